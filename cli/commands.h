@@ -1,0 +1,27 @@
+// The command table: every `doasido <command>` is added by one function,
+// defined in its own <command>_command.cc and listed in main.cc. Each
+// function creates its subcommand on `app`, with a description and an
+// example in the footer, and sets the callback that runs it. Callbacks
+// report failure by throwing doasido::Error; main turns that into a message
+// and exit code 1.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace doasido::cli {
+
+// Shared options every command that touches a database takes.
+struct DbOptions {
+  std::string db = "doasido.db";
+  std::string config;  // optional TOML/JSON file with one table per stage
+};
+void AddDbOptions(CLI::App& cmd, DbOptions& options);
+
+void AddInitCommand(CLI::App& app);
+void AddIngestCommand(CLI::App& app);
+void AddStatusCommand(CLI::App& app);
+void AddQueueCommand(CLI::App& app);
+void AddWorkerCommand(CLI::App& app);
+void AddRunCommand(CLI::App& app);
+
+}  // namespace doasido::cli

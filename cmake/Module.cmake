@@ -1,0 +1,35 @@
+# doasido_module(NAME <name> [DEPS <targets...>])
+#
+# One CMake library per top-level folder. Sources are the folder's *.cc
+# files; headers sit beside them and are included from the repository root
+# ("db/database.h"). A folder with no sources yet becomes an INTERFACE
+# library so that the dependency graph is the same from the first commit.
+set(DOASIDO_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+if(DOASIDO_WERROR)
+  list(APPEND DOASIDO_WARNINGS -Werror)
+endif()
+
+function(doasido_apply_options target)
+  target_compile_options(${target} PRIVATE ${DOASIDO_WARNINGS})
+  if(DOASIDO_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()
+
+function(doasido_module)
+  cmake_parse_arguments(M "" "NAME" "DEPS" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
+  set(target doasido_${M_NAME})
+  if(sources)
+    add_library(${target} STATIC ${sources})
+    target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${target} PUBLIC ${M_DEPS})
+    doasido_apply_options(${target})
+  else()
+    add_library(${target} INTERFACE)
+    target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${target} INTERFACE ${M_DEPS})
+  endif()
+  add_library(doasido::${M_NAME} ALIAS ${target})
+endfunction()

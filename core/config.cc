@@ -1,0 +1,65 @@
+#include "core/config.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+namespace doasido {
+namespace {
+
+Json TomlToJson(const toml::node& node) {
+  if (const auto* table = node.as_table()) {
+    Json out = Json::object();
+    for (const auto& [key, value] : *table) out[std::string(key.str())] = TomlToJson(value);
+    return out;
+  }
+  if (const auto* array = node.as_array()) {
+    Json out = Json::array();
+    for (const auto& value : *array) out.push_back(TomlToJson(value));
+    return out;
+  }
+  if (const auto* v = node.as_string()) return v->get();
+  if (const auto* v = node.as_integer()) return v->get();
+  if (const auto* v = node.as_floating_point()) return v->get();
+  if (const auto* v = node.as_boolean()) return v->get();
+  std::ostringstream text;
+  text << node;
+  return text.str();  // dates and times keep their TOML spelling
+}
+
+}  // namespace
+
+Json LoadConfigFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("bad_config", "cannot open config file", {.file = path.string()});
+  if (path.extension() == ".json") {
+    try {
+      return Json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw Error("bad_config", e.what(), {.file = path.string()});
+    }
+  }
+  try {
+    return TomlToJson(toml::parse_file(path.string()));
+  } catch (const toml::parse_error& e) {
+    throw Error("bad_config", std::string(e.description()),
+                {.file = path.string(), .line = static_cast<long>(e.source().begin.line)});
+  }
+}
+
+std::string ParamHash(const Json& params) {
+  const std::string text = params.dump();
+  std::uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+}  // namespace doasido

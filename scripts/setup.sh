@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs every Debian package doasido builds, runs and tests with.
+# Idempotent: packages already present are left alone. Run as root or with sudo.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config git
+  libsqlite3-dev sqlite3
+  libopencv-dev ffmpeg
+  libeigen3-dev libceres-dev
+  libmujoco-dev
+  libassimp-dev libbullet-extras-dev libbullet-dev
+  liblcm-dev liblcm-bin libglib2.0-dev
+  libembree-dev
+  libhdf5-dev
+  libzip-dev
+  libopenexr-dev
+  libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  libcpp-httplib-dev libssl-dev
+  libtomlplusplus-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  chromium chromium-driver
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "setup: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  SUDO="sudo"
+fi
+echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done"

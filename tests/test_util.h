@@ -1,0 +1,46 @@
+// Helpers shared by the test executables: where the real sample data is,
+// fresh temporary folders, and running the doasido binary.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace doasido::testing {
+
+// ../shared/data beside the checkout (absolute).
+std::filesystem::path SharedData();
+// The built doasido executable.
+std::filesystem::path DoasidoBin();
+// The repository root.
+std::filesystem::path SourceDir();
+
+// A fresh, empty directory removed when the object goes away (kept when
+// DOASIDO_KEEP_TMP is set, for debugging).
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+// Runs the doasido binary with `args` (no shell), capturing both streams.
+CommandResult RunDoasido(const std::vector<std::string>& args);
+
+// Writes `text` to `path`, creating parent folders.
+void WriteFile(const std::filesystem::path& path, const std::string& text);
+std::string ReadFile(const std::filesystem::path& path);
+
+}  // namespace doasido::testing

@@ -8,6 +8,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/config.h"
+
+namespace doasido {
+class Database;
+}
+
 namespace doasido::cli {
 
 // Shared options every command that touches a database takes.
@@ -16,6 +22,11 @@ struct DbOptions {
   std::string config;  // optional TOML/JSON file with one table per stage
 };
 void AddDbOptions(CLI::App& cmd, DbOptions& options);
+// The parsed --config file, or an empty object.
+Json LoadConfig(const DbOptions& options);
+
+// The stage x state x verdict table of `doasido status`.
+void PrintStatusTable(Database& db);
 
 void AddInitCommand(CLI::App& app);
 void AddIngestCommand(CLI::App& app);
@@ -23,5 +34,6 @@ void AddStatusCommand(CLI::App& app);
 void AddQueueCommand(CLI::App& app);
 void AddWorkerCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
+void AddSynthCommand(CLI::App& app);
 
 }  // namespace doasido::cli

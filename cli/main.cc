@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
 
   using namespace doasido::cli;
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
-                         AddQueueCommand, AddWorkerCommand, AddRunCommand};
+                         AddQueueCommand, AddWorkerCommand, AddRunCommand,
+                         AddSynthCommand};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

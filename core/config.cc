@@ -25,9 +25,7 @@ Json TomlToJson(const toml::node& node) {
   if (const auto* v = node.as_integer()) return v->get();
   if (const auto* v = node.as_floating_point()) return v->get();
   if (const auto* v = node.as_boolean()) return v->get();
-  std::ostringstream text;
-  text << node;
-  return text.str();  // dates and times keep their TOML spelling
+  throw Error("bad_config", "dates and times are not valid parameter values");
 }
 
 }  // namespace

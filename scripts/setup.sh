@@ -8,8 +8,8 @@ PACKAGES=(
   libsqlite3-dev sqlite3
   libopencv-dev ffmpeg
   libeigen3-dev libceres-dev
-  libmujoco-dev
-  libassimp-dev libbullet-extras-dev libbullet-dev
+  libmujoco-dev libqhull-dev
+  libassimp-dev libbullet-extras-dev libbullet-dev libtinyxml2-dev
   liblcm-dev liblcm-bin libglib2.0-dev
   libembree-dev
   libhdf5-dev

@@ -1,0 +1,45 @@
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "cli/stage_registry.h"
+#include "db/database.h"
+
+namespace doasido::cli {
+
+void AddInitCommand(CLI::App& app) {
+  struct Options {
+    DbOptions db;
+    std::vector<std::string> pipeline;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("init", "Create a database (or upgrade one) and set its pipeline");
+  AddDbOptions(*cmd, opt->db);
+  std::string stages;
+  for (const auto& entry : StageTable()) {
+    stages += "\n  " + entry.name + std::string(14 - std::min<size_t>(13, entry.name.size()), ' ') +
+              entry.summary;
+  }
+  cmd->add_option("--pipeline", opt->pipeline,
+                  "Ordered stages every clip goes through (default: every stage marked default)")
+      ->delimiter(',');
+  cmd->footer("Stages:" + stages +
+              "\n\nExample:\n  doasido init --db work/doasido.db\n"
+              "  doasido init --db work/queue-test.db --pipeline noop");
+  cmd->callback([opt] {
+    std::filesystem::create_directories(
+        std::filesystem::absolute(opt->db.db).parent_path());
+    Database db(opt->db.db);
+    auto pipeline = opt->pipeline.empty() ? DefaultPipeline() : opt->pipeline;
+    for (const auto& name : pipeline) MakeStage(name, Json::object());  // validates names
+    if (opt->pipeline.empty() && !db.Pipeline().empty()) {
+      pipeline = db.Pipeline();  // re-running init keeps an existing pipeline
+    }
+    db.SetPipeline(pipeline);
+    std::string joined;
+    for (const auto& s : pipeline) joined += (joined.empty() ? "" : " -> ") + s;
+    std::printf("%s: schema %d, pipeline %s\n", db.path().c_str(), db.SchemaVersion(),
+                joined.c_str());
+  });
+}
+
+}  // namespace doasido::cli

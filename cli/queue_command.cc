@@ -1,0 +1,81 @@
+#include "cli/commands.h"
+#include "db/database.h"
+
+namespace doasido::cli {
+
+void AddQueueCommand(CLI::App& app) {
+  struct Options {
+    DbOptions db;
+    std::string stage;
+    std::string state;
+    std::optional<ClipId> clip;
+    int limit = 50;
+    bool all = false;
+    bool json = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("queue", "List, retry or reset stage runs");
+  cmd->require_subcommand(1);
+  cmd->footer("Examples:\n"
+              "  doasido queue list --db work/doasido.db --state failed\n"
+              "  doasido queue retry --db work/doasido.db --stage probe\n"
+              "  doasido queue reset --db work/doasido.db --stage probe --clip 17\n"
+              "  doasido queue reset --db work/doasido.db --stage probe --all");
+
+  auto* list = cmd->add_subcommand("list", "List stage runs with their state, verdict and error");
+  AddDbOptions(*list, opt->db);
+  list->add_option("--stage", opt->stage, "Only this stage");
+  list->add_option("--state", opt->state, "Only this state")
+      ->check(CLI::IsMember({"pending", "running", "done", "failed"}));
+  list->add_option("--clip", opt->clip, "Only this clip id");
+  list->add_option("--limit", opt->limit, "At most this many rows (0: all)")->capture_default_str();
+  list->add_flag("--json", opt->json, "Print JSON");
+  list->callback([opt] {
+    Database db(opt->db.db);
+    const auto rows = db.ListRuns({opt->stage, opt->state, opt->clip, opt->limit});
+    if (opt->json) {
+      Json out = Json::array();
+      for (const auto& r : rows) {
+        out.push_back({{"run", r.run_id}, {"clip", r.clip_id}, {"external_id", r.external_id},
+                       {"stage", r.stage}, {"state", r.state}, {"attempts", r.attempts},
+                       {"verdict", r.verdict}, {"reason", r.reason}, {"error", r.error},
+                       {"lease_owner", r.lease_owner}, {"seconds", r.duration_s}});
+      }
+      std::printf("%s\n", out.dump(2).c_str());
+      return;
+    }
+    std::printf("%8s %-24s %-16s %-8s %3s %-7s %s\n", "clip", "external id", "stage", "state",
+                "try", "verdict", "reason / error");
+    for (const auto& r : rows) {
+      std::printf("%8lld %-24.24s %-16s %-8s %3d %-7s %s\n", static_cast<long long>(r.clip_id),
+                  r.external_id.c_str(), r.stage.c_str(), r.state.c_str(), r.attempts,
+                  r.verdict.c_str(), (r.error.empty() ? r.reason : r.error).c_str());
+    }
+  });
+
+  auto* retry = cmd->add_subcommand("retry", "Queue failed runs again (attempts start over)");
+  AddDbOptions(*retry, opt->db);
+  retry->add_option("--stage", opt->stage, "Only this stage (default: all)");
+  retry->add_option("--clip", opt->clip, "Only this clip id");
+  retry->callback([opt] {
+    Database db(opt->db.db);
+    std::printf("%lld failed runs queued again\n",
+                static_cast<long long>(db.Retry(opt->stage, opt->clip)));
+  });
+
+  auto* reset = cmd->add_subcommand(
+      "reset", "Queue a stage again from scratch for one clip or all; later stages are dropped");
+  AddDbOptions(*reset, opt->db);
+  reset->add_option("--stage", opt->stage, "The stage to run again")->required();
+  auto* clip = reset->add_option("--clip", opt->clip, "This clip id");
+  auto* all = reset->add_flag("--all", opt->all, "Every clip");
+  clip->excludes(all);
+  reset->callback([opt] {
+    if (!opt->clip && !opt->all) throw Error("usage", "give --clip ID or --all");
+    Database db(opt->db.db);
+    std::printf("%lld runs of %s reset\n",
+                static_cast<long long>(db.Reset(opt->stage, opt->clip)), opt->stage.c_str());
+  });
+}
+
+}  // namespace doasido::cli

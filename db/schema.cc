@@ -1,0 +1,123 @@
+#include "db/schema.h"
+
+namespace doasido::db {
+
+const std::vector<std::string>& Migrations() {
+  static const std::vector<std::string> kMigrations = {
+      // 1: the first schema.
+      R"sql(
+CREATE TABLE pipeline (
+  position INTEGER PRIMARY KEY,
+  stage TEXT NOT NULL UNIQUE
+);
+
+CREATE TABLE videos (
+  id INTEGER PRIMARY KEY,
+  path TEXT NOT NULL UNIQUE,          -- relative to the database folder, or a URL
+  width INTEGER, height INTEGER, fps REAL, frame_count INTEGER, duration_s REAL,
+  variable_frame_rate INTEGER, rotation_deg INTEGER, codec TEXT,
+  probed_at REAL
+);
+
+CREATE TABLE clips (
+  id INTEGER PRIMARY KEY,
+  video_id INTEGER NOT NULL REFERENCES videos(id),
+  external_id TEXT,
+  start_frame INTEGER, end_frame INTEGER,   -- inclusive, as in the source list
+  start_s REAL, end_s REAL,
+  source_list TEXT, source_line INTEGER,
+  metadata TEXT NOT NULL DEFAULT '{}',
+  created_at REAL NOT NULL
+);
+CREATE UNIQUE INDEX clips_span ON clips(video_id, IFNULL(start_frame, -1), IFNULL(end_frame, -1),
+                                        IFNULL(start_s, -1), IFNULL(end_s, -1));
+CREATE INDEX clips_external ON clips(external_id);
+
+CREATE TABLE stage_runs (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  state TEXT NOT NULL CHECK (state IN ('pending', 'running', 'done', 'failed')),
+  attempts INTEGER NOT NULL DEFAULT 0,
+  lease_owner TEXT, lease_expires REAL,
+  param_hash TEXT,
+  verdict TEXT CHECK (verdict IN ('pass', 'reject', 'flag')),
+  reason TEXT,
+  started_at REAL, finished_at REAL, duration_s REAL,
+  error TEXT,
+  UNIQUE (clip_id, stage)
+);
+CREATE INDEX stage_runs_open ON stage_runs(id) WHERE state IN ('pending', 'running');
+CREATE INDEX stage_runs_stage ON stage_runs(stage, state, verdict);
+
+CREATE TABLE measurements (
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  param_hash TEXT NOT NULL,
+  data TEXT NOT NULL,                 -- JSON: raw signals and summary numbers
+  created_at REAL NOT NULL,
+  PRIMARY KEY (clip_id, stage)
+);
+
+CREATE TABLE verdicts (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  verdict TEXT NOT NULL CHECK (verdict IN ('pass', 'reject', 'flag')),
+  reason TEXT,
+  source TEXT NOT NULL,               -- 'stage', 'rethreshold' or 'human'
+  param_hash TEXT,
+  created_at REAL NOT NULL
+);
+CREATE INDEX verdicts_clip ON verdicts(clip_id, stage);
+
+CREATE TABLE reviews (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  reviewer TEXT NOT NULL,
+  decision TEXT NOT NULL CHECK (decision IN ('accept', 'reject')),
+  reason TEXT,
+  created_at REAL NOT NULL
+);
+
+CREATE TABLE artifacts (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  kind TEXT NOT NULL,
+  path TEXT NOT NULL,                 -- relative to the database folder
+  created_at REAL NOT NULL,
+  UNIQUE (clip_id, stage, kind, path)
+);
+
+CREATE TABLE detections (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  frame INTEGER NOT NULL,
+  kind TEXT NOT NULL CHECK (kind IN ('hand', 'object')),
+  x1 REAL NOT NULL, y1 REAL NOT NULL, x2 REAL NOT NULL, y2 REAL NOT NULL,
+  score REAL NOT NULL,
+  contact_state INTEGER NOT NULL, hand_side INTEGER NOT NULL,
+  dx REAL NOT NULL, dy REAL NOT NULL, magnitude REAL NOT NULL,
+  source TEXT NOT NULL
+);
+CREATE INDEX detections_clip ON detections(clip_id, frame);
+
+CREATE TABLE events (
+  id INTEGER PRIMARY KEY,
+  at REAL NOT NULL,
+  clip_id INTEGER,
+  stage TEXT,
+  kind TEXT NOT NULL,                 -- 'ingest', 'claim', 'done', 'retry', 'failed', ...
+  worker TEXT,
+  detail TEXT
+);
+CREATE INDEX events_clip ON events(clip_id);
+)sql",
+  };
+  return kMigrations;
+}
+
+}  // namespace doasido::db

@@ -1,0 +1,702 @@
+#include "ingest/clip_list.h"
+
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <unordered_map>
+
+#include "core/error.h"
+
+namespace doasido::ingest {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::int64_t kMaxFrame = 1'000'000'000;  // ~1 year at 30 fps
+constexpr double kMaxSeconds = 1e7;                 // ~115 days
+
+std::string ReadAll(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("bad_list", "cannot open list", {.file = path.string()});
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+bool IsUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    size_t extra = 0;
+    if (c < 0x80) {
+      extra = 0;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      extra = 1;
+    } else if ((c >> 4) == 0xE) {
+      extra = 2;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      extra = 3;
+    } else {
+      return false;
+    }
+    if (i + extra >= s.size() && extra > 0) return false;
+    for (size_t k = 1; k <= extra; ++k) {
+      if ((static_cast<unsigned char>(s[i + k]) >> 6) != 0x2) return false;
+    }
+    i += 1 + extra;
+  }
+  return true;
+}
+
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
+}
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool IsUrl(const std::string& s) { return s.find("://") != std::string::npos; }
+
+// Strict integer: digits only (optional sign), nothing after.
+std::optional<std::int64_t> ParseInt(const std::string& text) {
+  const std::string t = Trim(text);
+  if (t.empty()) return std::nullopt;
+  std::int64_t v = 0;
+  const char* begin = t.data() + (t[0] == '+' ? 1 : 0);
+  const auto [ptr, ec] = std::from_chars(begin, t.data() + t.size(), v);
+  if (ec != std::errc() || ptr != t.data() + t.size()) return std::nullopt;
+  return v;
+}
+
+std::optional<double> ParseReal(const std::string& text) {
+  const std::string t = Trim(text);
+  if (t.empty()) return std::nullopt;
+  double v = 0;
+  const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+  if (ec != std::errc() || ptr != t.data() + t.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+using Cells = std::vector<std::pair<std::string, Json>>;
+
+std::string CellText(const Json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+const std::vector<std::string> kVideoColumns = {"video", "path", "video_path", "url", "file"};
+const std::vector<std::string> kIdColumns = {"id", "clip_id", "narration_id"};
+
+// Fills `row` from named cells, or reports the first problem in `error`.
+class RowBuilder {
+ public:
+  RowBuilder(const fs::path& list, const ListOptions& options, ListReadResult& out)
+      : list_(list), base_(list.parent_path()), options_(options), out_(out) {}
+
+  void Add(const Cells& cells, long line) {
+    ListRow row;
+    row.line = line;
+    row.clip.source_list = list_.string();
+    row.clip.source_line = line;
+    std::optional<std::string> start_text, end_text;
+    for (const auto& [raw_key, value] : cells) {
+      const std::string key = Lower(Trim(raw_key));
+      const std::string text = Trim(CellText(value));
+      if (std::find(kVideoColumns.begin(), kVideoColumns.end(), key) != kVideoColumns.end()) {
+        row.video = text;
+      } else if (std::find(kIdColumns.begin(), kIdColumns.end(), key) != kIdColumns.end()) {
+        row.clip.external_id = text;
+      } else if (key == "start_frame") {
+        if (!Frame(text, key, line, row.clip.start_frame)) return;
+      } else if (key == "end_frame" || key == "stop_frame") {
+        if (!Frame(text, key, line, row.clip.end_frame)) return;
+      } else if (key == "start_time" || key == "start_timestamp" || key == "start_s") {
+        if (!Time(text, key, line, row.clip.start_s)) return;
+      } else if (key == "end_time" || key == "stop_timestamp" || key == "end_s" ||
+                 key == "stop_time") {
+        if (!Time(text, key, line, row.clip.end_s)) return;
+      } else if (key == "start") {
+        start_text = text;
+      } else if (key == "end" || key == "stop") {
+        end_text = text;
+      } else {
+        row.clip.metadata[raw_key] = value;
+      }
+    }
+    if (start_text && !StartOrEnd(*start_text, "start", line, row.clip.start_frame,
+                                  row.clip.start_s)) {
+      return;
+    }
+    if (end_text && !StartOrEnd(*end_text, "end", line, row.clip.end_frame, row.clip.end_s)) {
+      return;
+    }
+    Finish(std::move(row));
+  }
+
+  // Shared final checks: video present and found, span ordered, no duplicate.
+  void Finish(ListRow row) {
+    const long line = row.line;
+    if (row.video.empty()) return Bad(line, "video", "no video path or URL");
+    if (!IsUrl(row.video)) {
+      fs::path p(row.video);
+      if (p.is_relative()) p = base_ / p;
+      row.video = fs::absolute(p).lexically_normal().string();
+      if (options_.check_files && !Exists(row.video)) {
+        return Bad(line, "video", "file not found: " + row.video);
+      }
+    }
+    const auto& c = row.clip;
+    if (c.start_frame.has_value() != c.end_frame.has_value() && c.end_frame) {
+      // an end without a start runs from the first frame
+      row.clip.start_frame = 0;
+    }
+    if (c.start_frame && c.end_frame && *c.end_frame < *c.start_frame) {
+      return Bad(line, "end_frame",
+                 "end " + std::to_string(*c.end_frame) + " is before start " +
+                     std::to_string(*c.start_frame));
+    }
+    if (c.start_s && c.end_s && *c.end_s < *c.start_s) {
+      return Bad(line, "end_time", "end is before start");
+    }
+    std::ostringstream key;
+    key.precision(17);
+    key << row.video << '|' << c.start_frame.value_or(-1) << '|' << c.end_frame.value_or(-1) << '|'
+        << c.start_s.value_or(-1) << '|' << c.end_s.value_or(-1);
+    const auto [it, fresh] = seen_.emplace(key.str(), line);
+    if (!fresh) {
+      return Bad(line, "video", "duplicate of line " + std::to_string(it->second) +
+                                    " (same video and span)");
+    }
+    out_.rows.push_back(std::move(row));
+  }
+
+  void Bad(long line, const std::string& field, const std::string& reason) {
+    out_.errors.push_back({list_.string(), line, field, reason});
+  }
+
+ private:
+  bool Exists(const std::string& path) {
+    auto [it, fresh] = exists_.emplace(path, false);
+    if (fresh) it->second = fs::exists(path);
+    return it->second;
+  }
+
+  bool Frame(const std::string& text, const std::string& field, long line,
+             std::optional<std::int64_t>& out) {
+    if (text.empty()) return true;
+    const auto v = ParseInt(text);
+    if (!v) return Bad(line, field, "not a whole frame number: '" + text + "'"), false;
+    if (*v < 0) return Bad(line, field, "negative frame number " + text), false;
+    if (*v > kMaxFrame) return Bad(line, field, "frame number out of range: " + text), false;
+    out = *v;
+    return true;
+  }
+
+  bool Time(const std::string& text, const std::string& field, long line,
+            std::optional<double>& out) {
+    if (text.empty()) return true;
+    const auto v = ParseTimestamp(text);
+    if (!v) return Bad(line, field, "not a time (seconds or HH:MM:SS.fff): '" + text + "'"), false;
+    if (*v > kMaxSeconds) return Bad(line, field, "time out of range: " + text), false;
+    out = *v;
+    return true;
+  }
+
+  bool StartOrEnd(const std::string& text, const std::string& field, long line,
+                  std::optional<std::int64_t>& frame, std::optional<double>& seconds) {
+    if (ParseInt(text) || (!text.empty() && text[0] == '-' && ParseReal(text))) {
+      return Frame(text, field, line, frame);
+    }
+    return Time(text, field, line, seconds);
+  }
+
+  fs::path list_;
+  fs::path base_;
+  const ListOptions& options_;
+  ListReadResult& out_;
+  std::unordered_map<std::string, long> seen_;
+  std::unordered_map<std::string, bool> exists_;
+};
+
+void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& options,
+                   ListReadResult& out) {
+  const std::string text = ReadAll(path);
+  size_t pos = 0;
+  long line = 1;
+  std::vector<std::string> header, fields;
+  std::string error;
+  long consumed = 0;
+  while (pos < text.size() && header.empty()) {
+    if (!SplitRecord(text, pos, delimiter, header, error, consumed)) {
+      throw Error("bad_list", "header: " + error, {.file = path.string(), .line = line});
+    }
+    line += consumed;
+    if (header.size() == 1 && Trim(header[0]).empty()) header.clear();
+  }
+  if (header.empty()) throw Error("bad_list", "empty list (no header)", {.file = path.string()});
+  for (auto& h : header) h = Trim(h);
+  if (!header.empty() && header[0].rfind("\xEF\xBB\xBF", 0) == 0) header[0] = header[0].substr(3);
+  const bool has_video = std::any_of(header.begin(), header.end(), [](const std::string& h) {
+    return std::find(kVideoColumns.begin(), kVideoColumns.end(), Lower(h)) != kVideoColumns.end();
+  });
+  if (!has_video) {
+    throw Error("bad_list", "no video column (one of video, path, video_path, url, file)",
+                {.file = path.string(), .line = 1, .field = "header"});
+  }
+  RowBuilder builder(path, options, out);
+  Cells cells;
+  while (pos < text.size()) {
+    const long row_line = line;
+    const size_t row_start = pos;
+    const bool ok = SplitRecord(text, pos, delimiter, fields, error, consumed);
+    line += consumed;
+    if (!ok) {
+      builder.Bad(row_line, "", error);
+      continue;
+    }
+    const std::string raw = text.substr(row_start, pos - row_start);
+    if (Trim(raw).empty()) {
+      builder.Bad(row_line, "", "empty line");
+      continue;
+    }
+    if (!IsUtf8(raw)) {
+      builder.Bad(row_line, "", "not valid UTF-8 text");
+      continue;
+    }
+    if (fields.size() != header.size()) {
+      builder.Bad(row_line, fields.size() < header.size() ? header[fields.size()] : "",
+                  "expected " + std::to_string(header.size()) + " columns, found " +
+                      std::to_string(fields.size()));
+      continue;
+    }
+    cells.clear();
+    for (size_t i = 0; i < header.size(); ++i) cells.emplace_back(header[i], fields[i]);
+    builder.Add(cells, row_line);
+  }
+}
+
+void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadResult& out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("bad_list", "cannot open list", {.file = path.string()});
+  RowBuilder builder(path, options, out);
+  std::string text;
+  long line = 0;
+  Cells cells;
+  while (std::getline(in, text)) {
+    ++line;
+    if (Trim(text).empty()) {
+      builder.Bad(line, "", "empty line");
+      continue;
+    }
+    if (!IsUtf8(text)) {
+      builder.Bad(line, "", "not valid UTF-8 text");
+      continue;
+    }
+    Json obj;
+    try {
+      obj = Json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+      builder.Bad(line, "", std::string("not JSON: ") + e.what());
+      continue;
+    }
+    if (!obj.is_object()) {
+      builder.Bad(line, "", "not a JSON object");
+      continue;
+    }
+    cells.clear();
+    for (const auto& [k, v] : obj.items()) cells.emplace_back(k, v);
+    builder.Add(cells, line);
+  }
+}
+
+// Reads a CSV into header-named rows (for EPIC's two files).
+std::vector<std::map<std::string, std::string>> ReadTable(const fs::path& path,
+                                                         std::vector<RowError>* errors,
+                                                         std::vector<long>* lines) {
+  const std::string text = ReadAll(path);
+  size_t pos = 0;
+  long line = 1, consumed = 0;
+  std::vector<std::string> header, fields;
+  std::string error;
+  if (!SplitRecord(text, pos, ',', header, error, consumed)) {
+    throw Error("bad_list", "header: " + error, {.file = path.string(), .line = 1});
+  }
+  line += consumed;
+  std::vector<std::map<std::string, std::string>> rows;
+  while (pos < text.size()) {
+    const long row_line = line;
+    const size_t start = pos;
+    const bool ok = SplitRecord(text, pos, ',', fields, error, consumed);
+    line += consumed;
+    const std::string raw = text.substr(start, pos - start);
+    std::string reason = !ok                              ? error
+                         : Trim(raw).empty()              ? "empty line"
+                         : !IsUtf8(raw)                   ? "not valid UTF-8 text"
+                         : fields.size() != header.size() ? "expected " +
+                                                                std::to_string(header.size()) +
+                                                                " columns, found " +
+                                                                std::to_string(fields.size())
+                                                          : "";
+    if (!reason.empty()) {
+      if (errors) errors->push_back({path.string(), row_line, "", reason});
+      continue;
+    }
+    std::map<std::string, std::string> row;
+    for (size_t i = 0; i < header.size(); ++i) row[Trim(header[i])] = fields[i];
+    rows.push_back(std::move(row));
+    if (lines) lines->push_back(row_line);
+  }
+  return rows;
+}
+
+void ReadEpic(const fs::path& path, const ListOptions& options, ListReadResult& out) {
+  const fs::path info_path = options.epic_video_info.empty()
+                                 ? path.parent_path() / "EPIC_100_video_info.csv"
+                                 : options.epic_video_info;
+  if (!fs::exists(info_path)) {
+    throw Error("bad_list", "EPIC list needs its video info CSV (--video-info)",
+                {.file = info_path.string()});
+  }
+  std::map<std::string, std::map<std::string, std::string>> info;
+  for (auto& row : ReadTable(info_path, nullptr, nullptr)) info[row["video_id"]] = row;
+  const fs::path root =
+      options.epic_video_root.empty() ? path.parent_path() / "videos" : options.epic_video_root;
+  ListOptions no_check = options;
+  no_check.check_files = false;  // EPIC lists come without their footage
+  RowBuilder builder(path, no_check, out);
+  std::vector<long> lines;
+  const auto rows = ReadTable(path, &out.errors, &lines);
+  const std::vector<std::string> used = {"narration_id", "participant_id", "video_id",
+                                         "start_timestamp", "stop_timestamp", "start_frame",
+                                         "stop_frame"};
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    const long line = lines[i];
+    auto get = [&r](const std::string& k) {
+      const auto it = r.find(k);
+      return it == r.end() ? std::string() : it->second;
+    };
+    const auto video_info = info.find(get("video_id"));
+    if (video_info == info.end()) {
+      builder.Bad(line, "video_id", "'" + get("video_id") + "' is not in " + info_path.string());
+      continue;
+    }
+    Cells cells = {{"narration_id", get("narration_id")},
+                   {"video", (root / get("participant_id") / "videos" /
+                              (get("video_id") + ".MP4")).string()},
+                   {"start_frame", get("start_frame")},
+                   {"stop_frame", get("stop_frame")},
+                   {"start_timestamp", get("start_timestamp")},
+                   {"stop_timestamp", get("stop_timestamp")}};
+    for (const auto& [k, v] : r) {
+      if (std::find(used.begin(), used.end(), k) == used.end()) cells.emplace_back(k, v);
+    }
+    cells.emplace_back("participant_id", get("participant_id"));
+    cells.emplace_back("video_id", get("video_id"));
+    const auto fps = ParseReal(video_info->second["fps"]);
+    if (fps) cells.emplace_back("fps", *fps);
+    cells.emplace_back("resolution", video_info->second["resolution"]);
+    // EPIC numbers frames at 60 per second whatever the video's real rate
+    // (29.97, 47.95, 59.94 and 90 fps videos alike), so a frame number is
+    // not a frame index into the video: decode by time, or scale.
+    cells.emplace_back("frame_numbers_fps", 60);
+    builder.Add(cells, line);
+  }
+}
+
+struct FrameGroup {
+  std::string genre;
+  std::map<std::int64_t, std::vector<Detection>> frames;
+  long first_index = 0;
+};
+
+double Number(const tinyxml2::XMLElement* parent, const char* name, bool* ok) {
+  const auto* e = parent->FirstChildElement(name);
+  if (e == nullptr || e->GetText() == nullptr) return 0;
+  const std::string text = Trim(e->GetText());
+  if (text.empty() || text == "None") return 0;
+  const auto v = ParseReal(text);
+  if (!v) *ok = false;
+  return v.value_or(0);
+}
+
+// Adds the rows of grouped frames (VOC folders and frame-name lists).
+void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::path& list,
+                    const fs::path& video_dir, const ListOptions& options, ListReadResult& out) {
+  ListOptions no_check = options;
+  no_check.check_files = false;  // the annotations are the data; probe reports missing videos
+  RowBuilder builder(list, no_check, out);
+  for (const auto& [video, group] : groups) {
+    ListRow row;
+    row.line = group.first_index;
+    row.video = (video_dir / (video + ".mp4")).string();
+    row.clip.external_id = group.genre.empty() ? video : group.genre + "_v_" + video;
+    row.clip.source_list = list.string();
+    row.clip.source_line = group.first_index;
+    row.clip.start_frame = group.frames.begin()->first;
+    row.clip.end_frame = group.frames.rbegin()->first;
+    row.clip.metadata["genre"] = group.genre;
+    row.clip.metadata["annotated_frames"] = group.frames.size();
+    for (const auto& [frame, dets] : group.frames) {
+      row.detections.insert(row.detections.end(), dets.begin(), dets.end());
+    }
+    builder.Finish(std::move(row));
+  }
+}
+
+void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult& out) {
+  const fs::path annotations =
+      fs::exists(folder / "Annotations") ? folder / "Annotations" : folder;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(annotations)) {
+    if (entry.path().extension() == ".xml") files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) {
+    throw Error("bad_list", "no *.xml annotations", {.file = annotations.string()});
+  }
+  std::map<std::string, FrameGroup> groups;
+  long index = 0;
+  for (const auto& file : files) {
+    ++index;
+    auto bad = [&](const std::string& field, const std::string& reason) {
+      out.errors.push_back({file.string(), 0, field, reason});
+    };
+    const auto name = ParseFrameName(file.stem().string());
+    if (!name) {
+      bad("filename", "not <genre>_v_<video>_frame<digits>");
+      continue;
+    }
+    tinyxml2::XMLDocument doc;
+    if (doc.LoadFile(file.c_str()) != tinyxml2::XML_SUCCESS) {
+      bad("xml", std::string("malformed XML: ") + doc.ErrorStr());
+      continue;
+    }
+    const auto* root = doc.FirstChildElement("annotation");
+    if (root == nullptr) {
+      bad("annotation", "no <annotation> element");
+      continue;
+    }
+    const auto frame =
+        static_cast<std::int64_t>(std::llround(name->frame * options.voc_frame_scale));
+    auto& group = groups[name->video];
+    if (group.frames.empty() && group.first_index == 0) group.first_index = index;
+    group.genre = name->genre;
+    auto& dets = group.frames[frame];
+    bool ok = true;
+    for (const auto* obj = root->FirstChildElement("object"); obj;
+         obj = obj->NextSiblingElement("object")) {
+      const auto* kind = obj->FirstChildElement("name");
+      const auto* box = obj->FirstChildElement("bndbox");
+      if (kind == nullptr || kind->GetText() == nullptr || box == nullptr) {
+        ok = false;
+        bad("object", "object without <name> or <bndbox>");
+        break;
+      }
+      Detection d;
+      d.frame = frame;
+      d.source = "100doh_voc";
+      const std::string k = Trim(kind->GetText());
+      d.kind = k == "hand" ? "hand" : "object";
+      bool numbers_ok = true;
+      // VOC boxes are 1-based inclusive; ours are 0-based with exclusive ends.
+      d.x1 = Number(box, "xmin", &numbers_ok) - 1;
+      d.y1 = Number(box, "ymin", &numbers_ok) - 1;
+      d.x2 = Number(box, "xmax", &numbers_ok);
+      d.y2 = Number(box, "ymax", &numbers_ok);
+      if (d.kind == "hand") {
+        d.contact_state = static_cast<int>(Number(obj, "contactstate", &numbers_ok));
+        d.hand_side = static_cast<int>(Number(obj, "handside", &numbers_ok));
+        d.dx = Number(obj, "unitdx", &numbers_ok);
+        d.dy = Number(obj, "unitdy", &numbers_ok);
+        d.magnitude = Number(obj, "magnitude", &numbers_ok);
+      }
+      if (!numbers_ok || d.x2 <= d.x1 || d.y2 <= d.y1) {
+        ok = false;
+        bad("bndbox", "box numbers are missing, not numbers, or empty");
+        break;
+      }
+      dets.push_back(d);
+    }
+    if (!ok) group.frames.erase(frame);
+    if (group.frames.empty()) groups.erase(name->video);
+  }
+  const fs::path video_dir = options.voc_video_dir.empty()
+                                 ? annotations.parent_path() / "videos"
+                                 : options.voc_video_dir;
+  AddFrameGroups(groups, folder, video_dir, options, out);
+}
+
+void ReadFrameNames(const fs::path& path, const ListOptions& options, ListReadResult& out) {
+  std::ifstream in(path);
+  if (!in) throw Error("bad_list", "cannot open list", {.file = path.string()});
+  std::map<std::string, FrameGroup> groups;
+  std::string text;
+  long line = 0;
+  while (std::getline(in, text)) {
+    ++line;
+    const auto name = ParseFrameName(Trim(text));
+    if (!name) {
+      out.errors.push_back({path.string(), line, "name",
+                            Trim(text).empty() ? "empty line" : "not a 100DOH frame name"});
+      continue;
+    }
+    const std::string key = name->split.empty() ? name->video : name->genre + "_" + name->video;
+    auto& group = groups[key];
+    if (group.frames.empty()) group.first_index = line;
+    group.genre = name->genre;
+    group.frames[static_cast<std::int64_t>(std::llround(name->frame * options.voc_frame_scale))];
+  }
+  const fs::path video_dir =
+      options.voc_video_dir.empty() ? path.parent_path() / "videos" : options.voc_video_dir;
+  AddFrameGroups(groups, path, video_dir, options, out);
+}
+
+}  // namespace
+
+std::string RowError::Format() const {
+  return file + ":" + std::to_string(line) + ": " + (field.empty() ? "" : field + ": ") + reason;
+}
+
+bool SplitRecord(const std::string& text, size_t& pos, char delimiter,
+                 std::vector<std::string>& fields, std::string& error, long& lines_consumed) {
+  fields.clear();
+  lines_consumed = 0;
+  std::string field;
+  bool quoted = false, was_quoted = false;
+  while (pos < text.size()) {
+    const char c = text[pos];
+    if (quoted) {
+      if (c == '"') {
+        if (pos + 1 < text.size() && text[pos + 1] == '"') {
+          field += '"';
+          pos += 2;
+          continue;
+        }
+        quoted = false;
+      } else {
+        if (c == '\n') ++lines_consumed;
+        field += c;
+      }
+      ++pos;
+      continue;
+    }
+    if (c == '"' && Trim(field).empty() && !was_quoted) {
+      quoted = was_quoted = true;
+      field.clear();
+    } else if (c == delimiter) {
+      fields.push_back(std::move(field));
+      field.clear();
+      was_quoted = false;
+    } else if (c == '\n') {
+      ++pos;
+      ++lines_consumed;
+      if (!field.empty() && field.back() == '\r') field.pop_back();
+      fields.push_back(std::move(field));
+      return true;
+    } else {
+      field += c;
+    }
+    ++pos;
+  }
+  if (quoted) {
+    error = "unterminated quoted field";
+    ++lines_consumed;
+    return false;
+  }
+  if (!field.empty() && field.back() == '\r') field.pop_back();
+  fields.push_back(std::move(field));
+  ++lines_consumed;
+  return true;
+}
+
+std::optional<double> ParseTimestamp(const std::string& raw) {
+  const std::string text = Trim(raw);
+  if (text.empty()) return std::nullopt;
+  std::vector<std::string> parts;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, ':')) parts.push_back(part);
+  if (parts.empty() || parts.size() > 3) return std::nullopt;
+  double total = 0;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const bool last = i + 1 == parts.size();
+    std::optional<double> v = ParseReal(parts[i]);
+    if (!last) {
+      const auto whole = ParseInt(parts[i]);
+      v = whole ? std::optional<double>(static_cast<double>(*whole)) : std::nullopt;
+    }
+    if (!v || *v < 0) return std::nullopt;
+    if (i > 0 && *v >= 60) return std::nullopt;  // minutes and seconds fields
+    total = total * 60 + *v;
+  }
+  if (!std::isfinite(total)) return std::nullopt;
+  return total;
+}
+
+std::optional<FrameName> ParseFrameName(const std::string& name) {
+  FrameName out;
+  const auto v = name.find("_v_");
+  const auto f = name.rfind("_frame");
+  if (v != std::string::npos && f != std::string::npos && f > v + 3) {
+    const auto frame = ParseInt(name.substr(f + 6));
+    if (!frame || *frame < 0 || name.size() - (f + 6) == 0) return std::nullopt;
+    out.genre = name.substr(0, v);
+    out.video = name.substr(v + 3, f - v - 3);
+    out.frame = *frame;
+    return out.genre.empty() ? std::nullopt : std::optional(out);
+  }
+  // Egocentric: <dataset>_<split>_<video>_<digits>; the video id may hold '_'.
+  const auto first = name.find('_');
+  const auto second = first == std::string::npos ? first : name.find('_', first + 1);
+  const auto last = name.rfind('_');
+  if (second == std::string::npos || last <= second + 1) return std::nullopt;
+  const auto frame = ParseInt(name.substr(last + 1));
+  if (!frame || *frame < 0) return std::nullopt;
+  out.genre = name.substr(0, first);
+  out.split = name.substr(first + 1, second - first - 1);
+  out.video = name.substr(second + 1, last - second - 1);
+  out.frame = *frame;
+  return out;
+}
+
+ListReadResult ReadClipList(const fs::path& path, const ListOptions& options) {
+  ListReadResult out;
+  if (!fs::exists(path)) throw Error("bad_list", "no such file or folder", {.file = path.string()});
+  if (fs::is_directory(path)) {
+    out.format = "voc";
+    ReadVoc(path, options, out);
+    return out;
+  }
+  const std::string ext = Lower(path.extension().string());
+  if (ext == ".jsonl" || ext == ".json" || ext == ".ndjson") {
+    out.format = "jsonl";
+    ReadJsonLines(path, options, out);
+  } else if (ext == ".tsv") {
+    out.format = "tsv";
+    ReadDelimited(path, '\t', options, out);
+  } else if (ext == ".txt") {
+    out.format = "framenames";
+    ReadFrameNames(path, options, out);
+  } else {
+    std::ifstream in(path);
+    std::string first;
+    std::getline(in, first);
+    if (first.rfind("narration_id", 0) == 0) {
+      out.format = "epic";
+      ReadEpic(path, options, out);
+    } else {
+      out.format = "csv";
+      ReadDelimited(path, ',', options, out);
+    }
+  }
+  return out;
+}
+
+}  // namespace doasido::ingest

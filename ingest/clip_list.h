@@ -1,0 +1,97 @@
+// Clip-list readers. Each reader turns one list file (or annotation folder)
+// into rows ready for the database plus a list of the rows it refused, each
+// named by file, line and field, so one bad row never stops a batch.
+//
+// Formats (REFERENCE.md §1):
+//  - CSV / TSV / JSONL with a header (JSONL: one object per line). Columns:
+//      video | path | video_path | url | file   the video (required); a
+//                                 relative path is relative to the list file
+//      id | clip_id | narration_id             optional external id
+//      start_frame, end_frame | stop_frame     inclusive frame numbers
+//      start_time | start_timestamp | start_s, end_time | stop_timestamp | end_s
+//                                 seconds, or HH:MM:SS(.fff), or MM:SS(.fff)
+//      start, end                 a frame number if a plain integer, else a time
+//    Every other column is kept as clip metadata.
+//  - EPIC-KITCHENS-100 annotation CSV (header starts with narration_id) with
+//    its EPIC_100_video_info.csv (per-video fps): frames and timestamps both
+//    kept; videos are <video_root>/<participant_id>/videos/<video_id>.MP4.
+//    EPIC frame numbers count at 60 per second for every video, whatever its
+//    real rate: metadata "frame_numbers_fps" = 60 says so.
+//  - 100DOH VOC annotation folders: Annotations/*.xml, one per frame named
+//    <genre>_v_<video id>_frame<6 digits>; frames of one video id become one
+//    clip spanning them, boxes and contact states become detections.
+//  - Plain text lists of 100DOH-family frame names (one per line): frames are
+//    grouped per video into clips like VOC folders, without boxes.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "db/records.h"
+
+namespace doasido::ingest {
+
+struct ListRow {
+  long line = 0;             // 1-based line (or file index for VOC) in the list
+  std::string video;         // absolute path, or URL
+  ClipRecord clip;           // video_id unset; source_list/source_line set
+  std::vector<Detection> detections;
+};
+
+struct RowError {
+  std::string file;
+  long line = 0;
+  std::string field;
+  std::string reason;
+  std::string Format() const;  // "file:line: field: reason"
+};
+
+struct ListReadResult {
+  std::string format;  // "csv", "tsv", "jsonl", "epic", "voc", "framenames"
+  std::vector<ListRow> rows;
+  std::vector<RowError> errors;
+};
+
+struct ListOptions {
+  // Refuse rows whose local video file does not exist (URLs are not checked).
+  bool check_files = true;
+  // EPIC: folder holding <participant>/videos/<video>.MP4, and the video
+  // info CSV (default: EPIC_100_video_info.csv beside the list).
+  std::filesystem::path epic_video_root;
+  std::filesystem::path epic_video_info;
+  // VOC and frame-name lists: folder with <video id>.mp4 (default: videos/
+  // beside the Annotations folder) and a factor from annotated frame numbers
+  // to video frame numbers (e.g. the sampling stride).
+  std::filesystem::path voc_video_dir;
+  double voc_frame_scale = 1.0;
+};
+
+// Reads any supported list, choosing the reader from the path (a folder is
+// VOC; .jsonl/.json lines; .tsv; .txt frame names; .csv, EPIC by header).
+// Throws Error only when the file as a whole is unreadable (missing, no
+// header, no video column); row problems go to `errors`.
+ListReadResult ReadClipList(const std::filesystem::path& path, const ListOptions& options = {});
+
+// Parses a time: plain seconds ("12.5"), "MM:SS(.fff)" or "HH:MM:SS(.fff)".
+// Returns nullopt for anything else, negative values, NaN or infinity.
+std::optional<double> ParseTimestamp(const std::string& text);
+
+// A 100DOH-family frame name split into its parts.
+struct FrameName {
+  std::string genre;  // "boardgame", or the dataset for egocentric names ("EK")
+  std::string split;  // egocentric names only ("test")
+  std::string video;  // YouTube id or egocentric video id ("P24-09")
+  std::int64_t frame = 0;
+};
+// Accepts "<genre>_v_<id>_frame<digits>" and "<dataset>_<split>_<video>_<digits>".
+std::optional<FrameName> ParseFrameName(const std::string& name);
+
+// Splits one CSV/TSV record (RFC 4180 quoting) starting at `pos` in `text`,
+// advancing `pos` past its line end; quoted fields may span lines. Returns
+// false with `error` set for an unterminated quote.
+bool SplitRecord(const std::string& text, size_t& pos, char delimiter,
+                 std::vector<std::string>& fields, std::string& error, long& lines_consumed);
+
+}  // namespace doasido::ingest

@@ -1,0 +1,67 @@
+#include "ingest/ingest.h"
+
+#include <chrono>
+
+#include "core/progress.h"
+
+namespace doasido::ingest {
+
+Json IngestSummary::ToJson() const {
+  Json bad = Json::array();
+  for (const auto& e : errors) {
+    bad.push_back({{"file", e.file}, {"line", e.line}, {"field", e.field}, {"reason", e.reason}});
+  }
+  return {{"list", list},         {"format", format},
+          {"rows", rows},         {"inserted", inserted},
+          {"already_present", already_present}, {"detections", detections},
+          {"bad_rows", errors.size()},          {"errors", bad},
+          {"seconds", seconds}};
+}
+
+IngestSummary IngestList(Database& db, const std::filesystem::path& list,
+                         const ListOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  ListReadResult read = ReadClipList(list, options);
+  IngestSummary summary;
+  summary.list = list.string();
+  summary.format = read.format;
+  summary.rows = static_cast<std::int64_t>(read.rows.size());
+  summary.errors = std::move(read.errors);
+
+  constexpr size_t kBatch = 20000;
+  Progress progress("ingest", read.rows.size());
+  std::unordered_map<std::string, VideoId> videos;
+  for (size_t begin = 0; begin < read.rows.size(); begin += kBatch) {
+    const size_t end = std::min(read.rows.size(), begin + kBatch);
+    Database::Transaction tx(db);
+    for (size_t i = begin; i < end; ++i) {
+      ListRow& row = read.rows[i];
+      auto [it, fresh] = videos.emplace(row.video, 0);
+      if (fresh) it->second = db.UpsertVideo(row.video);
+      row.clip.video_id = it->second;
+      const auto result = db.InsertClip(row.clip);
+      if (result.inserted) {
+        ++summary.inserted;
+        if (!row.detections.empty()) {
+          db.AddDetections(result.id, row.detections);
+          summary.detections += static_cast<std::int64_t>(row.detections.size());
+        }
+      } else {
+        ++summary.already_present;
+      }
+    }
+    if (end == read.rows.size()) {
+      db.LogEvent(std::nullopt, "", "ingest", "",
+                  list.string() + ": " + std::to_string(summary.inserted) + " new clips, " +
+                      std::to_string(summary.errors.size()) + " bad rows");
+    }
+    tx.Commit();
+    progress.Set(end);
+  }
+  progress.Finish();
+  summary.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace doasido::ingest

@@ -1,0 +1,33 @@
+// Loading a clip list into the database.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "db/database.h"
+#include "ingest/clip_list.h"
+
+namespace doasido::ingest {
+
+struct IngestSummary {
+  std::string list;
+  std::string format;
+  std::int64_t rows = 0;             // good rows read from the list
+  std::int64_t inserted = 0;         // new clips queued
+  std::int64_t already_present = 0;  // same video and span already in the database
+  std::int64_t detections = 0;
+  std::vector<RowError> errors;      // refused rows, each named
+  double seconds = 0;
+  Json ToJson() const;
+};
+
+// Reads `list` and inserts its clips in batched transactions, queueing each
+// new clip for the first pipeline stage. Re-ingesting the same list is a
+// no-op (clips are deduplicated by video and span). Shows progress on long
+// lists.
+IngestSummary IngestList(Database& db, const std::filesystem::path& list,
+                         const ListOptions& options = {});
+
+}  // namespace doasido::ingest

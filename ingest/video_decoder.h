@@ -1,0 +1,110 @@
+// One sequential decode pass over a span of a video file, delivering every
+// frame at a reduced analysis resolution.
+//
+// The analysis size follows PySceneDetect's automatic downscale so that shot
+// scores computed on these frames equal its published ones: the factor is
+// max(width, height) / analysis_size (no scaling when the longer side is
+// already smaller), the target size is each side divided by the factor and
+// rounded half-to-even (Python's round), and the resize is bilinear
+// (cv::INTER_LINEAR). The full-resolution size is kept in the geometry so
+// that boxes found at analysis resolution can be mapped back (and boxes given
+// at full resolution mapped in).
+//
+// Decoding is OpenCV's VideoCapture with the FFmpeg backend. Frames before
+// the span are grabbed but not converted. A decode that ends before the
+// number of frames the container declares, or before the requested span
+// ends, is a truncated or corrupt file: Next() throws
+// Error("truncated_video") naming the file and the first frame it could not
+// decode.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace cv {
+class VideoCapture;
+}
+
+namespace doasido {
+
+struct DecoderOptions {
+  // Target length of the longer side at analysis resolution (PySceneDetect's
+  // DEFAULT_MIN_WIDTH). 0 keeps full resolution.
+  int analysis_size = 256;
+  // Span to deliver, as 0-based frame indices of the file; last_frame < 0
+  // means "to the end of the file". Inclusive.
+  std::int64_t first_frame = 0;
+  std::int64_t last_frame = -1;
+  // The same span in seconds, used only when the frame bound is unset
+  // (first_frame == 0 / last_frame < 0) and the value is >= 0; converted
+  // with the stream's frame rate (nearest frame).
+  double first_s = -1;
+  double last_s = -1;
+  // How many frames short of the container's declared count the decode may
+  // end without being called truncated (some containers round their count).
+  std::int64_t frame_count_tolerance = 0;
+  // Clip label used in error messages (may be empty).
+  std::string clip;
+};
+
+struct VideoGeometry {
+  int full_width = 0, full_height = 0;  // decoded frame size
+  int width = 0, height = 0;            // analysis size
+  double downscale = 1.0;               // full / analysis (PySceneDetect's factor)
+  double fps = 0;
+  std::int64_t declared_frames = 0;  // container's frame count (0 if unknown)
+};
+
+struct AnalysisFrame {
+  std::int64_t index = 0;  // 0-based frame index in the file
+  double timestamp_s = 0;  // presentation time of the frame
+  cv::Mat bgr;             // CV_8UC3 at analysis size; valid until the next Next()
+};
+
+// PySceneDetect's downscale factor for a frame of `width` x `height` and a
+// target longer side `analysis_size` (>= 1 means shrink by that factor).
+double AnalysisDownscale(int width, int height, int analysis_size);
+// The analysis frame size for that factor (rounded half-to-even, >= 1).
+cv::Size AnalysisSize(int width, int height, int analysis_size);
+
+class VideoDecoder {
+ public:
+  // Opens `path` and positions at options.first_frame. Throws
+  // Error("video_open_failed") when the file is missing or not a video, and
+  // Error("truncated_video") when the span starts past the decodable end.
+  VideoDecoder(const std::filesystem::path& path, const DecoderOptions& options);
+  ~VideoDecoder();
+  VideoDecoder(const VideoDecoder&) = delete;
+  VideoDecoder& operator=(const VideoDecoder&) = delete;
+
+  const VideoGeometry& geometry() const { return geometry_; }
+  const std::filesystem::path& path() const { return path_; }
+
+  // Decodes the next frame of the span into `frame`. Returns false once the
+  // span (or the file) has ended normally; throws Error("truncated_video")
+  // when decoding stops early (see the file comment).
+  bool Next(AnalysisFrame* frame);
+
+  // The span's first frame (after converting first_s, if that was used).
+  std::int64_t first_frame() const { return options_.first_frame; }
+  // Frames delivered so far.
+  std::int64_t delivered() const { return delivered_; }
+
+ private:
+  [[noreturn]] void ThrowTruncated(std::int64_t frame, const std::string& why) const;
+
+  std::filesystem::path path_;
+  DecoderOptions options_;
+  VideoGeometry geometry_;
+  std::unique_ptr<cv::VideoCapture> capture_;
+  cv::Mat full_;
+  std::int64_t next_index_ = 0;
+  std::int64_t delivered_ = 0;
+  bool done_ = false;
+};
+
+}  // namespace doasido

@@ -94,14 +94,19 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   }
   Heartbeat heartbeat(options.db, worker, options.lease_s);
   WorkerStats stats;
+  auto claim_next = [&]() -> std::optional<Claim> {
+    if (g_stop) return std::nullopt;
+    return db.ClaimNext(worker, names, options.lease_s, options.max_attempts);
+  };
+  std::optional<Claim> claim = claim_next();
   while (!g_stop) {
-    const auto claim = db.ClaimNext(worker, names, options.lease_s, options.max_attempts);
     if (!claim) {
       if (options.until_empty) {
         const auto s = db.Summary();
         if (s.pending == 0 && s.running == 0) break;
       }
       std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));
+      claim = claim_next();
       continue;
     }
     heartbeat.Set(claim->run_id);
@@ -121,14 +126,13 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
     }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    heartbeat.Set(0);
+    // Record this run and claim the next one in a single commit.
+    Database::Transaction tx(db);
     if (!error.empty()) {
       spdlog::warn("{} on clip {} (attempt {}): {}", claim->stage, label, claim->attempts, error);
       db.Fail(*claim, worker, error, options.max_attempts);
       ++stats.failed_attempts;
-      continue;
-    }
-    if (db.Complete(*claim, worker, hashes.at(claim->stage), result, seconds)) {
+    } else if (db.Complete(*claim, worker, hashes.at(claim->stage), result, seconds)) {
       ++stats.done;
       spdlog::debug("{} {} -> {} {}", claim->stage, label, ToString(result.verdict),
                     result.reason);
@@ -137,6 +141,9 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       spdlog::warn("{} on clip {}: lease lost before completion; result dropped", claim->stage,
                    label);
     }
+    claim = claim_next();
+    tx.Commit();
+    heartbeat.Set(claim ? claim->run_id : 0);
   }
   return stats;
 }

@@ -99,7 +99,10 @@ class Database {
   std::string Store(const std::string& path_or_url) const;
 
   // ---- Transactions -------------------------------------------------------
-  // RAII `BEGIN IMMEDIATE`; rolls back unless Commit() was called.
+  // RAII `BEGIN IMMEDIATE`; rolls back unless Commit() was called. Inside
+  // an open transaction it is a savepoint, so calls that each guard their
+  // own writes compose: a worker completes one run and claims the next in
+  // a single commit.
   class Transaction {
    public:
     explicit Transaction(Database& db);
@@ -108,6 +111,7 @@ class Database {
 
    private:
     Database& db_;
+    bool nested_;
     bool done_ = false;
   };
 
@@ -193,6 +197,7 @@ class Database {
   double busy_timeout_s_;
   std::map<std::string, std::unique_ptr<db::Statement>> statements_;
   std::vector<std::string> pipeline_cache_;
+  int transaction_depth_ = 0;
 };
 
 // Seconds since the epoch, the clock of every timestamp in the database.

@@ -49,7 +49,6 @@ CREATE TABLE stage_runs (
   UNIQUE (clip_id, stage)
 );
 CREATE INDEX stage_runs_open ON stage_runs(id) WHERE state IN ('pending', 'running');
-CREATE INDEX stage_runs_stage ON stage_runs(stage, state, verdict);
 
 CREATE TABLE measurements (
   clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,

@@ -73,7 +73,7 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s)
     // against process crashes (a killed worker), which is what the queue
     // must survive. Reads go through mmap to spare a copy per page.
     db::Exec(db_, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;"
-                  " PRAGMA mmap_size=268435456;");
+                  " PRAGMA mmap_size=268435456; PRAGMA cache_size=-65536;");
     Migrate();
   } catch (const Error& e) {
     sqlite3_close(db_);

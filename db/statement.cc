@@ -50,8 +50,12 @@ bool Statement::Step() {
   const int code = rc;
   sqlite3_reset(stmt_);
   stepped_ = false;
+  const char* file = sqlite3_db_filename(db_, "main");
   throw Error(code == SQLITE_FULL ? "disk_full" : "database",
-              message + " (" + (sqlite3_sql(stmt_) ? sqlite3_sql(stmt_) : "") + ")");
+              code == SQLITE_FULL ? message
+                                  : message + " (" + (sqlite3_sql(stmt_) ? sqlite3_sql(stmt_) : "") +
+                                        ")",
+              {.file = file ? file : ""});
 }
 
 void Statement::Run() {
@@ -87,7 +91,9 @@ void Exec(sqlite3* db, const std::string& sql) {
   if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
     const std::string message = err ? err : "unknown";
     sqlite3_free(err);
-    throw Error(message.find("full") != std::string::npos ? "disk_full" : "database", message);
+    const char* file = sqlite3_db_filename(db, "main");
+    throw Error(message.find("full") != std::string::npos ? "disk_full" : "database", message,
+                {.file = file ? file : ""});
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -99,6 +100,26 @@ class RowBuilder {
   RowBuilder(const fs::path& list, const ListOptions& options, ListReadResult& out)
       : list_(list), base_(list.parent_path()), options_(options), out_(out) {}
 
+  // What a column means, decided once per file from its header name.
+  enum class Role { kVideo, kId, kStartFrame, kEndFrame, kStartTime, kEndTime, kStart, kEnd,
+                    kMetadata };
+
+  static Role RoleOf(const std::string& raw_key) {
+    const std::string key = Lower(Trim(raw_key));
+    auto in = [&key](const std::vector<std::string>& names) {
+      return std::find(names.begin(), names.end(), key) != names.end();
+    };
+    if (in(kVideoColumns)) return Role::kVideo;
+    if (in(kIdColumns)) return Role::kId;
+    if (key == "start_frame") return Role::kStartFrame;
+    if (key == "end_frame" || key == "stop_frame") return Role::kEndFrame;
+    if (in({"start_time", "start_timestamp", "start_s"})) return Role::kStartTime;
+    if (in({"end_time", "stop_timestamp", "end_s", "stop_time"})) return Role::kEndTime;
+    if (key == "start") return Role::kStart;
+    if (key == "end" || key == "stop") return Role::kEnd;
+    return Role::kMetadata;
+  }
+
   void Add(const Cells& cells, long line) {
     ListRow row;
     row.line = line;
@@ -106,27 +127,33 @@ class RowBuilder {
     row.clip.source_line = line;
     std::optional<std::string> start_text, end_text;
     for (const auto& [raw_key, value] : cells) {
-      const std::string key = Lower(Trim(raw_key));
-      const std::string text = Trim(CellText(value));
-      if (std::find(kVideoColumns.begin(), kVideoColumns.end(), key) != kVideoColumns.end()) {
-        row.video = text;
-      } else if (std::find(kIdColumns.begin(), kIdColumns.end(), key) != kIdColumns.end()) {
-        row.clip.external_id = text;
-      } else if (key == "start_frame") {
-        if (!Frame(text, key, line, row.clip.start_frame)) return;
-      } else if (key == "end_frame" || key == "stop_frame") {
-        if (!Frame(text, key, line, row.clip.end_frame)) return;
-      } else if (key == "start_time" || key == "start_timestamp" || key == "start_s") {
-        if (!Time(text, key, line, row.clip.start_s)) return;
-      } else if (key == "end_time" || key == "stop_timestamp" || key == "end_s" ||
-                 key == "stop_time") {
-        if (!Time(text, key, line, row.clip.end_s)) return;
-      } else if (key == "start") {
-        start_text = text;
-      } else if (key == "end" || key == "stop") {
-        end_text = text;
-      } else {
+      auto [it, fresh] = roles_.emplace(raw_key, Role::kMetadata);
+      if (fresh) it->second = RoleOf(raw_key);
+      const Role role = it->second;
+      if (role == Role::kMetadata) {
         row.clip.metadata[raw_key] = value;
+        continue;
+      }
+      const std::string text = Trim(CellText(value));
+      const std::string key = Lower(Trim(raw_key));
+      switch (role) {
+        case Role::kVideo: row.video = text; break;
+        case Role::kId: row.clip.external_id = text; break;
+        case Role::kStartFrame:
+          if (!Frame(text, key, line, row.clip.start_frame)) return;
+          break;
+        case Role::kEndFrame:
+          if (!Frame(text, key, line, row.clip.end_frame)) return;
+          break;
+        case Role::kStartTime:
+          if (!Time(text, key, line, row.clip.start_s)) return;
+          break;
+        case Role::kEndTime:
+          if (!Time(text, key, line, row.clip.end_s)) return;
+          break;
+        case Role::kStart: start_text = text; break;
+        case Role::kEnd: end_text = text; break;
+        case Role::kMetadata: break;
       }
     }
     if (start_text && !StartOrEnd(*start_text, "start", line, row.clip.start_frame,
@@ -164,11 +191,12 @@ class RowBuilder {
     if (c.start_s && c.end_s && *c.end_s < *c.start_s) {
       return Bad(line, "end_time", "end is before start");
     }
-    std::ostringstream key;
-    key.precision(17);
-    key << row.video << '|' << c.start_frame.value_or(-1) << '|' << c.end_frame.value_or(-1) << '|'
-        << c.start_s.value_or(-1) << '|' << c.end_s.value_or(-1);
-    const auto [it, fresh] = seen_.emplace(key.str(), line);
+    char span[128];
+    std::snprintf(span, sizeof span, "|%lld|%lld|%.17g|%.17g",
+                  static_cast<long long>(c.start_frame.value_or(-1)),
+                  static_cast<long long>(c.end_frame.value_or(-1)), c.start_s.value_or(-1),
+                  c.end_s.value_or(-1));
+    const auto [it, fresh] = seen_.emplace(row.video + span, line);
     if (!fresh) {
       return Bad(line, "video", "duplicate of line " + std::to_string(it->second) +
                                     " (same video and span)");
@@ -221,6 +249,7 @@ class RowBuilder {
   const ListOptions& options_;
   ListReadResult& out_;
   std::unordered_map<std::string, long> seen_;
+  std::unordered_map<std::string, Role> roles_;
   std::unordered_map<std::string, bool> exists_;
 };
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -61,9 +60,8 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
     }
   }
   if (options_.first_frame < 0) {
-    throw Error("bad_span", "first frame is negative", {.clip = options.clip,
-                                                        .file = path.string(),
-                                                        .field = "start_frame"});
+    throw Error("bad_span", "first frame is negative",
+                {.clip = options.clip, .file = path.string(), .field = "start_frame"});
   }
   // Grab (decode without colour conversion) up to the span: exact, unlike
   // seeking, which lands on key frames in some containers.
@@ -88,10 +86,9 @@ void VideoDecoder::ThrowTruncated(std::int64_t frame, const std::string& why) co
     message += " of " + std::to_string(geometry_.declared_frames) + " declared";
   }
   message += "); the file is truncated or corrupt";
-  throw Error("truncated_video", message,
-              {.clip = options_.clip,
-               .file = path_.string(),
-               .field = "frame " + std::to_string(frame)});
+  throw Error(
+      "truncated_video", message,
+      {.clip = options_.clip, .file = path_.string(), .field = "frame " + std::to_string(frame)});
 }
 
 bool VideoDecoder::Next(AnalysisFrame* frame) {
@@ -118,8 +115,8 @@ bool VideoDecoder::Next(AnalysisFrame* frame) {
                            : static_cast<double>(next_index_) / geometry_.fps;
   if (full_.cols != geometry_.full_width || full_.rows != geometry_.full_height) {
     throw Error("corrupt_video",
-                "frame " + std::to_string(next_index_) + " is " + std::to_string(full_.cols) +
-                    "x" + std::to_string(full_.rows) + ", the stream declares " +
+                "frame " + std::to_string(next_index_) + " is " + std::to_string(full_.cols) + "x" +
+                    std::to_string(full_.rows) + ", the stream declares " +
                     std::to_string(geometry_.full_width) + "x" +
                     std::to_string(geometry_.full_height),
                 {.clip = options_.clip,

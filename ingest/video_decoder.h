@@ -21,9 +21,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace cv {
 class VideoCapture;

@@ -35,5 +35,6 @@ void AddQueueCommand(CLI::App& app);
 void AddWorkerCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
+void AddRetargetCommand(CLI::App& app);
 
 }  // namespace doasido::cli

@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   using namespace doasido::cli;
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
-                         AddSynthCommand};
+                         AddSynthCommand, AddRetargetCommand};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

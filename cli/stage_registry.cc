@@ -2,6 +2,7 @@
 
 #include "db/noop_stage.h"
 #include "ingest/probe.h"
+#include "retarget/kinematic_stage.h"
 
 namespace doasido::cli {
 namespace {
@@ -21,6 +22,9 @@ const std::vector<StageEntry>& StageTable() {
   static const std::vector<StageEntry> kTable = {
       {"probe", "size, fps, frame count, rotation and codec; rejects spans outside the video",
        true, Maker<ingest::ProbeStage, ingest::ProbeConfig>("probe")},
+      {"retarget-kinematic",
+       "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
+       Maker<retarget::KinematicStage, retarget::KinematicStageConfig>("retarget_kinematic")},
       {"noop", "does nothing for work_ms milliseconds (queue diagnostics)", false,
        Maker<NoopStage, NoopConfig>("noop")},
   };

@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Configures and builds doasido (Release) into build/. Extra arguments go to
-# CMake's configure step, e.g. scripts/build.sh -DDOASIDO_SANITIZE=ON.
+# CMake's configure step, e.g. BUILD_TYPE=Debug scripts/build.sh -DDOASIDO_SANITIZE=ON.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "$@" >/dev/null
-cmake --build "$BUILD_DIR" -j"$JOBS"
+# BUILD_TARGETS (space-separated) limits the build, e.g. BUILD_TARGETS=doasido.
+targets=()
+for t in ${BUILD_TARGETS:-}; do targets+=(--target "$t"); done
+cmake --build "$BUILD_DIR" -j"$JOBS" "${targets[@]}"

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-bash scripts/build.sh
+BUILD_TARGETS=doasido bash scripts/build.sh
 WORK=${WORK:-work}
 mkdir -p "$WORK"
 DOASIDO=build/bin/doasido

@@ -1,0 +1,468 @@
+#include "retarget/kinematic_retarget.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <spdlog/spdlog.h>
+
+#include "core/error.h"
+
+namespace doasido::retarget {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+bool IsPalmKeypoint(int k) { return k == 0 || k == 5 || k == 9 || k == 13 || k == 17; }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+double WrapAngle(double a) { return std::remainder(a, 2 * M_PI); }
+
+// x, y, z angles with R = Rx(a) Ry(b) Rz(c) (MuJoCo's order for hinge joints
+// declared x, y, z in one body), the smaller of the two equivalent triples.
+Vec3 EulerXYZ(const Mat3& r) {
+  const Vec3 e = r.eulerAngles(0, 1, 2);
+  Vec3 a(WrapAngle(e[0]), WrapAngle(e[1]), WrapAngle(e[2]));
+  Vec3 b(WrapAngle(e[0] + M_PI), WrapAngle(M_PI - e[1]), WrapAngle(e[2] + M_PI));
+  return a.norm() <= b.norm() ? a : b;
+}
+
+// R, t minimising sum |R a_i + t - b_i|^2.
+void Kabsch(const std::vector<Vec3>& a, const std::vector<Vec3>& b, Mat3* r, Vec3* t) {
+  Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= a.size();
+  cb /= b.size();
+  Mat3 h = Mat3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::JacobiSVD<Mat3> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 d = Mat3::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  *r = svd.matrixV() * d * svd.matrixU().transpose();
+  *t = cb - *r * ca;
+}
+
+}  // namespace
+
+KinematicRetargeter::KinematicRetargeter(const HandModel& hand, KinematicConfig config)
+    : hand_(hand), config_(config), data_(MakeData(hand.model.get())), rng_(config.seed) {
+  const mjModel* m = hand_.model.get();
+  if (hand_.wrist_qpos.size() != 6) {
+    throw Error("bad_embodiment", "kinematic retargeting needs the floating wrist",
+                {.field = "floating_base"});
+  }
+  std::vector<int> qadr = hand_.wrist_qpos;
+  qadr.insert(qadr.end(), hand_.finger_qpos.begin(), hand_.finger_qpos.end());
+  const int n = static_cast<int>(qadr.size());
+  lower_ = Eigen::VectorXd::Constant(n, -kInf);
+  upper_ = Eigen::VectorXd::Constant(n, kInf);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < m->njnt; ++j) {
+      if (m->jnt_qposadr[j] != qadr[k]) continue;
+      qpos_adr_.push_back(qadr[k]);
+      dof_adr_.push_back(m->jnt_dofadr[j]);
+      if (m->jnt_limited[j]) {
+        lower_[k] = m->jnt_range[2 * j];
+        upper_[k] = m->jnt_range[2 * j + 1];
+      }
+    }
+  }
+  for (int i = 0; i < static_cast<int>(hand_.points.size()); ++i) {
+    if (config_.use_intermediate || hand_.points[i].fingertip || hand_.points[i].keypoint == 0) {
+      active_.push_back(i);
+    }
+    if (IsPalmKeypoint(hand_.points[i].keypoint)) palm_points_.push_back(i);
+  }
+  if (palm_points_.size() < 3) {
+    palm_points_.clear();
+    for (int i = 0; i < static_cast<int>(hand_.points.size()); ++i) palm_points_.push_back(i);
+  }
+  Eigen::VectorXd zero(n);
+  for (int k = 0; k < n; ++k) zero[k] = k < 6 ? 0.0 : m->qpos0[qpos_adr_[k]];
+  Clamp(zero);
+  const std::vector<Vec3> at_zero = Points(zero);
+  for (int i : palm_points_) palm_at_zero_.push_back(at_zero[i]);
+  scale_ = config_.scale > 0 ? config_.scale : hand_.embodiment.scale > 0 ? hand_.embodiment.scale : 1.0;
+}
+
+std::vector<std::string> KinematicRetargeter::VariableNames() const {
+  const std::vector<std::string> all = QposNames(hand_.model.get());
+  std::vector<std::string> out;
+  for (int adr : qpos_adr_) out.push_back(all[adr]);
+  return out;
+}
+
+void KinematicRetargeter::Clamp(Eigen::VectorXd& q) const {
+  q = q.cwiseMax(lower_).cwiseMin(upper_);
+}
+
+std::vector<Vec3> KinematicRetargeter::Points(const Eigen::VectorXd& q) {
+  const mjModel* m = hand_.model.get();
+  mjData* d = data_.get();
+  for (size_t k = 0; k < qpos_adr_.size(); ++k) d->qpos[qpos_adr_[k]] = q[k];
+  mj_kinematics(m, d);
+  std::vector<Vec3> out;
+  for (const ModelPoint& p : hand_.points) out.push_back(PointPosition(m, d, p));
+  return out;
+}
+
+std::vector<Vec3> KinematicRetargeter::Targets(const Keypoints21& human) const {
+  const Vec3 wrist = human.row(0).transpose();
+  std::vector<Vec3> out;
+  for (const ModelPoint& p : hand_.points) {
+    out.push_back(wrist + scale_ * (human.row(p.keypoint).transpose() - wrist));
+  }
+  return out;
+}
+
+double KinematicRetargeter::AdaptScale(const std::vector<Keypoints21>& human) {
+  if (config_.scale > 0) return scale_ = config_.scale;
+  if (hand_.embodiment.scale > 0) return scale_ = hand_.embodiment.scale;
+  const mjModel* m = hand_.model.get();
+  Eigen::VectorXd zero(qpos_adr_.size());
+  for (size_t k = 0; k < qpos_adr_.size(); ++k) zero[k] = k < 6 ? 0.0 : m->qpos0[qpos_adr_[k]];
+  Clamp(zero);
+  const std::vector<Vec3> robot = Points(zero);
+  auto find = [&](int keypoint) {
+    for (size_t i = 0; i < hand_.points.size(); ++i) {
+      if (hand_.points[i].keypoint == keypoint) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  const int wrist = find(0);
+  double robot_sum = 0, human_sum = 0;
+  for (int f = 1; f < 5; ++f) {  // index, middle, ring, pinky: keypoints 4f+1 .. 4f+4
+    const int mcp_k = 4 * f + 1, tip_k = 4 * f + 4;
+    const int tip = find(tip_k), mcp = find(mcp_k);
+    if (wrist < 0 || tip < 0) continue;
+    robot_sum += mcp >= 0 ? (robot[mcp] - robot[wrist]).norm() + (robot[tip] - robot[mcp]).norm()
+                          : (robot[tip] - robot[wrist]).norm();
+    std::vector<double> lengths;
+    for (const Keypoints21& h : human) {
+      double len = (h.row(mcp_k) - h.row(0)).norm();
+      for (int k = mcp_k; k < tip_k; ++k) len += (h.row(k + 1) - h.row(k)).norm();
+      if (std::isfinite(len) && len > 0) lengths.push_back(len);
+    }
+    human_sum += Median(lengths);
+  }
+  if (robot_sum > 0 && human_sum > 0) scale_ = robot_sum / human_sum;
+  return scale_;
+}
+
+double KinematicRetargeter::Objective(const Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                                      const Eigen::VectorXd* previous, Eigen::VectorXd* residual,
+                                      Eigen::MatrixXd* jacobian) {
+  const mjModel* m = hand_.model.get();
+  mjData* d = data_.get();
+  const int n = static_cast<int>(q.size());
+  for (int k = 0; k < n; ++k) d->qpos[qpos_adr_[k]] = q[k];
+  mj_kinematics(m, d);
+  if (jacobian) mj_comPos(m, d);
+  const int rows = 3 * static_cast<int>(active_.size()) + (previous ? n : 0);
+  Eigen::VectorXd r(rows);
+  if (jacobian) jacobian->setZero(rows, n);
+  std::vector<mjtNum> jacp(jacobian ? 3 * m->nv : 0);
+  int row = 0;
+  for (int i : active_) {
+    const ModelPoint& p = hand_.points[i];
+    const double w = std::sqrt(p.weight) / config_.sigma;
+    const Vec3 x = PointPosition(m, d, p);
+    r.segment<3>(row) = w * (x - targets[i]);
+    if (jacobian) {
+      const int body = p.site >= 0 ? m->site_bodyid[p.site] : p.body;
+      mj_jac(m, d, jacp.data(), nullptr, x.data(), body);
+      for (int k = 0; k < n; ++k) {
+        for (int a = 0; a < 3; ++a) (*jacobian)(row + a, k) = w * jacp[a * m->nv + dof_adr_[k]];
+      }
+    }
+    row += 3;
+  }
+  if (previous) {
+    const double w = std::sqrt(config_.smooth_weight);
+    r.tail(n) = w * (q - *previous);
+    if (jacobian) jacobian->bottomRows(n).diagonal().setConstant(w);
+  }
+  if (residual) *residual = r;
+  return r.squaredNorm();
+}
+
+Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
+                                              const Eigen::VectorXd* previous, double* objective) {
+  const int n = static_cast<int>(q.size());
+  Clamp(q);
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  double cost = Objective(q, targets, previous, &r, &J);
+  double mu = 1e-3;
+  for (int it = 0; it < config_.max_iterations; ++it) {
+    const Eigen::VectorXd g = J.transpose() * r;
+    const Eigen::MatrixXd H = J.transpose() * J;
+    // Active set: hold joints at a limit that the gradient pushes outward.
+    std::vector<int> free;
+    for (int k = 0; k < n; ++k) {
+      const bool at_lower = q[k] <= lower_[k] + 1e-12 && g[k] > 0;
+      const bool at_upper = q[k] >= upper_[k] - 1e-12 && g[k] < 0;
+      if (!at_lower && !at_upper) free.push_back(k);
+    }
+    if (free.empty()) break;
+    const int f = static_cast<int>(free.size());
+    Eigen::MatrixXd A(f, f);
+    Eigen::VectorXd b(f);
+    for (int i = 0; i < f; ++i) {
+      b[i] = -g[free[i]];
+      for (int j = 0; j < f; ++j) A(i, j) = H(free[i], free[j]);
+    }
+    bool accepted = false;
+    double gain = 0;
+    for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
+      Eigen::MatrixXd Ad = A;
+      for (int i = 0; i < f; ++i) Ad(i, i) += mu * (A(i, i) + 1e-6);
+      const Eigen::VectorXd step = Ad.ldlt().solve(b);
+      Eigen::VectorXd qn = q;
+      for (int i = 0; i < f; ++i) qn[free[i]] += step[i];
+      Clamp(qn);
+      const double cn = Objective(qn, targets, previous, nullptr, nullptr);
+      if (cn < cost) {
+        gain = cost - cn;
+        q = qn;
+        cost = Objective(q, targets, previous, &r, &J);
+        mu = std::max(mu / 3, 1e-9);
+        accepted = true;
+      } else {
+        mu *= 4;
+      }
+    }
+    if (!accepted || gain < 1e-12 * (1 + cost)) break;
+  }
+  if (objective) *objective = cost;
+  return q;
+}
+
+Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& targets) const {
+  const mjModel* m = hand_.model.get();
+  std::vector<Vec3> goal;
+  for (int i : palm_points_) goal.push_back(targets[i]);
+  Mat3 r;
+  Vec3 t;
+  Kabsch(palm_at_zero_, goal, &r, &t);
+  Eigen::VectorXd q(qpos_adr_.size());
+  q.head<3>() = t;
+  q.segment<3>(3) = EulerXYZ(r);
+  for (size_t k = 6; k < qpos_adr_.size(); ++k) q[k] = m->qpos0[qpos_adr_[k]];
+  return q;
+}
+
+FrameSolution KinematicRetargeter::SolveFrame(const Keypoints21& human,
+                                              const Eigen::VectorXd* previous, int restarts) {
+  if (restarts < 0) restarts = config_.restarts;
+  const std::vector<Vec3> targets = Targets(human);
+  const Eigen::VectorXd kabsch = KabschStart(targets);
+  FrameSolution best;
+  best.objective = kInf;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int s = 0; s <= restarts; ++s) {
+    Eigen::VectorXd start;
+    if (s == 0) {
+      start = previous ? *previous : kabsch;
+    } else {
+      start = kabsch;
+      const Vec3 axis(gauss(rng_), gauss(rng_), gauss(rng_));
+      const double angle = config_.wrist_noise_rad * gauss(rng_);
+      const Mat3 r = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix() *
+                     (Eigen::AngleAxisd(kabsch[3], Vec3::UnitX()) *
+                      Eigen::AngleAxisd(kabsch[4], Vec3::UnitY()) *
+                      Eigen::AngleAxisd(kabsch[5], Vec3::UnitZ())).toRotationMatrix();
+      start.segment<3>(3) = EulerXYZ(r);
+      for (int a = 0; a < 3; ++a) start[a] += config_.wrist_noise_m * gauss(rng_);
+      for (int k = 6; k < start.size(); ++k) {
+        const double lo = std::isfinite(lower_[k]) ? lower_[k] : start[k] - 0.5;
+        const double hi = std::isfinite(upper_[k]) ? upper_[k] : start[k] + 0.5;
+        start[k] = lo + (hi - lo) * unit(rng_);
+      }
+    }
+    double objective = 0;
+    Eigen::VectorXd q = Minimise(start, targets, previous, &objective);
+    if (objective < best.objective) {
+      best.objective = objective;
+      best.qpos = q;
+      best.best_start = s;
+    }
+  }
+  const std::vector<Vec3> x = Points(best.qpos);
+  int tips = 0;
+  for (size_t i = 0; i < hand_.points.size(); ++i) {
+    if (!hand_.points[i].fingertip) continue;
+    const double e = (x[i] - targets[i]).norm();
+    best.fingertip_mean += e;
+    best.fingertip_max = std::max(best.fingertip_max, e);
+    ++tips;
+  }
+  if (tips) best.fingertip_mean /= tips;
+  return best;
+}
+
+HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
+                                          const std::vector<bool>& valid, double fps) {
+  auto is_valid = [&](size_t t) { return valid.empty() || valid[t]; };
+  if (config_.scale <= 0 && hand_.embodiment.scale <= 0) {
+    std::vector<Keypoints21> seen;
+    for (size_t t = 0; t < human.size(); ++t) {
+      if (is_valid(t)) seen.push_back(human[t]);
+    }
+    AdaptScale(seen);
+  }
+  HandTrajectory out;
+  out.embodiment = hand_.embodiment.name;
+  out.fps = fps;
+  out.scale = scale_;
+  out.qpos_names = VariableNames();
+  out.qpos.resize(human.size());
+  out.valid.resize(human.size());
+  out.fingertip_error.assign(human.size(), std::nan(""));
+  std::optional<Eigen::VectorXd> previous;
+  for (size_t t = 0; t < human.size(); ++t) {
+    out.valid[t] = is_valid(t);
+    if (!out.valid[t]) {
+      if (previous) out.qpos[t] = *previous;
+      continue;
+    }
+    FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr);
+    out.qpos[t] = s.qpos;
+    out.fingertip_error[t] = s.fingertip_mean;
+    if (!previous) {
+      for (size_t k = 0; k < t; ++k) out.qpos[k] = s.qpos;  // leading unseen frames
+    }
+    previous = s.qpos;
+  }
+  if (!previous) {
+    throw Error("bad_keypoints", "no frame with a valid hand", {.field = "valid"});
+  }
+  return out;
+}
+
+void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path) {
+  Json j;
+  j["embodiment"] = t.embodiment;
+  j["fps"] = t.fps;
+  j["scale"] = t.scale;
+  j["qpos_names"] = t.qpos_names;
+  j["qpos"] = Json::array();
+  for (const auto& q : t.qpos) j["qpos"].push_back(std::vector<double>(q.data(), q.data() + q.size()));
+  j["valid"] = t.valid;
+  j["fingertip_error"] = Json::array();
+  for (double e : t.fingertip_error) j["fingertip_error"].push_back(std::isfinite(e) ? Json(e) : Json());
+  j["object_poses"] = Json::array();
+  for (const Pose& p : t.object_poses) {
+    j["object_poses"].push_back({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
+  }
+  std::ofstream out(path);
+  out << j.dump(1);
+  if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
+}
+
+HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("bad_trajectory", "cannot read", {.file = path.string()});
+  HandTrajectory t;
+  try {
+    const Json j = Json::parse(in);
+    t.embodiment = j.at("embodiment").get<std::string>();
+    t.fps = j.at("fps").get<double>();
+    t.scale = j.at("scale").get<double>();
+    t.qpos_names = j.at("qpos_names").get<std::vector<std::string>>();
+    for (const auto& row : j.at("qpos")) {
+      const auto v = row.get<std::vector<double>>();
+      t.qpos.push_back(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+    }
+    t.valid = j.at("valid").get<std::vector<bool>>();
+    for (const auto& e : j.at("fingertip_error")) {
+      t.fingertip_error.push_back(e.is_null() ? std::nan("") : e.get<double>());
+    }
+    for (const auto& p : j.at("object_poses")) {
+      const auto v = p.get<std::vector<double>>();
+      if (v.size() != 7) throw Error("bad_trajectory", "object pose needs 7 numbers",
+                                     {.file = path.string(), .field = "object_poses"});
+      t.object_poses.push_back({Quat(v[3], v[4], v[5], v[6]), Vec3(v[0], v[1], v[2])});
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw Error("bad_trajectory", e.what(), {.file = path.string()});
+  }
+  return t;
+}
+
+void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path) {
+  std::ofstream out(path);
+  out << "frame,time,valid,fingertip_error";
+  for (const auto& n : t.qpos_names) out << "," << n;
+  const bool object = !t.object_poses.empty();
+  if (object) out << ",obj_tx,obj_ty,obj_tz,obj_qw,obj_qx,obj_qy,obj_qz";
+  out << "\n";
+  out.precision(9);
+  for (size_t f = 0; f < t.qpos.size(); ++f) {
+    out << f << "," << f / t.fps << "," << (t.valid[f] ? 1 : 0) << ",";
+    if (std::isfinite(t.fingertip_error[f])) out << t.fingertip_error[f];
+    for (int k = 0; k < t.qpos[f].size(); ++k) out << "," << t.qpos[f][k];
+    if (object && f < t.object_poses.size()) {
+      const Pose& p = t.object_poses[f];
+      out << "," << p.t.x() << "," << p.t.y() << "," << p.t.z() << "," << p.q.w() << ","
+          << p.q.x() << "," << p.q.y() << "," << p.q.z();
+    }
+    out << "\n";
+  }
+  if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
+}
+
+std::vector<Keypoints21> ReadKeypointCsv(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("bad_keypoints", "cannot read", {.file = path.string()});
+  std::string line;
+  std::getline(in, line);
+  if (line.rfind("k0_x", 0) != 0) {
+    throw Error("bad_keypoints", "header must start with k0_x,k0_y,k0_z",
+                {.file = path.string(), .line = 1});
+  }
+  std::vector<Keypoints21> out;
+  long lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) {
+      try {
+        v.push_back(std::stod(cell));
+      } catch (const std::exception&) {
+        throw Error("bad_keypoints", "not a number: '" + cell + "'",
+                    {.file = path.string(), .line = lineno, .field = "column " + std::to_string(v.size() + 1)});
+      }
+    }
+    if (v.size() != 63) {
+      throw Error("bad_keypoints", "expected 63 values, got " + std::to_string(v.size()),
+                  {.file = path.string(), .line = lineno});
+    }
+    for (double x : v) {
+      if (!std::isfinite(x)) {
+        throw Error("bad_keypoints", "NaN or infinite coordinate", {.file = path.string(), .line = lineno});
+      }
+    }
+    out.push_back(Eigen::Map<const Keypoints21>(v.data()));
+  }
+  return out;
+}
+
+}  // namespace doasido::retarget

@@ -1,0 +1,136 @@
+// Kinematic retargeting (seed section 3.2 and appendix "Robust Kinematic
+// Retargeting"): per frame, the floating-wrist pose and finger joints whose
+// mapped points (fingertips, optionally knuckles) match the human keypoints.
+//
+// Per frame it minimises, in the spirit of mink's damped least squares,
+//   sum_i w_i |p_i(q) - x_i|^2 / sigma^2  +  lambda |q - q_prev|^2
+// over q within the joint limits, where x_i = wrist + s (k_i - wrist) are
+// the human keypoints scaled about the wrist by the human->robot scale s,
+// and p_i(q) come from MuJoCo forward kinematics with Jacobians from mj_jac.
+// The solver is Levenberg-Marquardt with an active set for the joint limits
+// (a joint at a limit whose gradient pushes outward is held). Each frame is
+// solved from the previous frame's answer (warm start) and from `restarts`
+// random configurations (wrist from a Kabsch fit of the palm points, fingers
+// uniform in their ranges); the lowest objective wins, which avoids the local
+// minima a single start falls into (a thumb on the wrong side of a finger).
+//
+// Scale adaptation: s = sum_f L_robot(f) / sum_f L_human(f) over the mapped
+// fingers other than the thumb, where L = |wrist -> knuckle| + straight
+// finger length knuckle -> tip (robot at qpos0, whose fingers are straight;
+// human: median bone lengths over the sequence). The thumb is left out
+// because robot thumbs differ most in where they sit on the palm.
+#pragma once
+
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/config.h"
+#include "core/geometry.h"
+#include "retarget/embodiment.h"
+
+namespace doasido::retarget {
+
+using Keypoints21 = Eigen::Matrix<double, 21, 3, Eigen::RowMajor>;
+
+struct KinematicConfig {
+  int restarts = 4;              // random starts per frame, besides the warm start
+  int max_iterations = 100;      // Levenberg-Marquardt iterations per start
+  double sigma = 0.01;           // m: position residual unit
+  double smooth_weight = 1e-3;   // lambda, per rad^2 (or m^2) of change from the previous frame
+  bool use_intermediate = true;  // also match knuckles and other non-fingertip points
+  double scale = 0;              // > 0 fixes s; 0 uses the embodiment's, else adapts
+  unsigned seed = 0;             // random starts
+  double wrist_noise_rad = 0.3;  // spread of random starts' wrist rotation
+  double wrist_noise_m = 0.01;   // and translation
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_iterations, sigma,
+                                                smooth_weight, use_intermediate, scale, seed,
+                                                wrist_noise_rad, wrist_noise_m)
+
+// The reference the dynamics-aware optimiser tracks.
+struct HandTrajectory {
+  std::string embodiment;
+  double fps = 30;
+  double scale = 1;
+  std::vector<std::string> qpos_names;     // (nq)
+  std::vector<Eigen::VectorXd> qpos;       // (T, nq) robot joint positions, wrist first
+  std::vector<bool> valid;                 // (T) human hand seen; else the pose is held
+  std::vector<double> fingertip_error;     // (T) mean fingertip distance to target, m
+  std::vector<Pose> object_poses;          // (T) object->world, or empty
+};
+
+// JSON: {"embodiment", "fps", "scale", "qpos_names", "qpos": [[...]], "valid",
+// "fingertip_error", "object_poses": [[tx,ty,tz,qw,qx,qy,qz]]}. Throws Error("io").
+void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path);
+// CSV: frame,time,valid,fingertip_error,<qpos names...>[,obj_tx..obj_qz]; one row a frame.
+void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path);
+// Reads WriteTrajectoryJson's output. Throws Error("bad_trajectory").
+HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path);
+
+// Reads a keypoint CSV: header k0_x,k0_y,k0_z,...,k20_z then one row of 63
+// numbers (metres) per frame. Throws Error("bad_keypoints") naming file and line.
+std::vector<Keypoints21> ReadKeypointCsv(const std::filesystem::path& path);
+
+struct FrameSolution {
+  Eigen::VectorXd qpos;
+  double objective = 0;        // the minimised objective
+  double fingertip_mean = 0;   // m
+  double fingertip_max = 0;    // m
+  int best_start = 0;          // 0 = warm start (or Kabsch start on the first frame)
+};
+
+class KinematicRetargeter {
+ public:
+  // `hand` must outlive the retargeter and have a floating base.
+  KinematicRetargeter(const HandModel& hand, KinematicConfig config = {});
+
+  // Sets and returns s for `human` (see the header comment).
+  double AdaptScale(const std::vector<Keypoints21>& human);
+  void set_scale(double s) { scale_ = s; }
+  double scale() const { return scale_; }
+
+  // Solves one frame. `previous` (size nq) is the warm start and the target
+  // of the smoothness term; without it the first start is the Kabsch wrist
+  // fit with fingers at qpos0 and no smoothness term. `restarts` < 0 means
+  // config.restarts.
+  FrameSolution SolveFrame(const Keypoints21& human, const Eigen::VectorXd* previous,
+                           int restarts = -1);
+
+  // Solves a sequence (scale adapted first unless fixed). Frames with
+  // valid[t] false hold the previous pose. `valid` may be empty (all valid).
+  HandTrajectory Solve(const std::vector<Keypoints21>& human, const std::vector<bool>& valid,
+                       double fps);
+
+  // Names of the variables, the order of FrameSolution::qpos.
+  std::vector<std::string> VariableNames() const;
+  // Robot positions of the mapped points (in description order) at `qpos`.
+  std::vector<Vec3> Points(const Eigen::VectorXd& qpos);
+  // Scaled human targets for the mapped points.
+  std::vector<Vec3> Targets(const Keypoints21& human) const;
+
+ private:
+  double Objective(const Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                   const Eigen::VectorXd* previous, Eigen::VectorXd* residual,
+                   Eigen::MatrixXd* jacobian);
+  Eigen::VectorXd Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
+                           const Eigen::VectorXd* previous, double* objective);
+  Eigen::VectorXd KabschStart(const std::vector<Vec3>& targets) const;
+  void Clamp(Eigen::VectorXd& q) const;
+
+  const HandModel& hand_;
+  KinematicConfig config_;
+  DataPtr data_;
+  double scale_ = 1.0;
+  std::vector<int> qpos_adr_, dof_adr_;  // per variable: wrist (6) then fingers
+  std::vector<int> active_;            // indices into hand_.points that are matched
+  std::vector<Vec3> palm_at_zero_;     // palm points at zero wrist, fingers at qpos0
+  std::vector<int> palm_points_;       // indices into hand_.points (wrist + knuckles)
+  Eigen::VectorXd lower_, upper_;      // per qpos; +-inf when unlimited
+  std::mt19937 rng_;
+};
+
+}  // namespace doasido::retarget

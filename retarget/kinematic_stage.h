@@ -1,0 +1,60 @@
+// The `retarget-kinematic` queue stage: a clip's reconstructed right hand
+// (and object) become the reference robot trajectory and the simulation
+// scene the dynamics-aware optimiser starts from (seed section 3.2).
+//
+// Input: the clip bundle (recon/bundle.h, ReadBundle). Its folder is the
+// clip metadata's "bundle" entry when present (absolute, or relative to the
+// folder of the list the clip was ingested from), else
+// <artifact_dir>/../bundle, i.e. the "bundle" folder beside this stage's
+// folder in the clip's artifact directory. Used: hands.npz right hand
+// (joints (T,21,3), valid), object/poses.npz, object/mesh.obj, gravity.npz,
+// meta.json fps.
+//
+// World frame: camera axes rotated so that up (mean of gravity.npz, else
+// the camera's -y) is +z, shifted so the floor z = 0 touches the object's
+// lowest point in the first frame (or lies 5 cm below the lowest hand
+// keypoint when there is no object).
+//
+// Output in artifact_dir: trajectory.json and trajectory.csv
+// (kinematic_retarget.h HandTrajectory: robot qpos per frame, object poses
+// in the world frame), and with an object scene/scene.xml + hull OBJs
+// (scene_builder.h) and robot_scene.xml (hand with floating wrist + scene).
+// Verdict: pass, or flag ("kinematic_error") when the mean fingertip error
+// exceeds flag_fingertip_error; reject ("no_right_hand") without a right hand.
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "retarget/kinematic_retarget.h"
+#include "retarget/scene_builder.h"
+
+namespace doasido::retarget {
+
+struct KinematicStageConfig {
+  std::string hand = "sharpa_right";  // embodiment name or description path
+  std::string robots_dir;             // folder of descriptions; "" = DefaultRobotsDir()
+  double flag_fingertip_error = 0.02; // m, mean over frames
+  KinematicConfig kinematic;
+  SceneConfig scene;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, robots_dir,
+                                                flag_fingertip_error, kinematic, scene)
+
+// ../shared/data/robots beside the source checkout when it exists, else "".
+std::string DefaultRobotsDir();
+
+class KinematicStage : public Stage {
+ public:
+  explicit KinematicStage(KinematicStageConfig config = {}) : config_(std::move(config)) {}
+  std::string Name() const override { return "retarget-kinematic"; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+  std::optional<StageResult> Redecide(const Json& measurements) const override;
+
+ private:
+  KinematicStageConfig config_;
+};
+
+}  // namespace doasido::retarget

@@ -1,0 +1,342 @@
+#include "synth/episode.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "synth/objects.h"
+
+namespace doasido::synth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTouchTol = 0.001;  // metres of clearance that count as touching
+
+// Distance queries against a posed object with a bounding-sphere early out.
+class Proximity {
+ public:
+  explicit Proximity(TriMesh mesh) : mesh_(std::move(mesh)) {
+    centre_ = 0.5 * (mesh_.Min() + mesh_.Max());
+    radius_ = 0;
+    for (int i = 0; i < mesh_.num_vertices(); ++i) {
+      radius_ = std::max(radius_, (Vec3(mesh_.vertices.row(i).transpose()) - centre_).norm());
+    }
+  }
+  // Lower bound on the distance when far away, exact when near.
+  double Distance(const Vec3& p, double near) const {
+    const double bound = (p - centre_).norm() - radius_;
+    if (bound > near) return bound;
+    return DistanceToMesh(mesh_, p);
+  }
+  double radius() const { return radius_; }
+  const Vec3& centre() const { return centre_; }
+
+ private:
+  TriMesh mesh_;
+  Vec3 centre_;
+  double radius_;
+};
+
+// Smallest (distance - radius) over points sampled along the capsules.
+double Clearance(const std::vector<Capsule>& caps, int first, int last, const Proximity& obj) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int c = first; c < last; ++c) {
+    for (int k = 0; k <= 4; ++k) {
+      const Vec3 p = caps[c].a + (caps[c].b - caps[c].a) * (k / 4.0);
+      best = std::min(best, obj.Distance(p, caps[c].radius + 0.01) - caps[c].radius);
+    }
+  }
+  return best;
+}
+
+Vec3 ApproachDirection(Side side, double azimuth, double elevation) {
+  const double sx = side == Side::kRight ? 1.0 : -1.0;
+  return Vec3(sx * std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+              std::sin(elevation));
+}
+
+Mat3 GraspFrame(Side side, const Vec3& a) {
+  const Vec3 n = -a;
+  const Vec3 r = (Vec3::UnitZ() - Vec3::UnitZ().dot(n) * n).normalized();
+  const Vec3 d = side == Side::kRight ? n.cross(r) : r.cross(n);
+  return HandFrame(d, n);
+}
+
+Pose RestPose(const EpisodeSpec& spec) {
+  return {Quat(Eigen::AngleAxisd(spec.object_yaw, Vec3::UnitZ())),
+          Vec3(spec.object_xy.x(), spec.object_xy.y(), 0)};
+}
+
+Pose Translated(const Pose& p, const Vec3& d) { return {p.q, p.t + d}; }
+
+Pose Interpolate(const Pose& a, const Pose& b, double s) {
+  return {a.q.slerp(s, b.q), a.t + (b.t - a.t) * s};
+}
+
+double Seg(double f, double a, double b) { return std::clamp((f - a) / (b - a), 0.0, 1.0); }
+
+// Object pose during manipulation, u in [0, 1]; starts at `rest`.
+Pose VerbPose(Verb verb, const Pose& rest, double height, double side_sign, double scale,
+              double u) {
+  switch (verb) {
+    case Verb::kPickPlace: {
+      const Vec3 target(-side_sign * 0.12 * scale, 0.04 * scale, 0);
+      const double lift = 0.08 * scale * (MinJerk(Seg(u, 0, 0.3)) - MinJerk(Seg(u, 0.7, 1)));
+      const Vec3 move = target * MinJerk(Seg(u, 0.3, 0.7));
+      return Translated(rest, move + Vec3(0, 0, lift));
+    }
+    case Verb::kLiftRotate: {
+      const double lift = 0.10 * scale * (MinJerk(Seg(u, 0, 0.25)) - MinJerk(Seg(u, 0.75, 1)));
+      const double tilt =
+          -side_sign * 1.2 * (MinJerk(Seg(u, 0.25, 0.5)) - MinJerk(Seg(u, 0.5, 0.75)));
+      const Vec3 pivot = rest.t + Vec3(0, 0, height / 2 + lift);
+      const Quat r(Eigen::AngleAxisd(tilt, Vec3::UnitY()));
+      // Rotate about the object's centre, then lift.
+      const Vec3 base = rest.t + Vec3(0, 0, lift);
+      return {r * rest.q, pivot + r * (base - pivot)};
+    }
+    case Verb::kSlide: {
+      const double x = 0.08 * scale * std::sin(2 * kPi * 2 * MinJerk(u)) * side_sign;
+      const double y = 0.02 * scale * (1 - std::cos(2 * kPi * MinJerk(u)));
+      return Translated(rest, Vec3(x, y, 0));
+    }
+    case Verb::kStir: {
+      const double a = 2 * kPi * 1.5 * MinJerk(u);
+      const double r = 0.05 * scale;
+      return Translated(rest, Vec3(side_sign * r * (std::cos(a) - 1), r * std::sin(a), 0));
+    }
+  }
+  return rest;
+}
+
+// Carrying the object out of view and back (for LeaveFrame::kObject).
+Pose CarryOutPose(const Pose& rest, double side_sign, double u) {
+  const double lift = 0.12 * (MinJerk(Seg(u, 0, 0.1)) - MinJerk(Seg(u, 0.87, 1)));
+  const double out = 0.9 * (MinJerk(Seg(u, 0.1, 0.32)) - MinJerk(Seg(u, 0.6, 0.87)));
+  return Translated(rest, Vec3(side_sign * out, 0, lift));
+}
+
+HandPose WithCurl(const Pose& wrist, const std::array<double, 5>& curl, double s) {
+  HandPose p = RelaxedPose(wrist);
+  for (int f = 0; f < 5; ++f) SetFingerCurl(p, f, curl[f] * s);
+  return p;
+}
+
+}  // namespace
+
+const char* VerbName(Verb verb) {
+  switch (verb) {
+    case Verb::kPickPlace:
+      return "pick_place";
+    case Verb::kLiftRotate:
+      return "lift_rotate";
+    case Verb::kSlide:
+      return "slide";
+    case Verb::kStir:
+      return "stir";
+  }
+  return "unknown";
+}
+
+double MinJerk(double t) {
+  t = std::clamp(t, 0.0, 1.0);
+  return t * t * t * (10 - 15 * t + 6 * t * t);
+}
+
+Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
+                 double object_yaw, const HandShape& shape) {
+  const Pose rest{Quat(Eigen::AngleAxisd(object_yaw, Vec3::UnitZ())), Vec3::Zero()};
+  const Proximity obj(object.Transformed(rest));
+  const double height = object.Max().z();
+  const Vec3 target(0, 0, std::min(0.55 * height, 0.07));
+  const Vec3 a = ApproachDirection(side, azimuth, elevation);
+  const Mat3 R = GraspFrame(side, a);
+  const Vec3 palm_local(0, 0.05 * shape.scale, 0);
+
+  auto posed = [&](double dist, const std::array<double, 5>& curl) {
+    const Vec3 palm = target + a * dist;
+    const Pose wrist{Quat(R), palm - R * palm_local};
+    const HandPose hp = WithCurl(wrist, curl, 1.0);
+    const HandJoints j = HandJointPositions(hp, side, shape);
+    return std::make_pair(hp, HandCapsules(j, hp, side, shape));
+  };
+  // Move the open hand in along -a until it first touches.
+  std::array<double, 5> open{};
+  const int n_caps = static_cast<int>(posed(1.0, open).second.size());
+  double far = obj.radius() + 0.15, near = 0.0;
+  auto touching = [&](double dist) {
+    return Clearance(posed(dist, open).second, 0, n_caps, obj) <= kTouchTol;
+  };
+  double step_hi = far;
+  for (double d = far; d >= 0; d -= 0.005) {
+    if (touching(d)) {
+      near = d;
+      break;
+    }
+    step_hi = d;
+  }
+  for (int it = 0; it < 12; ++it) {  // boundary between touching (near) and free (step_hi)
+    const double mid = 0.5 * (near + step_hi);
+    (touching(mid) ? near : step_hi) = mid;
+  }
+  const double dist = step_hi + 0.002;
+  Grasp g;
+  g.curl.fill(0.0);
+  for (int f = 0; f < 5; ++f) {
+    auto clearance = [&](double c) {
+      std::array<double, 5> curl = g.curl;
+      curl[f] = c;
+      return Clearance(posed(dist, curl).second, 3 * f, 3 * f + 3, obj);
+    };
+    double lo = 0, hi = -1;
+    for (double c = 0; c <= 1.0 + 1e-9; c += 0.04) {
+      if (clearance(c) <= kTouchTol) {
+        hi = c;
+        break;
+      }
+      lo = c;
+    }
+    if (hi < 0) {
+      g.curl[f] = 1.0;
+      continue;
+    }
+    if (hi == 0) {
+      g.touching[f] = true;
+      continue;
+    }
+    for (int it = 0; it < 10; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (clearance(mid) <= kTouchTol ? hi : lo) = mid;
+    }
+    g.curl[f] = hi;
+    g.touching[f] = true;
+  }
+  const Pose wrist = posed(dist, g.curl).first.wrist;
+  g.wrist_in_object = rest.Inverse() * wrist;
+  return g;
+}
+
+Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {
+  Episode ep;
+  ep.spec = spec;
+  const Side side = spec.active;
+  const int s_idx = static_cast<int>(side);
+  const double sx = side == Side::kRight ? 1.0 : -1.0;
+  ep.grasp = SolveGrasp(object, side, spec.approach_azimuth, spec.approach_elevation,
+                        spec.object_yaw, shape);
+  const Pose rest = RestPose(spec);
+  const Pose rest_xy{Quat::Identity(), rest.t};  // grasp is relative to the yawed object
+  const double height = object.Max().z();
+  const Vec3 a = ApproachDirection(side, spec.approach_azimuth, spec.approach_elevation);
+  // The grasp was solved with the object yawed at the origin.
+  const Pose g0 = rest_xy *
+                  Pose{Quat(Eigen::AngleAxisd(spec.object_yaw, Vec3::UnitZ())), Vec3::Zero()} *
+                  ep.grasp.wrist_in_object;
+  auto grasp_at = [&](const Pose& object_pose) { return object_pose * ep.grasp.wrist_in_object; };
+  const Pose pre = Translated(g0, a * 0.06);
+  const Pose start = Translated(g0, a * 0.16 + Vec3(0, 0, 0.04));
+  const Pose hover = Translated(g0, a * 0.035);
+  const Pose away = Translated(g0, Vec3(sx * 0.9, 0, 0.15));
+  const std::array<double, 5> curl = ep.grasp.curl;
+  const double T = std::max(spec.frames - 1, 1);
+
+  for (int i = 0; i < spec.frames; ++i) {
+    const double f = i;
+    EpisodeFrame fr;
+    fr.object_pose = rest;
+    Pose wrist = start;
+    double s_curl = 0;
+    bool contact = false;
+    if (spec.static_scene) {
+      wrist = Translated(g0, a * 0.05);
+      fr.phase = "static";
+    } else if (!spec.touch) {
+      if (f <= 0.3 * T) {
+        wrist = Interpolate(start, hover, MinJerk(Seg(f, 0, 0.3 * T)));
+        fr.phase = "reach";
+      } else if (f <= 0.75 * T) {
+        const double w = std::sin(2 * kPi * (f - 0.3 * T) / (0.45 * T));
+        wrist = Translated(hover, Vec3(0, 0.008 * w, 0.004 * w));
+        fr.phase = "hover";
+      } else {
+        wrist = Interpolate(hover, start, MinJerk(Seg(f, 0.75 * T, T)));
+        fr.phase = "retract";
+      }
+    } else {
+      // Phase boundaries as fractions of the clip.
+      double b_reach = 0.20, b_appr = 0.30, b_close = 0.38, b_manip = 0.78, b_open = 0.86;
+      if (spec.leave == LeaveFrame::kHand) {
+        b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.50, b_open = 0.55;
+      } else if (spec.leave == LeaveFrame::kObject) {
+        b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.86, b_open = 0.92;
+      }
+      auto object_at = [&](double u) {
+        return spec.leave == LeaveFrame::kObject
+                   ? CarryOutPose(rest, sx, u)
+                   : VerbPose(spec.verb, rest, height, sx, spec.manipulation_scale, u);
+      };
+      const Pose final_object = object_at(1.0);
+      const Pose g1 = grasp_at(final_object);
+      if (f <= b_reach * T) {
+        wrist = Interpolate(start, pre, MinJerk(Seg(f, 0, b_reach * T)));
+        fr.phase = "reach";
+      } else if (f <= b_appr * T) {
+        wrist = Interpolate(pre, g0, MinJerk(Seg(f, b_reach * T, b_appr * T)));
+        fr.phase = "approach";
+      } else if (f < b_close * T) {
+        wrist = g0;
+        s_curl = MinJerk(Seg(f, b_appr * T, b_close * T));
+        fr.phase = "grasp";
+      } else if (f <= b_manip * T) {
+        const double u = Seg(f, b_close * T, b_manip * T);
+        fr.object_pose = object_at(u);
+        wrist = grasp_at(fr.object_pose);
+        s_curl = 1;
+        contact = true;
+        fr.phase = "manipulate";
+      } else {
+        fr.object_pose = final_object;
+        const double open_s = Seg(f, b_manip * T, b_open * T);
+        s_curl = 1 - MinJerk(open_s);
+        contact = open_s <= 0.0;
+        const Pose pre1 = Translated(g1, a * 0.06);
+        const Pose start1 = Translated(g1, a * 0.16 + Vec3(0, 0, 0.04));
+        if (f <= b_open * T) {
+          wrist = g1;
+          fr.phase = "release";
+        } else if (spec.leave == LeaveFrame::kHand) {
+          const Pose away1 = Translated(g1, away.t - g0.t);
+          if (f <= 0.65 * T) {
+            wrist = Interpolate(g1, away1, MinJerk(Seg(f, b_open * T, 0.65 * T)));
+            fr.phase = "exit";
+          } else if (f <= 0.80 * T) {
+            wrist = away1;
+            fr.phase = "away";
+          } else {
+            wrist = Interpolate(away1, start1, MinJerk(Seg(f, 0.80 * T, T)));
+            fr.phase = "return";
+          }
+        } else {
+          const double r = Seg(f, b_open * T, T);
+          wrist = r < 0.4 ? Interpolate(g1, pre1, MinJerk(r / 0.4))
+                          : Interpolate(pre1, start1, MinJerk((r - 0.4) / 0.6));
+          fr.phase = "retract";
+        }
+      }
+    }
+    fr.hands[s_idx] = WithCurl(wrist, curl, s_curl);
+    fr.contact[s_idx] = contact;
+    if (spec.two_hands) {
+      const Side other = side == Side::kRight ? Side::kLeft : Side::kRight;
+      const double drift = spec.static_scene ? 0.0 : std::sin(2 * kPi * 1.3 * f / T);
+      const Vec3 pos(rest.t.x() - sx * 0.2 + 0.01 * drift, rest.t.y() - 0.06, 0.045);
+      const Vec3 d = Vec3(sx * 0.35, 1, 0).normalized();
+      fr.hands[static_cast<int>(other)] =
+          RelaxedPose(Pose{Quat(HandFrame(d, -Vec3::UnitZ())), pos});
+    }
+    ep.frames.push_back(std::move(fr));
+  }
+  return ep;
+}
+
+}  // namespace doasido::synth

@@ -1,0 +1,75 @@
+// Scripted manipulation episodes: reach -> grasp (fingers close onto the
+// object surface) -> manipulate (a verb) -> release -> retract, for one
+// active hand, optionally with a second, idle hand. The object rests on the
+// table (object-local z = 0 on the world plane z = 0) whenever it is not held.
+// Everything is in the world frame (+z up, table top z = 0); the camera is
+// chosen by the generator.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/mesh.h"
+#include "synth/hand_model.h"
+
+namespace doasido::synth {
+
+enum class Verb { kPickPlace, kLiftRotate, kSlide, kStir };
+const char* VerbName(Verb verb);
+
+enum class LeaveFrame { kNone, kHand, kObject };
+
+struct EpisodeSpec {
+  Verb verb = Verb::kPickPlace;
+  int frames = 90;
+  Side active = Side::kRight;
+  bool two_hands = false;
+  bool touch = true;                     // false: the hand hovers near the object, never touching
+  bool static_scene = false;             // nothing moves: the hand rests beside the object
+  LeaveFrame leave = LeaveFrame::kNone;  // who leaves the view mid-episode
+  Vec2 object_xy = Vec2(0, 0.05);
+  double object_yaw = 0;
+  double approach_azimuth = -0.35;   // radians from world +x (right hand; mirrored for left)
+  double approach_elevation = 0.55;  // radians above the horizontal
+  double manipulation_scale = 1.0;   // scales verb amplitudes
+};
+
+// A grasp: the wrist in the object frame and the per-finger curl at which
+// each finger first touches the object surface (thumb first).
+struct Grasp {
+  Pose wrist_in_object;
+  std::array<double, 5> curl{};
+  std::array<bool, 5> touching{};  // whether the finger reached the surface
+};
+
+// Places the hand against the object (palm moved along the approach
+// direction until the hand touches the surface, then backed off 2 mm) and
+// closes each finger until its capsules touch the surface (bisection on the
+// curl). `object` is object-local; the object is assumed at rest with yaw
+// `object_yaw` (the approach direction is in the world).
+Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
+                 double object_yaw, const HandShape& shape = {});
+
+struct EpisodeFrame {
+  Pose object_pose;                              // object-local -> world
+  std::array<std::optional<HandPose>, 2> hands;  // by Side
+  std::array<bool, 2> contact{};                 // hand touches the object
+  std::string phase;                             // reach, approach, close, manipulate, ...
+};
+
+struct Episode {
+  EpisodeSpec spec;
+  Grasp grasp;
+  std::vector<EpisodeFrame> frames;
+};
+
+Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape = {});
+
+// Minimum-jerk profile s(t) = 10t^3 - 15t^4 + 6t^5 for t clamped to [0, 1].
+double MinJerk(double t);
+
+}  // namespace doasido::synth

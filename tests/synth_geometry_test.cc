@@ -1,0 +1,220 @@
+// Geometry of the synthetic world: hand proportions and mirroring, closed
+// meshes, the rasteriser against a brute-force reference, and grasps whose
+// fingers end on the object surface.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "synth/episode.h"
+#include "synth/hand_model.h"
+#include "synth/objects.h"
+#include "synth/rasterizer.h"
+#include "synth/render.h"
+#include "tests/test_util.h"
+
+namespace doasido::synth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Vec3 Row(const HandJoints& j, int i) { return j.row(i).transpose(); }
+
+TEST(HandModel, BoneLengthsMatchShapeForAnyPose) {
+  HandShape shape;
+  HandPose pose = RelaxedPose(
+      Pose{Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized())), Vec3(0.1, -0.2, 0.5)});
+  for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, 0.2 * f);
+  pose.abduct = {0.2, -0.1, 0.05, 0.1, 0.2};
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const HandJoints j = HandJointPositions(pose, side, shape);
+    for (int f = 0; f < 5; ++f) {
+      for (int s = 0; s < 3; ++s) {
+        const int a = 1 + 4 * f + s;
+        EXPECT_NEAR((Row(j, a + 1) - Row(j, a)).norm(), shape.length[f][s], 1e-12)
+            << "finger " << f << " segment " << s;
+      }
+    }
+    EXPECT_NEAR((Row(j, 0) - pose.wrist.t).norm(), 0.0, 1e-12);
+  }
+}
+
+TEST(HandModel, AdultProportionsAndOpenPoseOrder) {
+  HandPose flat;  // identity wrist, all angles zero: fingers straight along +y
+  const HandJoints j = HandJointPositions(flat, Side::kRight);
+  // Wrist to middle fingertip of an adult hand is about 17-20 cm.
+  EXPECT_GT(Row(j, 12).y(), 0.17);
+  EXPECT_LT(Row(j, 12).y(), 0.20);
+  // Middle finger is the longest, pinky the shortest.
+  EXPECT_GT(Row(j, 12).y(), Row(j, 8).y());
+  EXPECT_GT(Row(j, 12).y(), Row(j, 16).y());
+  EXPECT_GT(Row(j, 16).y(), Row(j, 20).y());
+  // Radial order along +x on a right hand: thumb, index, middle, ring, pinky.
+  EXPECT_GT(Row(j, 4).x(), Row(j, 8).x());
+  EXPECT_GT(Row(j, 5).x(), Row(j, 9).x());
+  EXPECT_GT(Row(j, 9).x(), Row(j, 13).x());
+  EXPECT_GT(Row(j, 13).x(), Row(j, 17).x());
+}
+
+TEST(HandModel, LeftIsMirrorOfRight) {
+  HandPose pose = RelaxedPose(Pose::Identity());
+  for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, 0.5);
+  const HandJoints r = HandJointPositions(pose, Side::kRight);
+  const HandJoints l = HandJointPositions(pose, Side::kLeft);
+  for (int i = 0; i < 21; ++i) {
+    EXPECT_NEAR(l(i, 0), -r(i, 0), 1e-12);
+    EXPECT_NEAR(l(i, 1), r(i, 1), 1e-12);
+    EXPECT_NEAR(l(i, 2), r(i, 2), 1e-12);
+  }
+}
+
+TEST(HandModel, FlexionCurlsTowardsThePalm) {
+  HandPose pose;
+  const HandJoints open = HandJointPositions(pose, Side::kRight);
+  for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, 1.0);
+  const HandJoints fist = HandJointPositions(pose, Side::kRight);
+  for (int tip : {8, 12, 16, 20}) {
+    EXPECT_LT((Row(fist, tip) - Row(fist, 0)).norm(), (Row(open, tip) - Row(open, 0)).norm());
+    EXPECT_GT(Row(fist, tip).z(), 0.01);  // palmar side is +z
+  }
+}
+
+TEST(HandModel, CapsuleMeshIsClosedAndFollowsThePose) {
+  HandPose pose = RelaxedPose(Pose{Quat::Identity(), Vec3(0, 0, 0.4)});
+  const PosedHand hand = PoseHand(pose, Side::kLeft);
+  double expected = 0;
+  for (const Capsule& c : hand.capsules) {
+    const double r = c.radius, len = (c.b - c.a).norm();
+    expected += kPi * r * r * len + 4.0 / 3.0 * kPi * r * r * r;
+  }
+  // Sum of the capsules' own volumes (they overlap, so compare the sum).
+  EXPECT_NEAR(hand.mesh.Volume(), expected, 0.06 * expected);
+  // Every edge is shared by exactly two faces: a closed surface.
+  std::map<std::pair<int, int>, int> edges;
+  for (int f = 0; f < hand.mesh.num_faces(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = hand.mesh.faces(f, k), b = hand.mesh.faces(f, (k + 1) % 3);
+      edges[{a, b}]++;
+    }
+  }
+  for (const auto& [e, n] : edges) {
+    ASSERT_EQ(n, 1);
+    ASSERT_EQ(edges.count({e.second, e.first}), 1u) << "open edge";
+  }
+  // The same topology for another pose.
+  for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, 0.9);
+  const PosedHand fist = PoseHand(pose, Side::kLeft);
+  EXPECT_EQ(fist.mesh.num_vertices(), hand.mesh.num_vertices());
+  EXPECT_EQ(fist.mesh.faces, hand.mesh.faces);
+}
+
+TEST(Objects, VolumesRestingPlaneAndInsideTest) {
+  const TriMesh box = MakeBox(0.1, 0.2, 0.3);
+  EXPECT_NEAR(box.Volume(), 0.006, 1e-12);
+  const TriMesh cyl = MakeCylinder(0.05, 0.1, 64);
+  EXPECT_NEAR(cyl.Volume(), kPi * 0.05 * 0.05 * 0.1, 0.01 * cyl.Volume());
+  const TriMesh sph = MakeSphere(0.05, 48, 32);
+  EXPECT_NEAR(sph.Volume(), 4.0 / 3.0 * kPi * std::pow(0.05, 3), 0.02 * sph.Volume());
+  const TriMesh mug = MakeMug(0.04, 0.1, 0.006, 64);
+  const double shell = kPi * 0.04 * 0.04 * 0.1 - kPi * 0.034 * 0.034 * 0.094;
+  EXPECT_GT(mug.Volume(), shell);        // wall + handle
+  EXPECT_LT(mug.Volume(), 1.5 * shell);  // the cavity is not filled
+  for (const TriMesh* m : {&box, &cyl, &sph, &mug}) EXPECT_NEAR(m->Min().z(), 0.0, 1e-12);
+  EXPECT_TRUE(InsideMesh(cyl, Vec3(0, 0, 0.05)));
+  EXPECT_FALSE(InsideMesh(cyl, Vec3(0.06, 0, 0.05)));
+  EXPECT_FALSE(InsideMesh(mug, Vec3(0, 0, 0.05)));     // in the cavity
+  EXPECT_TRUE(InsideMesh(mug, Vec3(0.037, 0, 0.05)));  // in the wall
+  EXPECT_NEAR(DistanceToMesh(box, Vec3(0, 0, 0.4)), 0.1, 1e-12);
+}
+
+TEST(Objects, MeshFileRestsOnTheTable) {
+  const TriMesh m =
+      LoadObjectMesh(testing::SharedData() / "meshes/ycb/006_mustard_bottle_textured.obj");
+  EXPECT_EQ(m.num_faces(), 16384);  // the file header says 16384 faces
+  EXPECT_NEAR(m.Min().z(), 0.0, 1e-12);
+  EXPECT_NEAR(m.Min().x() + m.Max().x(), 0.0, 1e-12);
+  EXPECT_GT(m.Max().z(), 0.15);  // a 19 cm bottle
+}
+
+TEST(Rasterizer, MatchesBruteForceReference) {
+  const Camera cam{96, 72, 80, 80, 47.5, 35.5};
+  HandPose pose =
+      RelaxedPose(Pose{Quat(HandFrame(Vec3(0, -1, 0), Vec3(0, 0, -1))), Vec3(0.0, 0.06, 0.35)});
+  const TriMesh hand = PoseHand(pose, Side::kRight).mesh;
+  const TriMesh sphere = MakeSphere(0.04).Transformed(Pose{Quat::Identity(), Vec3(0.03, 0, 0.3)});
+  RasterTarget fast, slow;
+  fast.Reset(cam.width, cam.height);
+  slow.Reset(cam.width, cam.height);
+  Rasterize(sphere, cam, 3, fast);
+  Rasterize(hand, cam, 5, fast);
+  RasterizeBruteForce(sphere, cam, 3, slow);
+  RasterizeBruteForce(hand, cam, 5, slow);
+  int covered = 0, same_surface = 0;
+  double max_dz = 0;
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const std::uint8_t a = fast.surface.at<std::uint8_t>(y, x),
+                         b = slow.surface.at<std::uint8_t>(y, x);
+      if (a == 0 && b == 0) continue;
+      ++covered;
+      same_surface += a == b;
+      if (a == b)
+        max_dz = std::max<double>(
+            max_dz, std::abs(fast.depth.at<float>(y, x) - slow.depth.at<float>(y, x)));
+    }
+  }
+  EXPECT_GT(covered, 500);
+  EXPECT_GE(same_surface, covered - 2);  // ties on shared edges may differ
+  EXPECT_LT(max_dz, 1e-5);
+}
+
+TEST(Rasterizer, DepthOfAPlaneIsExactAndNearClippingWorks) {
+  const Camera cam{64, 48, 50, 50, 31.5, 23.5};
+  // A huge tilted plane passing behind the camera: z = 0.5 + 0.5 y.
+  TriMesh plane = MakePlane(20, 20);
+  const Quat tilt(Eigen::AngleAxisd(std::atan(0.5), Vec3::UnitX()));
+  plane = plane.Transformed(Pose{tilt, Vec3(0, 0, 0.5)});
+  RasterTarget t;
+  t.Reset(cam.width, cam.height);
+  Rasterize(plane, cam, 1, t);
+  for (int y = 0; y < cam.height; y += 3) {
+    for (int x = 0; x < cam.width; x += 3) {
+      // Ray (u, v) hits z = 0.5 + 0.5 * (v - cy) / f * z.
+      const double k = (y - cam.cy) / cam.fy;
+      const double z = 0.5 / (1 - 0.5 * k);
+      if (z <= 0.01 || z > 100) continue;
+      ASSERT_EQ(t.surface.at<std::uint8_t>(y, x), 1) << x << "," << y;
+      EXPECT_NEAR(t.depth.at<float>(y, x), z, 1e-5 * z);
+    }
+  }
+}
+
+TEST(Grasp, FingertipsEndOnTheSurface) {
+  for (const TriMesh& object : {MakeCylinder(0.035, 0.12), MakeBox(0.06, 0.06, 0.1)}) {
+    const Grasp g = SolveGrasp(object, Side::kRight, -0.3, 0.5, 0.2);
+    const Pose rest{Quat(Eigen::AngleAxisd(0.2, Vec3::UnitZ())), Vec3::Zero()};
+    const TriMesh posed = object.Transformed(rest);
+    HandPose pose = RelaxedPose(rest * g.wrist_in_object);
+    for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, g.curl[f]);
+    const PosedHand hand = PoseHand(pose, Side::kRight);
+    int touching = 0;
+    for (int f = 0; f < 5; ++f) {
+      if (!g.touching[f]) continue;
+      ++touching;
+      double clearance = 1e9;
+      for (int s = 0; s < 3; ++s) {
+        const Capsule& c = hand.capsules[3 * f + s];
+        for (int k = 0; k <= 8; ++k) {
+          const Vec3 p = c.a + (c.b - c.a) * (k / 8.0);
+          clearance = std::min(clearance, DistanceToMesh(posed, p) - c.radius);
+          EXPECT_FALSE(InsideMesh(posed, p)) << "finger " << f << " inside the object";
+        }
+      }
+      EXPECT_LT(std::abs(clearance), 0.0015) << "finger " << f;
+    }
+    EXPECT_GE(touching, 4);
+  }
+}
+
+}  // namespace
+}  // namespace doasido::synth

@@ -1,6 +1,12 @@
 #include "cli/stage_registry.h"
 
 #include "db/noop_stage.h"
+#include "filters/activity.h"
+#include "filters/analyze_stage.h"
+#include "filters/camera_motion.h"
+#include "filters/interaction.h"
+#include "filters/out_of_frame.h"
+#include "filters/shot_boundary.h"
 #include "ingest/probe.h"
 #include "retarget/kinematic_stage.h"
 
@@ -22,6 +28,23 @@ const std::vector<StageEntry>& StageTable() {
   static const std::vector<StageEntry> kTable = {
       {"probe", "size, fps, frame count, rotation and codec; rejects spans outside the video",
        true, Maker<ingest::ProbeStage, ingest::ProbeConfig>("probe")},
+      {"hand_object_detector",
+       "runs an external hand-object detector command and stores its 100DOH-format boxes", false,
+       Maker<filters::ExternalDetectorStage, filters::ExternalDetectorConfig>(
+           "hand_object_detector")},
+      {"filters_analyze",
+       "decodes the clip once at ~256 px and records every filter's per-frame signals", true,
+       Maker<filters::AnalyzeStage, filters::AnalyzeConfig>("filters_analyze")},
+      {"interaction", "rejects clips without hand-object contact", true,
+       Maker<filters::InteractionStage, filters::InteractionConfig>("interaction")},
+      {"out_of_frame", "rejects clips whose hand or touched object leaves the frame", true,
+       Maker<filters::OutOfFrameStage, filters::OutOfFrameConfig>("out_of_frame")},
+      {"shot_boundary", "trims a clip to its longest shot, or rejects it across a cut", true,
+       Maker<filters::ShotBoundaryStage, filters::ShotBoundaryConfig>("shot_boundary")},
+      {"activity", "rejects clips with no motion in the hand region", true,
+       Maker<filters::ActivityStage, filters::ActivityConfig>("activity")},
+      {"camera_motion", "rejects (or flags) clips whose camera pans, shakes or zooms", true,
+       Maker<filters::CameraMotionStage, filters::CameraMotionConfig>("camera_motion")},
       {"retarget-kinematic",
        "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
        Maker<retarget::KinematicStage, retarget::KinematicStageConfig>("retarget_kinematic")},

@@ -20,6 +20,7 @@ find_package(tomlplusplus REQUIRED)
 pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)
 pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)
 pkg_check_modules(TINYXML2 REQUIRED IMPORTED_TARGET tinyxml2)
+pkg_check_modules(QHULL REQUIRED IMPORTED_TARGET qhull_r)
 
 # OpenCV's CMake package has no imported target; give it one so modules
 # link it like everything else.

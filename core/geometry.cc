@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/SVD>
+
 namespace doasido {
 
 Mat4 Pose::Matrix() const {
@@ -15,6 +17,23 @@ Mat4 Pose::Matrix() const {
 Pose Pose::Inverse() const {
   const Quat qi = q.conjugate();
   return {qi, -(qi * t)};
+}
+
+Pose FitRigid(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  Mat3 h = Mat3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::JacobiSVD<Mat3> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 d = Mat3::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  const Mat3 r = svd.matrixV() * d * svd.matrixU().transpose();
+  return {Quat(r), cb - r * ca};
 }
 
 double RotationAngle(const Quat& a, const Quat& b) {

@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <vector>
+
 namespace doasido {
 
 using Vec2 = Eigen::Vector2d;
@@ -27,6 +29,11 @@ struct Pose {
   Pose operator*(const Pose& other) const { return {q * other.q, q * other.t + t}; }
   Pose Inverse() const;
 };
+
+// The rigid transform minimising sum |pose * a_i - b_i|^2 (Kabsch: SVD of
+// the cross-covariance of the centred sets, reflection excluded). a and b
+// have the same size, at least 3 points not all on a line.
+Pose FitRigid(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 
 // Angle in radians of the rotation taking a to b, in [0, pi].
 double RotationAngle(const Quat& a, const Quat& b);

@@ -96,21 +96,15 @@ db::Statement& Database::Prepare(const std::string& sql) {
 int Database::LatestSchemaVersion() { return static_cast<int>(db::Migrations().size()); }
 
 int Database::SchemaVersion() {
-  auto& q = Prepare("SELECT version FROM schema_version");
-  const int v = q.Step() ? static_cast<int>(q.Int(0)) : 0;
-  q.Reset();
-  return v;
+  return static_cast<int>(QueryInt("SELECT version FROM schema_version"));
 }
 
 void Database::Migrate() {
   db::Exec(db_, "CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
   Transaction tx(*this);
   int version = SchemaVersion();
-  if (version == 0) {
-    auto& count = Prepare("SELECT COUNT(*) FROM schema_version");
-    count.Step();
-    if (count.Int(0) == 0) Prepare("INSERT INTO schema_version VALUES (0)").Run();
-    count.Reset();
+  if (version == 0 && QueryInt("SELECT COUNT(*) FROM schema_version") == 0) {
+    Prepare("INSERT INTO schema_version VALUES (0)").Run();
   }
   const auto& migrations = db::Migrations();
   if (version > static_cast<int>(migrations.size())) {
@@ -171,11 +165,7 @@ void Database::Transaction::Commit() {
 void Database::SetPipeline(const std::vector<std::string>& stages) {
   Transaction tx(*this);
   const auto current = Pipeline();
-  auto& runs = Prepare("SELECT COUNT(*) FROM stage_runs");
-  runs.Step();
-  const bool has_runs = runs.Int(0) > 0;
-  runs.Reset();
-  if (has_runs) {
+  if (QueryInt("SELECT COUNT(*) FROM stage_runs") > 0) {
     const bool appends = stages.size() >= current.size() &&
                          std::equal(current.begin(), current.end(), stages.begin());
     if (!appends) {
@@ -420,21 +410,16 @@ ClipContext Database::LoadContext(ClipId clip, const std::string& stage) {
   return ctx;
 }
 
-std::int64_t Database::CountClips() {
-  auto& q = Prepare("SELECT COUNT(*) FROM clips");
-  q.Step();
-  const auto n = q.Int(0);
+std::int64_t Database::QueryInt(const std::string& sql) {
+  auto& q = Prepare(sql);
+  const std::int64_t n = q.Step() ? q.Int(0) : 0;
   q.Reset();
   return n;
 }
 
-std::int64_t Database::CountVideos() {
-  auto& q = Prepare("SELECT COUNT(*) FROM videos");
-  q.Step();
-  const auto n = q.Int(0);
-  q.Reset();
-  return n;
-}
+std::int64_t Database::CountClips() { return QueryInt("SELECT COUNT(*) FROM clips"); }
+
+std::int64_t Database::CountVideos() { return QueryInt("SELECT COUNT(*) FROM videos"); }
 
 // ---- Queue ------------------------------------------------------------------
 

@@ -186,6 +186,8 @@ class Database {
 
  private:
   db::Statement& Prepare(const std::string& sql);
+  // The first column of the first row of a query, or 0 without rows.
+  std::int64_t QueryInt(const std::string& sql);
   void Migrate();
   void QueueNextStage(ClipId clip, const std::string& stage);
   void DropLaterStages(ClipId clip, const std::string& stage);

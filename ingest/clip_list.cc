@@ -695,7 +695,10 @@ std::optional<FrameName> ParseFrameName(const std::string& name) {
   return out;
 }
 
-ListReadResult ReadClipList(const fs::path& path, const ListOptions& options) {
+ListReadResult ReadClipList(const fs::path& given, const ListOptions& options) {
+  // Relative paths in a list are relative to the list's folder; anchoring
+  // the list itself first keeps that true from any working directory.
+  const fs::path path = fs::absolute(given).lexically_normal();
   ListReadResult out;
   if (!fs::exists(path)) throw Error("bad_list", "no such file or folder", {.file = path.string()});
   if (fs::is_directory(path)) {

@@ -162,23 +162,6 @@ std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e) {
   return out;
 }
 
-// Rotation R minimising sum |R a_i - b_i|^2 over centred point sets.
-Mat3 Kabsch(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
-  for (size_t i = 0; i < a.size(); ++i) {
-    ca += a[i];
-    cb += b[i];
-  }
-  ca /= a.size();
-  cb /= b.size();
-  Mat3 h = Mat3::Zero();
-  for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
-  Eigen::JacobiSVD<Mat3> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 d = Mat3::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-  return svd.matrixV() * d * svd.matrixU().transpose();
-}
-
 // The mount rotation taking the robot's palm points at qpos0 onto the
 // canonical human palm; identity when fewer than three palm points map.
 Mat3 CanonicalMount(const mjModel* m, const Embodiment& e) {
@@ -195,7 +178,7 @@ Mat3 CanonicalMount(const mjModel* m, const Embodiment& e) {
     human.push_back(h);
   }
   if (robot.size() < 3) return Mat3::Identity();
-  return Kabsch(robot, human);
+  return FitRigid(robot, human).R();
 }
 
 std::filesystem::path FindModelFile(const std::string& model, const std::filesystem::path& desc_dir,

@@ -37,24 +37,6 @@ Vec3 EulerXYZ(const Mat3& r) {
   return a.norm() <= b.norm() ? a : b;
 }
 
-// R, t minimising sum |R a_i + t - b_i|^2.
-void Kabsch(const std::vector<Vec3>& a, const std::vector<Vec3>& b, Mat3* r, Vec3* t) {
-  Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
-  for (size_t i = 0; i < a.size(); ++i) {
-    ca += a[i];
-    cb += b[i];
-  }
-  ca /= a.size();
-  cb /= b.size();
-  Mat3 h = Mat3::Zero();
-  for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
-  Eigen::JacobiSVD<Mat3> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 d = Mat3::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-  *r = svd.matrixV() * d * svd.matrixU().transpose();
-  *t = cb - *r * ca;
-}
-
 }  // namespace
 
 KinematicRetargeter::KinematicRetargeter(const HandModel& hand, KinematicConfig config)
@@ -255,12 +237,10 @@ Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& target
   const mjModel* m = hand_.model.get();
   std::vector<Vec3> goal;
   for (int i : palm_points_) goal.push_back(targets[i]);
-  Mat3 r;
-  Vec3 t;
-  Kabsch(palm_at_zero_, goal, &r, &t);
+  const Pose fit = FitRigid(palm_at_zero_, goal);
   Eigen::VectorXd q(qpos_adr_.size());
-  q.head<3>() = t;
-  q.segment<3>(3) = EulerXYZ(r);
+  q.head<3>() = fit.t;
+  q.segment<3>(3) = EulerXYZ(fit.R());
   for (size_t k = 6; k < qpos_adr_.size(); ++k) q[k] = m->qpos0[qpos_adr_[k]];
   return q;
 }

@@ -34,6 +34,7 @@ TEST(Commands, RunProbesRealVideosAndATruncatedOneFailsWithItsName) {
                 ",apple,,,internet\n" + (v / "bedroom.mp4").string() +
                 ",bed_too_long,0,500,egocentric\n" + "broken.mp4,broken,0,10,internet\n");
   const std::string db = (dir / "work" / "d.db").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "probe"}).exit_code, 0);
   const auto run = RunDoasido({"run", "--db", db, (dir / "clips.csv").string(),
                                "--max-attempts", "2"});
   ASSERT_EQ(run.exit_code, 0) << run.err;

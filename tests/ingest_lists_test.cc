@@ -247,6 +247,15 @@ TEST(IngestLists, VocFolderBecomesClipsWithDetections) {
   EXPECT_EQ(hand.hand_side, 1);
   EXPECT_DOUBLE_EQ(hand.dy, 0.8);
   EXPECT_EQ(ab.detections[1].kind, "object");
+
+  // The same folder named relative to the working directory finds the same
+  // videos.
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  const auto relative = ReadClipList("voc");
+  std::filesystem::current_path(cwd);
+  ASSERT_EQ(relative.rows.size(), 2u);
+  EXPECT_EQ(relative.rows[0].video, r.rows[0].video);
 }
 
 }  // namespace

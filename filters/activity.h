@@ -1,0 +1,83 @@
+// Activity: is anything moving where the hands are?
+//
+// Signals (analysis pass), per frame against the previous frame, on the gray
+// analysis image: the region is the union of the frame's hand boxes grown by
+// box_margin (the whole frame when no hand box is known); `energy` is the
+// mean |difference| over the region in gray levels and `moving` the fraction
+// of region pixels that changed by more than pixel_threshold levels. Frame 0
+// has no predecessor and records 0. `hands_region` is 1 where the region came
+// from hand boxes.
+//
+// Decision (ActivityStage): a frame is active when moving >=
+// min_moving_fraction; the clip is active when at least min_active_fraction
+// of its frames (of the kept shot, when the shot filter trimmed it) are.
+// Otherwise reject "no_activity".
+//
+// What it does not do: it does not compensate camera motion (a static scene
+// filmed by a moving camera counts as active; the camera-motion filter is the
+// one that rejects it).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "filters/frame_analyzer.h"
+
+namespace doasido::filters {
+
+struct ActivitySignalConfig {
+  double box_margin = 0.25;  // grow hand boxes by this fraction per side
+  int pixel_threshold = 15;  // gray levels
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ActivitySignalConfig, box_margin, pixel_threshold)
+
+struct ActivitySignals {
+  std::vector<double> energy;
+  std::vector<double> moving;
+  std::vector<int> hands_region;
+};
+Json ToJson(const ActivitySignals& s);
+ActivitySignals ActivitySignalsFromJson(const Json& j);  // throws Error("bad_measurements")
+
+class ActivityExtractor : public FrameConsumer {
+ public:
+  explicit ActivityExtractor(ActivitySignalConfig config = {}) : config_(config) {}
+  void Consume(FrameContext& context) override;
+  const ActivitySignals& signals() const { return signals_; }
+
+ private:
+  ActivitySignalConfig config_;
+  ActivitySignals signals_;
+  cv::Mat prev_gray_, diff_;
+};
+
+struct ActivityConfig {
+  double min_moving_fraction = 0.01;
+  double min_active_fraction = 0.10;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ActivityConfig, min_moving_fraction,
+                                                min_active_fraction)
+
+// Fraction of the frames first..last (inclusive positions; frame 0, which
+// has no predecessor, never counts) whose moving fraction is >= `min_moving`.
+double ActiveFraction(const ActivitySignals& s, double min_moving, std::int64_t first,
+                      std::int64_t last);
+
+// Stage "activity": decides from the "activity" section of the analysis
+// stage's measurements.
+class ActivityStage : public Stage {
+ public:
+  explicit ActivityStage(ActivityConfig config = {}) : config_(config) {}
+  std::string Name() const override { return "activity"; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+  std::optional<StageResult> Redecide(const Json& measurements) const override;
+
+ private:
+  ActivityConfig config_;
+};
+
+}  // namespace doasido::filters

@@ -1,0 +1,71 @@
+#include "filters/analyze_stage.h"
+
+#include "filters/stage_support.h"
+
+namespace doasido::filters {
+
+ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOptions& options,
+                         const std::vector<Detection>& detections, const AnalyzeConfig& config) {
+  DecoderOptions decode = options;
+  decode.analysis_size = config.analysis_size;
+  decode.frame_count_tolerance = config.frame_count_tolerance;
+
+  const bool builtin = detections.empty() && config.use_builtin_detector;
+  BuiltinHandObjectDetector detector(config.detector);
+  InteractionExtractor interaction;
+  OutOfFrameExtractor out_of_frame(config.out_of_frame);
+  ShotSignalExtractor shots(config.shot);
+  ActivityExtractor activity(config.activity);
+  CameraMotionExtractor camera(config.camera_motion);
+  std::vector<FrameConsumer*> consumers;
+  if (builtin) consumers.push_back(&detector);
+  for (FrameConsumer* c : std::initializer_list<FrameConsumer*>{&interaction, &out_of_frame, &shots,
+                                                                &activity, &camera}) {
+    consumers.push_back(c);
+  }
+  const AnalysisSummary summary = AnalyzeFrames(video, decode, detections, consumers);
+
+  ClipAnalysis out;
+  const VideoGeometry& g = summary.geometry;
+  out.measurements = {
+      {"clip",
+       {{"first_frame", summary.first_frame},
+        {"frames", summary.frames},
+        {"fps", g.fps},
+        {"width", g.width},
+        {"height", g.height},
+        {"full_width", g.full_width},
+        {"full_height", g.full_height},
+        {"downscale", g.downscale},
+        {"detection_source", builtin ? "builtin" : (detections.empty() ? "none" : "clip")}}},
+      {"shot_boundary", ToJson(shots.signals())},
+      {"activity", ToJson(activity.signals())},
+      {"camera_motion", ToJson(camera.signals())},
+      {"out_of_frame", ToJson(out_of_frame.signals())},
+      {"interaction", ToJson(interaction.signals())}};
+  if (builtin) out.builtin_detections = detector.detections();
+  return out;
+}
+
+StageResult AnalyzeStage::Run(const ClipContext& context) {
+  DecoderOptions options;
+  options.clip =
+      context.clip.external_id.empty() ? std::to_string(context.clip.id) : context.clip.external_id;
+  if (context.clip.start_frame) {
+    options.first_frame = *context.clip.start_frame;
+  } else if (context.clip.start_s) {
+    options.first_s = *context.clip.start_s;
+  }
+  if (context.clip.end_frame) {
+    options.last_frame = *context.clip.end_frame;
+  } else if (context.clip.end_s) {
+    options.last_s = *context.clip.end_s;
+  }
+  ClipAnalysis analysis = AnalyzeClip(context.video.path, options, context.detections, config_);
+  StageResult result;
+  result.measurements = std::move(analysis.measurements);
+  result.detections = std::move(analysis.builtin_detections);
+  return result;
+}
+
+}  // namespace doasido::filters

@@ -1,0 +1,75 @@
+// Stage "filters_analyze": the one decode of a clip that every filter needs.
+//
+// It decodes the clip's span once at analysis resolution and runs, per
+// frame and in this order: the built-in hand/object detector (only when the
+// clip has no detections and use_builtin_detector is set), then the signal
+// extractors of the interaction, out-of-frame, shot-boundary, activity and
+// camera-motion filters. Its measurements are
+//   {"clip": {first_frame, frames, fps, width, height, full_width,
+//             full_height, downscale, detection_source},
+//    "shot_boundary": {...}, "activity": {...}, "camera_motion": {...},
+//    "out_of_frame": {...}, "interaction": {...}}
+// and its verdict is always pass: the verdict stages (ShotBoundaryStage,
+// ActivityStage, CameraMotionStage, OutOfFrameStage, InteractionStage) run
+// after it and decide from these measurements without decoding.
+// Detections found by the built-in detector are returned in
+// StageResult::detections (source "detector:builtin").
+//
+// The clip span is ClipRecord start_frame/end_frame (inclusive), else
+// start_s/end_s converted at the stream's frame rate, else the whole file.
+// A missing, unreadable or truncated file throws Error naming the clip, the
+// file and the frame (ingest/video_decoder.h).
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "filters/activity.h"
+#include "filters/camera_motion.h"
+#include "filters/interaction.h"
+#include "filters/out_of_frame.h"
+#include "filters/shot_boundary.h"
+
+namespace doasido::filters {
+
+struct AnalyzeConfig {
+  int analysis_size = 256;  // longer side, PySceneDetect's default
+  bool use_builtin_detector = true;
+  std::int64_t frame_count_tolerance = 0;
+  ShotSignalConfig shot;
+  ActivitySignalConfig activity;
+  CameraMotionSignalConfig camera_motion;
+  OutOfFrameSignalConfig out_of_frame;
+  BuiltinDetectorConfig detector;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, use_builtin_detector,
+                                                frame_count_tolerance, shot, activity,
+                                                camera_motion, out_of_frame, detector)
+
+// Everything one analysis pass produced (for callers outside the queue,
+// such as benchmarks and tests).
+struct ClipAnalysis {
+  Json measurements;                          // as stored by AnalyzeStage
+  std::vector<Detection> builtin_detections;  // empty when the detector did not run
+};
+
+// Decodes `video` over the span in `options` once and computes every
+// filter's signals. `detections` are the clip's boxes (full-resolution file
+// frames); when empty and config.use_builtin_detector, the built-in detector
+// supplies them.
+ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOptions& options,
+                         const std::vector<Detection>& detections, const AnalyzeConfig& config);
+
+class AnalyzeStage : public Stage {
+ public:
+  explicit AnalyzeStage(AnalyzeConfig config = {}) : config_(std::move(config)) {}
+  std::string Name() const override { return "filters_analyze"; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+
+ private:
+  AnalyzeConfig config_;
+};
+
+}  // namespace doasido::filters

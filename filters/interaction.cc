@@ -1,0 +1,412 @@
+#include "filters/interaction.h"
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+#include "filters/out_of_frame.h"
+#include "filters/stage_support.h"
+
+namespace doasido::filters {
+namespace {
+
+std::vector<int> IntArray(const Json& j, const char* key) {
+  if (!j.contains(key) || !j.at(key).is_array()) {
+    throw Error("bad_measurements", "missing per-frame array", {.field = key});
+  }
+  return j.at(key).get<std::vector<int>>();
+}
+
+// Gap between two boxes in pixels (0 when they overlap).
+double BoxGap(const cv::Rect2d& a, const cv::Rect2d& b) {
+  const double dx = std::max({0.0, b.x - (a.x + a.width), a.x - (b.x + b.width)});
+  const double dy = std::max({0.0, b.y - (a.y + a.height), a.y - (b.y + b.height)});
+  return std::hypot(dx, dy);
+}
+
+struct Component {
+  cv::Rect box;
+  int area = 0;
+  int label = 0;
+};
+
+std::vector<Component> Components(const cv::Mat& mask, cv::Mat& labels) {
+  cv::Mat stats, centroids;
+  const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  std::vector<Component> out;
+  for (int i = 1; i < n; ++i) {
+    out.push_back(
+        {cv::Rect(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
+                  stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT)),
+         stats.at<int>(i, cv::CC_STAT_AREA), i});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const Component& a, const Component& b) { return a.area > b.area; });
+  return out;
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+void ReplaceAll(std::string& text, const std::string& key, const std::string& value) {
+  for (size_t pos = text.find(key); pos != std::string::npos;
+       pos = text.find(key, pos + value.size())) {
+    text.replace(pos, key.size(), value);
+  }
+}
+
+}  // namespace
+
+void BuiltinHandObjectDetector::Consume(FrameContext& context) {
+  const cv::Mat& bgr = context.frame->bgr;
+  const cv::Mat& gray = context.gray;
+  const double frame_area = static_cast<double>(gray.rows) * gray.cols;
+  cv::Mat ycrcb, skin;
+  cv::cvtColor(bgr, ycrcb, cv::COLOR_BGR2YCrCb);
+  cv::inRange(ycrcb, cv::Scalar(config_.y_min, config_.cr_min, config_.cb_min),
+              cv::Scalar(255, config_.cr_max, config_.cb_max), skin);
+  const cv::Mat k3 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3});
+  const cv::Mat k7 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7});
+  cv::morphologyEx(skin, skin, cv::MORPH_OPEN, k3);
+  cv::morphologyEx(skin, skin, cv::MORPH_CLOSE, k7);
+
+  FrameBoxes found;
+  found.known = true;
+  if (static_cast<int>(grays_.size()) >= config_.motion_gap) {
+    cv::Mat old_gray = grays_.front();
+    cv::Mat old_skin = skins_.front();
+    cv::Mat diff, motion;
+    cv::absdiff(gray, old_gray, diff);
+    motion = diff > config_.motion_threshold;
+    if (config_.compensate_camera &&
+        cv::countNonZero(motion) > config_.global_motion_fraction * frame_area) {
+      // Much of the picture changed: estimate a global shift (camera pan)
+      // at half size by phase correlation and undo it, so that only things
+      // that moved in the scene count as motion.
+      cv::Mat a, b;
+      cv::resize(old_gray, a, {}, 0.5, 0.5, cv::INTER_AREA);
+      cv::resize(gray, b, {}, 0.5, 0.5, cv::INTER_AREA);
+      a.convertTo(a, CV_32F);
+      b.convertTo(b, CV_32F);
+      double response = 0;
+      const cv::Point2d shift = cv::phaseCorrelate(a, b, cv::noArray(), &response) * 2.0;
+      if (response > 0.05 && std::hypot(shift.x, shift.y) > 0.5) {
+        const cv::Matx23d m(1, 0, shift.x, 0, 1, shift.y);
+        cv::warpAffine(old_gray, old_gray, m, gray.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+        cv::warpAffine(old_skin, old_skin, m, gray.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+        cv::absdiff(gray, old_gray, diff);
+        motion = diff > config_.motion_threshold;
+      }
+    }
+    cv::morphologyEx(motion, motion, cv::MORPH_OPEN, k3);
+
+    // Hands: skin regions of plausible size of which enough moved.
+    cv::Mat labels;
+    const std::vector<Component> skin_parts = Components(skin, labels);
+    const cv::Mat moving_skin = motion & skin;
+    for (const Component& c : skin_parts) {
+      if (static_cast<int>(found.hands.size()) >= config_.max_hands) break;
+      if (c.area < config_.min_hand_area * frame_area) break;  // sorted by area
+      if (c.area > config_.max_hand_area * frame_area) continue;
+      const cv::Mat mine = labels(c.box) == c.label;
+      const cv::Mat moved_here = moving_skin(c.box) & mine;
+      const int moved = cv::countNonZero(moved_here);
+      if (moved < config_.min_hand_motion * c.area) continue;
+      // The box of the part that moved: hands move more than the arms and
+      // clothes a skin region often includes.
+      std::vector<cv::Point> pts;
+      cv::findNonZero(moved_here, pts);
+      cv::Rect part = cv::boundingRect(pts) + c.box.tl();
+      const int grow = std::max(2, part.width / 8);
+      part = cv::Rect(part.x - grow, part.y - grow, part.width + 2 * grow, part.height + 2 * grow) &
+             c.box;
+      found.hands.emplace_back(part.x, part.y, part.width, part.height);
+    }
+    const bool seen = !found.hands.empty();
+    if (!seen && context.ordinal - last_seen_ <= config_.hold_frames) {
+      found.hands = last_.hands;  // a still hand is still there
+    }
+    // Objects: motion that is neither skin now nor where skin was, touching a hand.
+    if (!found.hands.empty()) {
+      cv::Mat near_skin;
+      cv::dilate(skin | old_skin, near_skin, k7, {-1, -1}, 2);
+      cv::Mat other = motion & ~near_skin;
+      cv::dilate(other, other, k3);
+      cv::Mat object_labels;
+      const double reach = config_.contact_distance * std::hypot(gray.cols, gray.rows);
+      for (const Component& c : Components(other, object_labels)) {
+        if (c.area < config_.min_object_area * frame_area) break;
+        const cv::Rect2d box(c.box.x, c.box.y, c.box.width, c.box.height);
+        bool next_to_hand = false;
+        for (const cv::Rect2d& h : found.hands) next_to_hand |= BoxGap(h, box) <= reach;
+        if (next_to_hand) found.objects.push_back(box);
+        if (found.objects.size() >= 2) break;
+      }
+    }
+    for (const cv::Rect2d& h : found.hands) {
+      bool contact = false;
+      for (const cv::Rect2d& o : found.objects) {
+        contact |= BoxGap(h, o) <= config_.contact_distance * std::hypot(gray.cols, gray.rows);
+      }
+      found.hand_contact.push_back(contact ? 3 : 0);
+    }
+    if (seen) {
+      last_seen_ = context.ordinal;
+      last_ = found;
+    }
+  }
+  grays_.push_back(gray.clone());
+  skins_.push_back(skin);
+  while (static_cast<int>(grays_.size()) > config_.motion_gap) {
+    grays_.pop_front();
+    skins_.pop_front();
+  }
+
+  const double s = geometry_.downscale;
+  auto add = [&](const cv::Rect2d& b, const std::string& kind, int contact) {
+    Detection d;
+    d.frame = context.frame->index;
+    d.kind = kind;
+    d.x1 = b.x * s;
+    d.y1 = b.y * s;
+    d.x2 = (b.x + b.width) * s;
+    d.y2 = (b.y + b.height) * s;
+    d.score = 1.0;
+    d.contact_state = contact;
+    d.source = "detector:builtin";
+    detections_.push_back(d);
+  };
+  for (size_t i = 0; i < found.hands.size(); ++i)
+    add(found.hands[i], "hand", found.hand_contact[i]);
+  for (const cv::Rect2d& o : found.objects) add(o, "object", -1);
+  context.boxes = found;
+}
+
+Json ToJson(const InteractionSignals& s) {
+  return Json{
+      {"covered", s.covered}, {"hands", s.hands}, {"objects", s.objects}, {"contact", s.contact}};
+}
+
+InteractionSignals InteractionSignalsFromJson(const Json& j) {
+  InteractionSignals s;
+  s.covered = IntArray(j, "covered");
+  s.hands = IntArray(j, "hands");
+  s.objects = IntArray(j, "objects");
+  s.contact = IntArray(j, "contact");
+  const size_t n = s.covered.size();
+  if (s.hands.size() != n || s.objects.size() != n || s.contact.size() != n) {
+    throw Error("bad_measurements", "per-frame arrays differ in length", {.field = "interaction"});
+  }
+  return s;
+}
+
+void InteractionExtractor::Consume(FrameContext& context) {
+  const FrameBoxes& b = context.boxes;
+  int mask = 0;
+  for (size_t i = 0; i < b.hands.size(); ++i) {
+    const int state = i < b.hand_contact.size() ? b.hand_contact[i] : -1;
+    if (state >= 0 && state <= 4) {
+      mask |= 1 << state;
+    } else if (TouchedObject(b.hands[i], b.objects) >= 0) {
+      mask |= 1 << 3;  // unknown state, object at the hand: a portable object
+    } else {
+      mask |= 1 << 5;
+    }
+  }
+  signals_.covered.push_back(b.known ? 1 : 0);
+  signals_.hands.push_back(static_cast<int>(b.hands.size()));
+  signals_.objects.push_back(static_cast<int>(b.objects.size()));
+  signals_.contact.push_back(mask);
+}
+
+double InteractionFraction(const InteractionSignals& s, const std::vector<int>& contact_states,
+                           std::int64_t first, std::int64_t last) {
+  int wanted = 0;
+  for (int state : contact_states) {
+    if (state >= 0 && state <= 5) wanted |= 1 << state;
+  }
+  size_t covered = 0, interacting = 0;
+  last = std::min<std::int64_t>(last, static_cast<std::int64_t>(s.covered.size()) - 1);
+  for (std::int64_t i = std::max<std::int64_t>(0, first); i <= last; ++i) {
+    if (!s.covered[i]) continue;
+    ++covered;
+    if (s.contact[i] & wanted) ++interacting;
+  }
+  return covered > 0 ? static_cast<double>(interacting) / static_cast<double>(covered) : 0.0;
+}
+
+namespace {
+
+StageResult DecideInteraction(const Json& measurements, const InteractionConfig& c) {
+  RequireAnalysis(measurements, "interaction");
+  const InteractionSignals s = InteractionSignalsFromJson(measurements.at("signals"));
+  const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
+  size_t covered = 0, with_hands = 0;
+  for (std::int64_t i = span.first; i <= span.last; ++i) {
+    covered += s.covered[i] != 0;
+    with_hands += (s.covered[i] && s.hands[i] > 0) ? 1 : 0;
+  }
+  const double n = std::max<double>(1.0, static_cast<double>(span.last - span.first + 1));
+  const double covered_fraction = static_cast<double>(covered) / n;
+  const double fraction = InteractionFraction(s, c.contact_states, span.first, span.last);
+  StageResult result;
+  result.measurements = measurements;
+  result.measurements["summary"] = {
+      {"covered_fraction", covered_fraction},
+      {"hand_fraction", covered > 0 ? static_cast<double>(with_hands) / covered : 0.0},
+      {"interaction_fraction", fraction}};
+  if (covered_fraction < c.min_covered_fraction) {
+    result.verdict = Verdict::kFlag;
+    result.reason = "no_detections";
+  } else if (fraction < c.min_interaction_fraction) {
+    result.verdict = Verdict::kReject;
+    result.reason = "no_interaction";
+  }
+  return result;
+}
+
+}  // namespace
+
+StageResult InteractionStage::Run(const ClipContext& context) {
+  return DecideInteraction(CopyAnalysis(context, "interaction"), config_);
+}
+
+std::optional<StageResult> InteractionStage::Redecide(const Json& measurements) const {
+  return DecideInteraction(measurements, config_);
+}
+
+std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, double min_score,
+                                          const std::string& source) {
+  std::ifstream in(path);
+  if (!in) {
+    throw Error("bad_detections", "cannot open detector output", {.file = path.string()});
+  }
+  std::vector<Detection> out;
+  std::string line;
+  long number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const ErrorSite site{.file = path.string(), .line = number};
+    Json row;
+    try {
+      row = Json::parse(line);
+    } catch (const Json::exception& e) {
+      throw Error("bad_detections", std::string("not JSON: ") + e.what(), site);
+    }
+    if (!row.is_object() || !row.contains("frame") || !row.at("frame").is_number_integer()) {
+      throw Error("bad_detections", "row lacks an integer \"frame\"",
+                  {.file = site.file, .line = number, .field = "frame"});
+    }
+    const auto frame = row.at("frame").get<std::int64_t>();
+    for (const char* key : {"hand_dets", "obj_dets"}) {
+      if (!row.contains(key) || row.at(key).is_null()) continue;
+      const bool hands = std::string(key) == "hand_dets";
+      if (!row.at(key).is_array()) {
+        throw Error("bad_detections", "not an array",
+                    {.file = site.file, .line = number, .field = key});
+      }
+      for (const Json& det : row.at(key)) {
+        const size_t need = hands ? 10 : 5;
+        if (!det.is_array() || det.size() < need) {
+          throw Error("bad_detections", "a detection needs " + std::to_string(need) + " numbers",
+                      {.file = site.file, .line = number, .field = key});
+        }
+        std::vector<double> v;
+        for (const Json& x : det) {
+          if (!x.is_number()) {
+            throw Error("bad_detections", "a detection value is not a number",
+                        {.file = site.file, .line = number, .field = key});
+          }
+          v.push_back(x.get<double>());
+        }
+        if (v[4] < min_score) continue;
+        if (!(v[2] > v[0]) || !(v[3] > v[1])) {
+          throw Error("bad_detections", "box has x2 <= x1 or y2 <= y1",
+                      {.file = site.file, .line = number, .field = key});
+        }
+        Detection d;
+        d.frame = frame;
+        d.kind = hands ? "hand" : "object";
+        d.x1 = v[0];
+        d.y1 = v[1];
+        d.x2 = v[2];
+        d.y2 = v[3];
+        d.score = v[4];
+        if (hands) {
+          d.contact_state = static_cast<int>(v[5]);
+          d.dx = v[6];
+          d.dy = v[7];
+          d.magnitude = v[8];
+          d.hand_side = static_cast<int>(v[9]);
+        }
+        d.source = source;
+        out.push_back(d);
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<Detection> RunExternalDetector(const ExternalDetectorConfig& config,
+                                           const std::filesystem::path& video,
+                                           std::int64_t first_frame, std::int64_t last_frame,
+                                           const std::filesystem::path& output,
+                                           const std::string& clip) {
+  std::string command = config.command;
+  ReplaceAll(command, "{video}", ShellQuote(std::filesystem::absolute(video).string()));
+  ReplaceAll(command, "{first_frame}", ShellQuote(std::to_string(first_frame)));
+  ReplaceAll(command, "{last_frame}", ShellQuote(std::to_string(last_frame)));
+  ReplaceAll(command, "{output}", ShellQuote(output.string()));
+  std::error_code ignored;
+  std::filesystem::remove(output, ignored);
+  const int status = std::system(command.c_str());
+  const ErrorSite site{.clip = clip, .file = video.string(), .field = "command"};
+  if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw Error("detector_failed",
+                "external detector failed (status " + std::to_string(status) + "): " + command,
+                site);
+  }
+  if (!std::filesystem::exists(output)) {
+    throw Error("detector_failed", "external detector wrote no output file: " + command, site);
+  }
+  return ReadDetectorOutput(output, config.min_score, "detector:external");
+}
+
+StageResult ExternalDetectorStage::Run(const ClipContext& context) {
+  StageResult result;
+  if (config_.command.empty()) {
+    result.reason = "no_detector";
+    result.measurements = {{"ran", false}};
+    return result;
+  }
+  const std::int64_t first = context.clip.start_frame.value_or(0);
+  const std::int64_t last = context.clip.end_frame.value_or(-1);
+  std::filesystem::create_directories(context.artifact_dir);
+  const auto output = context.artifact_dir / "detections.jsonl";
+  const std::string clip =
+      context.clip.external_id.empty() ? std::to_string(context.clip.id) : context.clip.external_id;
+  result.detections = RunExternalDetector(config_, context.video.path, first, last, output, clip);
+  std::map<std::int64_t, int> per_frame;
+  for (const Detection& d : result.detections) per_frame[d.frame] += d.kind == "hand";
+  result.measurements = {
+      {"ran", true}, {"detections", result.detections.size()}, {"frames", per_frame.size()}};
+  result.artifacts.emplace_back("detections_jsonl", "detections.jsonl");
+  return result;
+}
+
+}  // namespace doasido::filters

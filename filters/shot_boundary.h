@@ -1,0 +1,183 @@
+// Shot boundaries and fades, scored as PySceneDetect scores them.
+//
+// Per-frame signals (computed once, in the analysis pass, on frames
+// downscaled as PySceneDetect downscales them; see ingest/video_decoder.h):
+//   - delta_hue/sat/lum: mean |difference| of each HSV channel (OpenCV 8-bit
+//     HSV, hue 0..179) against the previous frame (ContentDetector).
+//   - hash_distance: Hamming distance / size^2 between perceptual hashes of
+//     consecutive frames: gray, INTER_AREA to (size*lowpass)^2, scaled to
+//     max 1, DCT, top-left size x size block, bits above its median
+//     (HashDetector).
+//   - histogram_correlation: correlation of the L2-normalised 256-bin
+//     histograms of the Y (YUV) channel of consecutive frames
+//     (HistogramDetector).
+//   - mean_intensity: mean of all B, G, R values (ThresholdDetector).
+//   - histogram_correlation_long: the same correlation between frame t and
+//     frame t - long_window, long_window = round(long_window_s * fps) >= 2
+//     (1 for the first long_window frames).
+//   - changed_fraction_long: fraction of pixels whose gray level differs by
+//     more than 25 between frame t and frame t - long_window (0 for the
+//     first long_window frames). A dissolve changes almost every pixel of a
+//     static shot over a few frames, which no consecutive-frame score sees;
+//     a moving hand changes only its own part of the picture.
+// Frame 0 has deltas 0, hash distance 0 and correlation 1.
+//
+// Cut lists are decided from those stored signals alone, so re-thresholding
+// never decodes. Every cut is the first frame of the new shot. The state
+// machines are PySceneDetect's:
+//   - content: score = sum(w_c * delta_c) / sum(|w_c|), above when >= the
+//     threshold; min_scene_len is enforced by its flash filter in merge
+//     mode: an above-threshold frame is a cut when the previous
+//     above-threshold frame (or the first frame) is at least min_scene_len
+//     frames back; after the first cut, a burst of closer above-threshold
+//     frames is merged and reported at its last above-threshold frame once
+//     the burst is at least min_scene_len long and min_scene_len frames
+//     below threshold have followed.
+//   - adaptive: ratio of a frame's content score to the mean of the
+//     `window` scores either side (self excluded; 255 when that mean is 0
+//     and the score is >= min_content_val, capped at 255); a cut at the
+//     centre frame c when ratio >= adaptive_threshold and score >=
+//     min_content_val, and the frame being read (c + window) is at least
+//     min_scene_len frames after the previous cut (or the first frame).
+//   - hash / histogram: cut when distance >= threshold (correlation <=
+//     1 - threshold) and at least min_scene_len frames after the previous
+//     cut (or the first frame).
+//   - dissolve (doasido's own, not PySceneDetect's): each run of frames whose
+//     long-window changed fraction is >= dissolve_threshold gives one cut, at
+//     the run's peak minus half the window, if the stretch of unsteady frames
+//     (changed fraction > dissolve_steady) around that peak lasts at most two
+//     windows (a dissolve joins two steady shots; a moving camera keeps
+//     changing) and the cut is at least min_scene_len frames after the
+//     previous cut (or the first frame).
+//   - fade: a frame is dark when its mean intensity < threshold; on the
+//     first bright frame after a dark run that started at frame `out` (the
+//     first frame counts as a fade-out when dark) the cut is the midpoint
+//     (in + out + bias * (in - out)) / 2 rounded half up, if the fade-in
+//     frame is at least min_scene_len frames after the previous fade-in (or
+//     the first frame).
+//
+// Policy (ShotBoundaryStage): boundaries are the union of the cut lists
+// named in `boundary_detectors`; when "fade" is among them, the end of a
+// dark run at the clip's start and the beginning of a dark run at its end
+// are boundaries too (the clip fades in from or out to black). No boundary:
+// pass. Otherwise the clip is trimmed to its longest segment when that lasts
+// >= min_segment_s (pass, reason "trimmed", trim recorded), else reject
+// "shot_boundary".
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "filters/frame_analyzer.h"
+
+namespace doasido::filters {
+
+struct ShotBoundaryConfig {
+  // ContentDetector (PySceneDetect defaults; edges are not computed, so
+  // their weight is always 0).
+  double content_threshold = 27.0;
+  double weight_hue = 1.0;
+  double weight_sat = 1.0;
+  double weight_lum = 1.0;
+  // Shared by every detector, in frames.
+  int min_scene_len = 15;
+  // AdaptiveDetector.
+  double adaptive_threshold = 3.0;
+  double min_content_val = 15.0;
+  int window_width = 2;
+  // HashDetector and HistogramDetector.
+  double hash_threshold = 0.395;
+  double histogram_threshold = 0.05;
+  // ThresholdDetector (fades to black).
+  double fade_threshold = 12.0;
+  double fade_bias = 0.0;
+  // Dissolves (long-window histogram correlation).
+  double dissolve_threshold = 0.5;
+  double dissolve_steady = 0.3;
+  // Policy. Names: "content", "adaptive", "hash", "histogram", "dissolve", "fade".
+  std::vector<std::string> boundary_detectors = {"adaptive", "dissolve", "fade"};
+  double min_segment_s = 2.0;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotBoundaryConfig, content_threshold, weight_hue,
+                                                weight_sat, weight_lum, min_scene_len,
+                                                adaptive_threshold, min_content_val, window_width,
+                                                hash_threshold, histogram_threshold, fade_threshold,
+                                                fade_bias, dissolve_threshold, dissolve_steady,
+                                                boundary_detectors, min_segment_s)
+
+// Analysis-pass parameters of the shot signals.
+struct ShotSignalConfig {
+  int hash_size = 16;
+  int hash_lowpass = 2;
+  int histogram_bins = 256;
+  double long_window_s = 0.5;  // for histogram_correlation_long (>= 2 frames)
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotSignalConfig, hash_size, hash_lowpass,
+                                                histogram_bins, long_window_s)
+
+struct ShotSignals {
+  std::vector<double> delta_hue, delta_sat, delta_lum;
+  std::vector<double> hash_distance;
+  std::vector<double> histogram_correlation;
+  std::vector<double> mean_intensity;
+  std::vector<double> histogram_correlation_long;
+  std::vector<double> changed_fraction_long;
+  int long_window = 15;
+};
+Json ToJson(const ShotSignals& s);
+ShotSignals ShotSignalsFromJson(const Json& j);  // throws Error("bad_measurements")
+
+class ShotSignalExtractor : public FrameConsumer {
+ public:
+  explicit ShotSignalExtractor(ShotSignalConfig config = {}) : config_(config) {}
+  void Begin(const VideoGeometry& geometry) override;
+  void Consume(FrameContext& context) override;
+  const ShotSignals& signals() const { return signals_; }
+
+ private:
+  cv::Mat Hash(const cv::Mat& gray) const;
+  ShotSignalConfig config_;
+  ShotSignals signals_;
+  cv::Mat hsv_, prev_hsv_, diff_, prev_hash_, prev_hist_;
+  std::deque<cv::Mat> hist_window_, gray_window_;
+};
+
+// Cut lists from stored signals; indices are 0-based positions in the span.
+std::vector<double> ContentScores(const ShotSignals& s, const ShotBoundaryConfig& c);
+std::vector<std::int64_t> ContentCuts(const std::vector<double>& scores, double threshold,
+                                      int min_scene_len);
+std::vector<std::int64_t> AdaptiveCuts(const std::vector<double>& scores, double adaptive_threshold,
+                                       double min_content_val, int window_width, int min_scene_len);
+std::vector<std::int64_t> HashCuts(const std::vector<double>& distance, double threshold,
+                                   int min_scene_len);
+std::vector<std::int64_t> HistogramCuts(const std::vector<double>& correlation, double threshold,
+                                        int min_scene_len);
+std::vector<std::int64_t> DissolveCuts(const std::vector<double>& long_correlation, int long_window,
+                                       double threshold, double steady, int min_scene_len);
+std::vector<std::int64_t> FadeCuts(const std::vector<double>& mean_intensity, double threshold,
+                                   int min_scene_len, double fade_bias);
+// The cut list of detector `name` (see boundary_detectors). Throws
+// Error("bad_config") for an unknown name.
+std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
+                                 const ShotBoundaryConfig& c);
+
+// Stage "shot_boundary": decides from the "shot_boundary" section of the
+// analysis stage's measurements.
+class ShotBoundaryStage : public Stage {
+ public:
+  explicit ShotBoundaryStage(ShotBoundaryConfig config = {}) : config_(std::move(config)) {}
+  std::string Name() const override { return "shot_boundary"; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+  std::optional<StageResult> Redecide(const Json& measurements) const override;
+
+ private:
+  ShotBoundaryConfig config_;
+};
+
+}  // namespace doasido::filters

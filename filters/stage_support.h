@@ -1,0 +1,49 @@
+// What the four verdict stages share: where the analysis stage keeps its
+// measurements and how a verdict stage copies the part it decides from.
+//
+// Measurements of a verdict stage are {"clip": {...}, "signals": {...},
+// "shot": {...}, "summary": {...}}: "clip" and "signals" are copied from the
+// analysis stage; "shot" (present when the shot-boundary stage ran before)
+// holds its boundaries and trim, so that the later filters judge only the
+// shot that is kept; "summary" is what the stage derived with its
+// thresholds. Redecide reads "clip", "signals" and "shot" only, so a verdict
+// can always be re-derived from the stage's own measurements.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/stage.h"
+
+namespace doasido::filters {
+
+// Name of the stage that decodes each clip once (filters/analyze_stage.h).
+inline constexpr const char* kAnalyzeStageName = "filters_analyze";
+
+// {"clip": analysis["clip"], "signals": analysis[section], "shot": ...} from
+// the analysis stage's measurements in `context` (and the shot-boundary
+// stage's, when present). Throws Error("missing_measurements") naming the
+// clip when the analysis stage has not run or lacks `section`.
+Json CopyAnalysis(const ClipContext& context, const std::string& section);
+
+// The frames a verdict judges, as 0-based positions in the analysed span:
+// the shot-boundary trim when there is one, else every frame; `boundaries`
+// are the shot boundaries (positions of first frames of new shots).
+struct ShotSpan {
+  std::int64_t first = 0;  // inclusive
+  std::int64_t last = -1;  // inclusive
+  std::vector<std::int64_t> boundaries;
+  bool Contains(std::int64_t i) const { return i >= first && i <= last; }
+};
+ShotSpan SpanOf(const Json& measurements, std::int64_t frames);
+
+// Checks that `measurements` has "clip" and "signals" objects. Throws
+// Error("bad_measurements") naming `stage` otherwise.
+void RequireAnalysis(const Json& measurements, const std::string& stage);
+
+// Number read from a JSON object with a default.
+double NumberOr(const Json& object, const std::string& key, double fallback);
+
+}  // namespace doasido::filters

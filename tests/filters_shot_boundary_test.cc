@@ -1,0 +1,57 @@
+// Shot-boundary scores against PySceneDetect's own golden cut lists for its
+// test videos (../shared/data/shots/goldens/<video>.<Detector>.<variant>.json).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "filters/frame_analyzer.h"
+#include "filters/shot_boundary.h"
+#include "test_util.h"
+
+namespace doasido::filters {
+namespace {
+
+std::vector<std::int64_t> Golden(const std::string& name) {
+  const auto path = testing::SharedData() / "shots" / "goldens" / name;
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  Json j = Json::parse(in);
+  return j.at("cuts").get<std::vector<std::int64_t>>();
+}
+
+ShotSignals Signals(const std::string& video) {
+  ShotSignalExtractor extractor;
+  AnalyzeFrames(testing::SharedData() / "shots" / video, DecoderOptions{}, {}, {&extractor});
+  return extractor.signals();
+}
+
+class ShotGoldens : public ::testing::TestWithParam<std::string> {
+ protected:
+  static void SetUpTestSuite() {}
+};
+
+TEST_P(ShotGoldens, EveryDetectorMatchesPySceneDetect) {
+  const std::string video = GetParam();
+  const ShotSignals s = Signals(video);
+  ShotBoundaryConfig c;
+  EXPECT_EQ(CutsOf("content", s, c), Golden(video + ".ContentDetector.default.json"));
+  EXPECT_EQ(CutsOf("adaptive", s, c), Golden(video + ".AdaptiveDetector.default.json"));
+  EXPECT_EQ(CutsOf("hash", s, c), Golden(video + ".HashDetector.default.json"));
+  EXPECT_EQ(CutsOf("histogram", s, c), Golden(video + ".HistogramDetector.default.json"));
+  EXPECT_EQ(CutsOf("fade", s, c), Golden(video + ".ThresholdDetector.default.json"));
+  ShotBoundaryConfig t30;
+  t30.content_threshold = 30;
+  EXPECT_EQ(CutsOf("content", s, t30), Golden(video + ".ContentDetector.t30.json"));
+  ShotBoundaryConfig t5;
+  t5.adaptive_threshold = 5;
+  EXPECT_EQ(CutsOf("adaptive", s, t5), Golden(video + ".AdaptiveDetector.t5.json"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Shots, ShotGoldens,
+                         ::testing::Values("testvideo.mp4", "counter.mp4", "fades.mp4"));
+
+}  // namespace
+}  // namespace doasido::filters

@@ -1,0 +1,141 @@
+// The single-pass frame decoder: analysis size, spans, timestamps and clear
+// errors for missing and truncated files.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.h"
+#include "ingest/video_decoder.h"
+#include "test_util.h"
+
+namespace doasido {
+namespace {
+
+std::filesystem::path Cups() { return testing::SharedData() / "videos" / "02_cups.mp4"; }
+
+// Copies the first half of the bytes of `from` to `to`.
+void CopyFirstHalf(const std::filesystem::path& from, const std::filesystem::path& to) {
+  std::ifstream in(from, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream out(to, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+}
+
+TEST(AnalysisSize, FollowsPySceneDetectDownscale) {
+  // factor = longer side / 256, sides rounded half to even.
+  EXPECT_DOUBLE_EQ(AnalysisDownscale(1280, 720, 256), 5.0);
+  EXPECT_EQ(AnalysisSize(1280, 720, 256), cv::Size(256, 144));
+  EXPECT_EQ(AnalysisSize(1920, 1080, 256), cv::Size(256, 144));
+  EXPECT_EQ(AnalysisSize(480, 320, 256), cv::Size(256, 171));   // 170.67
+  EXPECT_EQ(AnalysisSize(1296, 720, 256), cv::Size(256, 142));  // 142.2
+  EXPECT_EQ(AnalysisSize(720, 1280, 256), cv::Size(144, 256));  // portrait: longer side
+  EXPECT_EQ(AnalysisSize(200, 100, 256), cv::Size(200, 100));   // never upscaled
+  EXPECT_EQ(AnalysisSize(1280, 720, 0), cv::Size(1280, 720));   // 0 keeps full size
+  // 100 / (1000/256) = 25.6 -> 26; 1000 / 3.90625 = 256.
+  EXPECT_EQ(AnalysisSize(1000, 100, 256), cv::Size(256, 26));
+}
+
+TEST(VideoDecoder, DecodesEveryFrameAtAnalysisSize) {
+  VideoDecoder decoder(Cups(), {});
+  EXPECT_EQ(decoder.geometry().full_width, 1280);
+  EXPECT_EQ(decoder.geometry().full_height, 720);
+  EXPECT_EQ(decoder.geometry().width, 256);
+  EXPECT_EQ(decoder.geometry().height, 144);
+  EXPECT_NEAR(decoder.geometry().fps, 30000.0 / 1001.0, 1e-6);
+  AnalysisFrame frame;
+  std::int64_t expected = 0;
+  double last_t = -1;
+  while (decoder.Next(&frame)) {
+    EXPECT_EQ(frame.index, expected++);
+    EXPECT_EQ(frame.bgr.size(), cv::Size(256, 144));
+    EXPECT_EQ(frame.bgr.type(), CV_8UC3);
+    EXPECT_GT(frame.timestamp_s, last_t);
+    last_t = frame.timestamp_s;
+  }
+  EXPECT_EQ(expected, 300);  // the data README: 300 frames
+  EXPECT_NEAR(last_t, 299 * 1001.0 / 30000.0, 1e-3);
+}
+
+TEST(VideoDecoder, DeliversOnlyTheSpan) {
+  DecoderOptions options;
+  options.first_frame = 100;
+  options.last_frame = 119;
+  VideoDecoder decoder(Cups(), options);
+  AnalysisFrame frame;
+  std::vector<std::int64_t> got;
+  while (decoder.Next(&frame)) got.push_back(frame.index);
+  ASSERT_EQ(got.size(), 20u);
+  EXPECT_EQ(got.front(), 100);
+  EXPECT_EQ(got.back(), 119);
+  EXPECT_NEAR(frame.timestamp_s, 119 * 1001.0 / 30000.0, 1e-3);
+}
+
+TEST(VideoDecoder, SpanInSecondsUsesTheFrameRate) {
+  DecoderOptions options;
+  options.first_s = 2.0;  // 2 s * 29.97 = 59.94 -> frame 60
+  options.last_s = 3.0;   // 89.91 -> frame 90
+  VideoDecoder decoder(Cups(), options);
+  EXPECT_EQ(decoder.first_frame(), 60);
+  AnalysisFrame frame;
+  std::int64_t n = 0, last = -1;
+  while (decoder.Next(&frame)) {
+    ++n;
+    last = frame.index;
+  }
+  EXPECT_EQ(n, 31);
+  EXPECT_EQ(last, 90);
+}
+
+TEST(VideoDecoder, MissingFileIsAClearError) {
+  try {
+    VideoDecoder decoder(testing::SharedData() / "videos" / "no_such.mp4", {.clip = "c7"});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "video_open_failed");
+    EXPECT_EQ(e.site().clip, "c7");
+    EXPECT_NE(std::string(e.what()).find("no_such.mp4"), std::string::npos);
+  }
+}
+
+TEST(VideoDecoder, TruncatedFileNamesFileAndFrame) {
+  testing::TempDir dir;
+  const auto truncated = dir / "cups_half.mp4";
+  CopyFirstHalf(Cups(), truncated);
+  DecoderOptions options;
+  options.clip = "cups-half";
+  std::int64_t delivered = 0;
+  try {
+    VideoDecoder decoder(truncated, options);
+    AnalysisFrame frame;
+    while (decoder.Next(&frame)) ++delivered;
+    FAIL() << "decoded " << delivered << " frames without an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "truncated_video") << e.what();
+    EXPECT_EQ(e.site().file, truncated.string());
+    EXPECT_EQ(e.site().clip, "cups-half");
+    // The first frame it could not decode, out of the 300 the file declares.
+    EXPECT_EQ(e.site().field, "frame " + std::to_string(delivered));
+    EXPECT_GT(delivered, 50);
+    EXPECT_LT(delivered, 300);
+    EXPECT_NE(std::string(e.what()).find("of 300 declared"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VideoDecoder, FileCutBeforeItsIndexCannotBeOpened) {
+  // testvideo.mp4 keeps its index (moov) at the end: half a file has none.
+  testing::TempDir dir;
+  const auto truncated = dir / "testvideo_half.mp4";
+  CopyFirstHalf(testing::SharedData() / "shots" / "testvideo.mp4", truncated);
+  try {
+    VideoDecoder decoder(truncated, {});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "video_open_failed");
+    EXPECT_EQ(e.site().file, truncated.string());
+  }
+}
+
+}  // namespace
+}  // namespace doasido

@@ -41,7 +41,8 @@ void AddRetargetCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out", opt->out, "Output folder (created)")->required();
   cmd->add_option("--robots-dir", opt->robots_dir,
-                  "Folder of embodiment descriptions (default ../shared/data/robots)");
+                  "Folder of robot models the descriptions refer to (default: "
+                  "../shared/data/robots beside the source tree)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->capture_default_str();
   cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")
       ->capture_default_str();

@@ -68,15 +68,6 @@ bool InsideSolid(const TriMesh& mesh, const Vec3& p) {
   return crossings % 2 == 1;
 }
 
-bool InsideHull(const TriMesh& hull, const Vec3& p) {
-  for (int f = 0; f < hull.num_faces(); ++f) {
-    const Vec3 a = hull.vertices.row(hull.faces(f, 0)).transpose();
-    const Vec3 b = hull.vertices.row(hull.faces(f, 1)).transpose();
-    const Vec3 c = hull.vertices.row(hull.faces(f, 2)).transpose();
-    if ((b - a).cross(c - a).dot(p - a) > 0) return false;
-  }
-  return true;
-}
 
 // Fraction of random points of `hull` that lie inside the solid `mesh`.
 double SolidFraction(const TriMesh& mesh, const TriMesh& hull, std::mt19937& rng) {
@@ -113,6 +104,16 @@ std::vector<std::vector<int>> Components(const TriMesh& mesh, const std::vector<
 }
 
 }  // namespace
+
+bool InsideHull(const TriMesh& hull, const Vec3& p) {
+  for (int f = 0; f < hull.num_faces(); ++f) {
+    const Vec3 a = hull.vertices.row(hull.faces(f, 0)).transpose();
+    const Vec3 b = hull.vertices.row(hull.faces(f, 1)).transpose();
+    const Vec3 c = hull.vertices.row(hull.faces(f, 2)).transpose();
+    if ((b - a).cross(c - a).dot(p - a) > 0) return false;
+  }
+  return true;
+}
 
 // Greedy bottom-up merging of neighbouring hulls whose joint hull stays
 // solid (>= 90% inside the mesh, at most 15% more volume than the two),

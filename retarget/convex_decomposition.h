@@ -67,6 +67,9 @@ TriMesh ConvexHull(const std::vector<Vec3>& points);
 // directions (a closed, consistently oriented surface).
 bool IsClosed(const TriMesh& mesh);
 
+// Whether p lies inside (or on) a convex hull with outward-facing faces.
+bool InsideHull(const TriMesh& hull, const Vec3& p);
+
 // Simplifies by snapping vertices to a grid of `cell` metres, merging
 // vertices in one cell (at their mean) and dropping collapsed triangles.
 TriMesh ClusterVertices(const TriMesh& mesh, double cell);

@@ -43,16 +43,6 @@ Drift Simulate(const ObjectScene& scene, double seconds) {
   return {(p1 - p0).norm(), RotationAngle(q0, q1)};
 }
 
-bool Inside(const TriMesh& hull, const Vec3& p) {
-  for (int f = 0; f < hull.num_faces(); ++f) {
-    const Vec3 a = hull.vertices.row(hull.faces(f, 0)).transpose();
-    const Vec3 b = hull.vertices.row(hull.faces(f, 1)).transpose();
-    const Vec3 c = hull.vertices.row(hull.faces(f, 2)).transpose();
-    if ((b - a).cross(c - a).dot(p - a) > 0) return false;
-  }
-  return true;
-}
-
 class YcbScene : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(YcbScene, RestsOnTheFloor) {
@@ -84,7 +74,7 @@ TEST(MugScene, DecompositionKeepsTheCavityAndTheMugRests) {
   // hold them all.
   auto covered = [&](const Vec3& p) {
     for (const TriMesh& h : hulls) {
-      if (Inside(h, p)) return true;
+      if (InsideHull(h, p)) return true;
     }
     return false;
   };
@@ -107,7 +97,7 @@ TEST(MugScene, DecompositionKeepsTheCavityAndTheMugRests) {
   for (const TriMesh& h : hulls) dilated.push_back(DilateConvex(h, 0.002));
   auto skin = [&](const Vec3& p) {
     for (const TriMesh& h : dilated) {
-      if (Inside(h, p)) return true;
+      if (InsideHull(h, p)) return true;
     }
     return false;
   };

@@ -29,7 +29,10 @@ Json ToJson(const ShotSignals& s) {
               {"mean_intensity", s.mean_intensity},
               {"histogram_correlation_long", s.histogram_correlation_long},
               {"changed_fraction_long", s.changed_fraction_long},
-              {"long_window", s.long_window}};
+              {"blend_changed", s.blend_changed},
+              {"blend_unexplained", s.blend_unexplained},
+              {"long_window", s.long_window},
+              {"blend_step", s.blend_step}};
 }
 
 ShotSignals ShotSignalsFromJson(const Json& j) {
@@ -43,10 +46,17 @@ ShotSignals ShotSignalsFromJson(const Json& j) {
   s.histogram_correlation_long = DoubleArray(j, "histogram_correlation_long");
   s.changed_fraction_long = DoubleArray(j, "changed_fraction_long");
   s.long_window = j.value("long_window", 15);
+  if (j.contains("blend_changed") || j.contains("blend_unexplained")) {
+    s.blend_changed = DoubleArray(j, "blend_changed");
+    s.blend_unexplained = DoubleArray(j, "blend_unexplained");
+  }
+  s.blend_step = j.value("blend_step", 3);
   const size_t n = s.delta_hue.size();
   if (s.delta_sat.size() != n || s.delta_lum.size() != n || s.hash_distance.size() != n ||
       s.histogram_correlation.size() != n || s.mean_intensity.size() != n ||
-      s.histogram_correlation_long.size() != n || s.changed_fraction_long.size() != n) {
+      s.histogram_correlation_long.size() != n || s.changed_fraction_long.size() != n ||
+      s.blend_changed.size() != s.blend_unexplained.size() ||
+      (!s.blend_changed.empty() && s.blend_changed.size() != n)) {
     throw Error("bad_measurements", "per-frame arrays differ in length",
                 {.field = "shot_boundary"});
   }
@@ -81,6 +91,7 @@ cv::Mat ShotSignalExtractor::Hash(const cv::Mat& gray) const {
 void ShotSignalExtractor::Begin(const VideoGeometry& geometry) {
   const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
   signals_.long_window = std::max(2, static_cast<int>(std::lround(config_.long_window_s * fps)));
+  signals_.blend_step = std::max(1, config_.blend_step);
 }
 
 void ShotSignalExtractor::Consume(FrameContext& context) {
@@ -145,6 +156,30 @@ void ShotSignalExtractor::Consume(FrameContext& context) {
     signals_.changed_fraction_long.push_back(0.0);
   }
   gray_window_.push_back(context.gray.clone());
+
+  const int step = signals_.blend_step;
+  blend_window_.push_back(gray_window_.back());
+  if (static_cast<int>(blend_window_.size()) > 2 * step + 1) blend_window_.pop_front();
+  if (static_cast<int>(blend_window_.size()) < 2 * step + 1) {
+    signals_.blend_changed.push_back(0.0);
+    signals_.blend_unexplained.push_back(1.0);
+    return;
+  }
+  const cv::Mat& before = blend_window_.front();
+  const cv::Mat& after = blend_window_.back();
+  // In 16-bit integers, doubled so that the average stays exact:
+  // |2 mid - (before + after)| <= 2 tolerance |after - before|.
+  cv::add(before, after, blend_sum_, cv::noArray(), CV_16S);
+  blend_window_[step].convertTo(blend_mid_, CV_16S, 2.0);
+  cv::absdiff(blend_mid_, blend_sum_, blend_mid_);
+  cv::absdiff(after, before, diff_);
+  diff_.convertTo(blend_diff_, CV_16S, 2.0 * config_.blend_tolerance);
+  const cv::Mat changed = diff_ > config_.blend_change_level;
+  const double changed_pixels = cv::countNonZero(changed);
+  const double explained_pixels = cv::countNonZero(changed & (blend_mid_ <= blend_diff_));
+  signals_.blend_changed.push_back(changed_pixels / pixels);
+  signals_.blend_unexplained.push_back(
+      changed_pixels > 0 ? 1.0 - explained_pixels / changed_pixels : 1.0);
 }
 
 std::vector<double> ContentScores(const ShotSignals& s, const ShotBoundaryConfig& c) {
@@ -295,6 +330,34 @@ std::vector<std::int64_t> DissolveCuts(const std::vector<double>& changed_fracti
   return cuts;
 }
 
+std::vector<std::int64_t> BlendCuts(const std::vector<double>& changed,
+                                    const std::vector<double>& unexplained, int step,
+                                    double min_changed, double max_unexplained, int min_run,
+                                    int min_scene_len) {
+  std::vector<std::int64_t> cuts;
+  const auto n = static_cast<std::int64_t>(std::min(changed.size(), unexplained.size()));
+  const auto blended = [&](std::int64_t t) {
+    return changed[t] >= min_changed && unexplained[t] <= max_unexplained;
+  };
+  std::int64_t last_cut = 0;
+  for (std::int64_t t = 0; t < n;) {
+    if (!blended(t)) {
+      ++t;
+      continue;
+    }
+    const std::int64_t begin = t;
+    while (t < n && blended(t)) ++t;
+    if (t - begin < std::max(1, min_run)) continue;
+    // Entry t describes frame t - step.
+    const std::int64_t cut = std::max<std::int64_t>(1, (begin + t - 1) / 2 - step);
+    if (cut - last_cut >= min_scene_len) {
+      cuts.push_back(cut);
+      last_cut = cut;
+    }
+  }
+  return cuts;
+}
+
 std::vector<std::int64_t> FadeCuts(const std::vector<double>& mean_intensity, double threshold,
                                    int min_scene_len, double fade_bias) {
   std::vector<std::int64_t> cuts;
@@ -343,8 +406,19 @@ std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
     return HistogramCuts(s.histogram_correlation, c.histogram_threshold, c.min_scene_len);
   }
   if (name == "dissolve") {
-    return DissolveCuts(s.changed_fraction_long, s.long_window, c.dissolve_threshold,
-                        c.dissolve_steady, c.min_scene_len);
+    std::vector<std::int64_t> all = DissolveCuts(s.changed_fraction_long, s.long_window,
+                                                 c.dissolve_threshold, c.dissolve_steady,
+                                                 c.min_scene_len);
+    const std::vector<std::int64_t> blends =
+        BlendCuts(s.blend_changed, s.blend_unexplained, s.blend_step, c.blend_min_changed,
+                  c.blend_max_unexplained, c.blend_min_run, c.min_scene_len);
+    all.insert(all.end(), blends.begin(), blends.end());
+    std::sort(all.begin(), all.end());
+    std::vector<std::int64_t> cuts;
+    for (std::int64_t cut : all) {
+      if (cut - (cuts.empty() ? 0 : cuts.back()) >= c.min_scene_len) cuts.push_back(cut);
+    }
+    return cuts;
   }
   if (name == "fade") {
     return FadeCuts(s.mean_intensity, c.fade_threshold, c.min_scene_len, c.fade_bias);

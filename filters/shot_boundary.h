@@ -15,6 +15,17 @@
 //   - histogram_correlation_long: the same correlation between frame t and
 //     frame t - long_window, long_window = round(long_window_s * fps) >= 2
 //     (1 for the first long_window frames).
+//   - blend_changed / blend_unexplained (linear-blend test, k = blend_step
+//     frames): entry t describes frame c = t - k (both 0 resp. 1 for t < 2k).
+//     A pixel changed when |gray(c + k) - gray(c - k)| > blend_change_level;
+//     a changed pixel is explained when |gray(c) - (gray(c - k) + gray(c +
+//     k)) / 2| <= blend_tolerance * |gray(c + k) - gray(c - k)|.
+//     blend_changed = changed pixels / pixels, blend_unexplained = 1 -
+//     explained / changed pixels (1 when none changed). Inside a dissolve
+//     (or a fade to black) every frame is the average of its neighbours, so
+//     only the scene's own motion is unexplained; motion (hands, a moving
+//     camera, a cut) leaves most changed pixels unexplained: a pixel that a
+//     moving edge crosses holds one side's value, half the change off.
 //   - changed_fraction_long: fraction of pixels whose gray level differs by
 //     more than 25 between frame t and frame t - long_window (0 for the
 //     first long_window frames). A dissolve changes almost every pixel of a
@@ -49,6 +60,9 @@
 //     windows (a dissolve joins two steady shots; a moving camera keeps
 //     changing) and the cut is at least min_scene_len frames after the
 //     previous cut (or the first frame).
+//   - dissolve also takes the cuts of BlendCuts (linear-blend runs); the
+//     two lists are merged in frame order, dropping a cut closer than
+//     min_scene_len to the previous kept one.
 //   - fade: a frame is dark when its mean intensity < threshold; on the
 //     first bright frame after a dark run that started at frame `out` (the
 //     first frame counts as a fade-out when dark) the cut is the midpoint
@@ -99,6 +113,10 @@ struct ShotBoundaryConfig {
   // Dissolves (long-window histogram correlation).
   double dissolve_threshold = 0.5;
   double dissolve_steady = 0.3;
+  // Dissolves (linear-blend test, see BlendCuts).
+  double blend_min_changed = 0.2;
+  double blend_max_unexplained = 0.4;
+  int blend_min_run = 3;
   // Policy. Names: "content", "adaptive", "hash", "histogram", "dissolve", "fade".
   std::vector<std::string> boundary_detectors = {"adaptive", "dissolve", "fade"};
   double min_segment_s = 2.0;
@@ -108,7 +126,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotBoundaryConfig, content_thre
                                                 adaptive_threshold, min_content_val, window_width,
                                                 hash_threshold, histogram_threshold, fade_threshold,
                                                 fade_bias, dissolve_threshold, dissolve_steady,
-                                                boundary_detectors, min_segment_s)
+                                                blend_min_changed, blend_max_unexplained,
+                                                blend_min_run, boundary_detectors, min_segment_s)
 
 // Analysis-pass parameters of the shot signals.
 struct ShotSignalConfig {
@@ -116,9 +135,14 @@ struct ShotSignalConfig {
   int hash_lowpass = 2;
   int histogram_bins = 256;
   double long_window_s = 0.5;  // for histogram_correlation_long (>= 2 frames)
+  // Linear-blend test (see blend_changed / blend_unexplained).
+  int blend_step = 3;            // frames, >= 1
+  int blend_change_level = 12;   // gray levels
+  double blend_tolerance = 0.25;  // of a pixel's change
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotSignalConfig, hash_size, hash_lowpass,
-                                                histogram_bins, long_window_s)
+                                                histogram_bins, long_window_s, blend_step,
+                                                blend_change_level, blend_tolerance)
 
 struct ShotSignals {
   std::vector<double> delta_hue, delta_sat, delta_lum;
@@ -127,7 +151,11 @@ struct ShotSignals {
   std::vector<double> mean_intensity;
   std::vector<double> histogram_correlation_long;
   std::vector<double> changed_fraction_long;
+  // Linear-blend test of the frame blend_step frames back (see BlendCuts);
+  // empty in measurements recorded before the test existed.
+  std::vector<double> blend_changed, blend_unexplained;
   int long_window = 15;
+  int blend_step = 3;
 };
 Json ToJson(const ShotSignals& s);
 ShotSignals ShotSignalsFromJson(const Json& j);  // throws Error("bad_measurements")
@@ -145,6 +173,8 @@ class ShotSignalExtractor : public FrameConsumer {
   ShotSignals signals_;
   cv::Mat hsv_, prev_hsv_, diff_, prev_hash_, prev_hist_;
   std::deque<cv::Mat> hist_window_, gray_window_;
+  std::deque<cv::Mat> blend_window_;
+  cv::Mat blend_sum_, blend_mid_, blend_diff_;
 };
 
 // Cut lists from stored signals; indices are 0-based positions in the span.
@@ -159,6 +189,17 @@ std::vector<std::int64_t> HistogramCuts(const std::vector<double>& correlation, 
                                         int min_scene_len);
 std::vector<std::int64_t> DissolveCuts(const std::vector<double>& long_correlation, int long_window,
                                        double threshold, double steady, int min_scene_len);
+// Dissolves as linear blends (signals blend_changed / blend_unexplained,
+// entry t describing frame t - step): each run of at least min_run
+// consecutive entries with changed >= min_changed and unexplained <=
+// max_unexplained gives one cut at the frame its middle entry describes
+// ((first + last) / 2 - step, rounded down, at least 1), if that is at least
+// min_scene_len frames after the previous cut (or the first frame). Empty
+// inputs give no cuts.
+std::vector<std::int64_t> BlendCuts(const std::vector<double>& changed,
+                                    const std::vector<double>& unexplained, int step,
+                                    double min_changed, double max_unexplained, int min_run,
+                                    int min_scene_len);
 std::vector<std::int64_t> FadeCuts(const std::vector<double>& mean_intensity, double threshold,
                                    int min_scene_len, double fade_bias);
 // The cut list of detector `name` (see boundary_detectors). Throws

@@ -71,6 +71,19 @@ class Reader {
 
   NpzArchive Npz(const std::string& rel) { return WithClip([&] { return ReadNpz(dir_ / rel); }); }
 
+  // Array `key` of `npz` (read from `rel`), checked to be floating point
+  // with `shape` (-1: any extent); errors name the file and key.
+  const NpyArray& FloatArray(const NpzArchive& npz, const std::string& rel,
+                             const std::string& key, const std::vector<std::int64_t>& shape) {
+    const std::string file = (dir_ / rel).string();
+    return WithClip([&]() -> const NpyArray& {
+      const NpyArray& a = RequireKey(npz, key, file);
+      CheckFloat(a, file, key);
+      CheckShape(a, shape, file, key);
+      return a;
+    });
+  }
+
   void RequireFinite(const NpyArray& a, const std::string& rel, const std::string& key) {
     for (std::int64_t i = 0; i < a.size(); ++i) {
       if (!std::isfinite(a.AsDouble(i))) {
@@ -409,12 +422,7 @@ class Reader {
     if (!fs::exists(dir_ / rel)) return;
     const std::string file = (dir_ / rel).string();
     const NpzArchive npz = Npz(rel);
-    WithClip([&] {
-      const NpyArray& a = RequireKey(npz, "poses", file);
-      CheckFloat(a, file, "poses");
-      CheckShape(a, {T(), 7}, file, "poses");
-    });
-    const NpyArray& a = npz.at("poses");
+    const NpyArray& a = FloatArray(npz, rel, "poses", {T(), 7});
     for (std::int64_t t = 0; t < T(); ++t) {
       b_.object_poses.push_back(PoseAt(a, t * 7, rel, "poses", "frame " + std::to_string(t)));
     }
@@ -502,12 +510,7 @@ class Reader {
     if (!fs::exists(dir_ / rel)) return;
     const std::string file = (dir_ / rel).string();
     const NpzArchive npz = Npz(rel);
-    WithClip([&] {
-      const NpyArray& up = RequireKey(npz, "up", file);
-      CheckFloat(up, file, "up");
-      CheckShape(up, {T(), 3}, file, "up");
-    });
-    const NpyArray& up = npz.at("up");
+    const NpyArray& up = FloatArray(npz, rel, "up", {T(), 3});
     RequireFinite(up, rel, "up");
     for (std::int64_t t = 0; t < T(); ++t) {
       const Vec3 g(up.AsDouble(3 * t), up.AsDouble(3 * t + 1), up.AsDouble(3 * t + 2));

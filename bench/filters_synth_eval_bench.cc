@@ -18,7 +18,9 @@
 // in the queue's order: the later filters judge the shot the shot filter
 // kept.
 //
-// Usage: filters_synth_eval_bench [clips=200] [seed=11] [width=320] [cache_dir]
+// Usage: filters_synth_eval_bench [clips=200] [seed=11] [width=320] [cache_dir] [config]
+// `config` is a TOML/JSON file with the worker's sections (filters_analyze,
+// shot_boundary, camera_motion, ...) to evaluate other parameters.
 // Rendering dominates the run time (the analysis itself runs at hundreds of
 // frames per second); with a cache_dir the rendered videos and their boxes
 // are kept there and reused by later runs with the same seed and size.
@@ -131,11 +133,17 @@ int main(int argc, char** argv) {
                                        {"out_of_frame", {"out_of_frame", "object_out"}},
                                        {"activity", {"static"}},
                                        {"interaction", {"no_contact"}}};
-  ShotBoundaryStage shots;
-  CameraMotionStage camera;
-  OutOfFrameStage out;
-  ActivityStage activity;
-  InteractionStage interaction;
+  const Json config = argc > 5 ? LoadConfigFile(argv[5]) : Json::object();
+  auto section = [&config]<typename T>(const char* name, T value) {
+    ReadSection(config, name, value);
+    return value;
+  };
+  const AnalyzeConfig analyze = section("filters_analyze", AnalyzeConfig{});
+  ShotBoundaryStage shots(section("shot_boundary", ShotBoundaryConfig{}));
+  CameraMotionStage camera(section("camera_motion", CameraMotionConfig{}));
+  OutOfFrameStage out(section("out_of_frame", OutOfFrameConfig{}));
+  ActivityStage activity(section("activity", ActivityConfig{}));
+  InteractionStage interaction(section("interaction", InteractionConfig{}));
   const std::map<std::string, const Stage*> stages = {{"shot_boundary", &shots},
                                                       {"camera_motion", &camera},
                                                       {"out_of_frame", &out},
@@ -169,7 +177,7 @@ int main(int argc, char** argv) {
       std::ofstream(boxes_file) << DetectionsToJson(detections).dump();
     }
     const auto t1 = std::chrono::steady_clock::now();
-    const ClipAnalysis analysis = AnalyzeClip(video, {}, detections, {});
+    const ClipAnalysis analysis = AnalyzeClip(video, {}, detections, analyze);
     const auto t2 = std::chrono::steady_clock::now();
     render_s += std::chrono::duration<double>(t1 - t0).count();
     analyse_s += std::chrono::duration<double>(t2 - t1).count();

@@ -5,9 +5,11 @@
 //   ffmpeg -hide_banner -i FILE -vf "select='gt(scene,0.3)'" -f null -
 // "Per core" divides frames by CPU seconds (user + system, all threads), so
 // the multi-threaded decoders of both sides are compared fairly. Each side
-// runs `repeats` times; the fastest run counts. Also prints decode-only
-// speed (OpenCV VideoCapture + analysis-size resize) as the floor, and what
-// the built-in interaction detector says about the four real videos.
+// runs `repeats` times; the fastest run counts. Both decode paths of the
+// analysis stage are measured (filters_analyze.decode = "exact", the
+// default, PySceneDetect's pixels; and "fast"), each also as decode only (the
+// floor), and the built-in interaction detector's verdicts on the four real
+// videos are printed.
 //
 // Usage: filters_throughput_bench [repeats=3]
 #include <benchmark/benchmark.h>
@@ -56,8 +58,18 @@ double FfmpegCpu(const std::filesystem::path& file) {
 struct Row {
   std::string name;
   std::int64_t frames = 0;
-  double ours = 0, decode = 0, ffmpeg = 0, given = 0;  // CPU seconds, best run
+  // CPU seconds, best run; [0] exact decode, [1] fast decode.
+  double decode[2] = {1e30, 1e30}, given[2] = {1e30, 1e30}, ours[2] = {1e30, 1e30};
+  double ffmpeg = 1e30;
 };
+
+// CPU seconds of `work()`.
+template <typename F>
+double Cpu(F&& work) {
+  const double t0 = SelfCpu();
+  work();
+  return SelfCpu() - t0;
+}
 
 }  // namespace
 }  // namespace doasido::filters
@@ -77,27 +89,31 @@ int main(int argc, char** argv) {
   for (const auto& file : files) {
     Row row;
     row.name = file.filename().string();
-    row.ours = row.decode = row.ffmpeg = row.given = 1e30;
     for (int r = 0; r < repeats; ++r) {
-      double t0 = SelfCpu();
-      {
-        VideoDecoder decoder(file, {});
-        AnalysisFrame frame;
-        std::int64_t n = 0;
-        while (decoder.Next(&frame)) ++n;
-        row.frames = n;
-        benchmark::DoNotOptimize(frame.bgr.data);
+      for (int mode = 0; mode < 2; ++mode) {
+        AnalyzeConfig all;
+        all.decode = mode == 0 ? "exact" : "fast";
+        DecoderOptions options;
+        options.exact_scaling = mode == 0;
+        options.skip_loop_filter = mode == 1;
+        row.decode[mode] = std::min(row.decode[mode], Cpu([&] {
+          VideoDecoder decoder(file, options);
+          AnalysisFrame frame;
+          std::int64_t n = 0;
+          while (decoder.Next(&frame)) ++n;
+          row.frames = n;
+          benchmark::DoNotOptimize(frame.bgr.data);
+        }));
+        row.ours[mode] = std::min(row.ours[mode], Cpu([&] {
+          ClipAnalysis analysis = AnalyzeClip(file, {}, {}, all);
+          if (r == 0 && mode == 0) analyses.emplace_back(row.name, analysis.measurements);
+        }));
+        AnalyzeConfig no_detector = all;
+        no_detector.use_builtin_detector = false;
+        row.given[mode] = std::min(row.given[mode], Cpu([&] {
+          benchmark::DoNotOptimize(AnalyzeClip(file, {}, {}, no_detector).measurements.size());
+        }));
       }
-      row.decode = std::min(row.decode, SelfCpu() - t0);
-      t0 = SelfCpu();
-      ClipAnalysis analysis = AnalyzeClip(file, {}, {}, {});
-      row.ours = std::min(row.ours, SelfCpu() - t0);
-      if (r == 0) analyses.emplace_back(row.name, analysis.measurements);
-      AnalyzeConfig no_detector;
-      no_detector.use_builtin_detector = false;
-      t0 = SelfCpu();
-      benchmark::DoNotOptimize(AnalyzeClip(file, {}, {}, no_detector).measurements.size());
-      row.given = std::min(row.given, SelfCpu() - t0);
       const double f = FfmpegCpu(file);
       if (f > 0) row.ffmpeg = std::min(row.ffmpeg, f);
     }
@@ -108,24 +124,30 @@ int main(int argc, char** argv) {
       "\nSingle analysis pass vs ffmpeg select='gt(scene,0.3)' (frames / CPU second, "
       "best of %d)\n",
       repeats);
-  std::printf("%-16s %7s %12s %14s %12s %14s %8s\n", "file", "frames", "decode only", "no detector",
-              "doasido all", "ffmpeg scene", "ratio");
-  double all_frames = 0, all_ours = 0, all_ffmpeg = 0;
+  std::printf("%-15s %6s | %26s | %26s | %7s | %6s %6s\n", "", "", "decode = exact (default)",
+              "decode = fast", "ffmpeg", "ratio", "ratio");
+  std::printf("%-15s %6s | %8s %8s %8s | %8s %8s %8s | %7s | %6s %6s\n", "file", "frames",
+              "decode", "given", "all", "decode", "given", "all", "scene", "exact", "fast");
+  double all_frames = 0, all_ours[2] = {0, 0}, all_ffmpeg = 0;
   for (const Row& r : rows) {
     const double n = static_cast<double>(r.frames);
-    std::printf("%-16s %7lld %12.0f %14.0f %12.0f %14.0f %7.2fx\n", r.name.c_str(),
-                static_cast<long long>(r.frames), n / r.decode, n / r.given, n / r.ours,
-                n / r.ffmpeg, r.ffmpeg / r.ours);
+    std::printf("%-15s %6lld | %8.0f %8.0f %8.0f | %8.0f %8.0f %8.0f | %7.0f | %5.2fx %5.2fx\n",
+                r.name.c_str(), static_cast<long long>(r.frames), n / r.decode[0],
+                n / r.given[0], n / r.ours[0], n / r.decode[1], n / r.given[1], n / r.ours[1],
+                n / r.ffmpeg, r.ffmpeg / r.ours[0], r.ffmpeg / r.ours[1]);
     all_frames += n;
-    all_ours += r.ours;
+    all_ours[0] += r.ours[0];
+    all_ours[1] += r.ours[1];
     all_ffmpeg += r.ffmpeg;
   }
-  std::printf("%-16s %7.0f %12s %14s %12.0f %14.0f %7.2fx   (goal >= 3x)\n", "all", all_frames, "",
-              "", all_frames / all_ours, all_frames / all_ffmpeg, all_ffmpeg / all_ours);
+  std::printf("%-15s %6.0f | %8s %8s %8.0f | %8s %8s %8.0f | %7.0f | %5.2fx %5.2fx  (goal >= 3x)\n",
+              "all", all_frames, "", "", all_frames / all_ours[0], "", "",
+              all_frames / all_ours[1], all_frames / all_ffmpeg, all_ffmpeg / all_ours[0],
+              all_ffmpeg / all_ours[1]);
   std::printf(
-      "decode only: OpenCV VideoCapture + resize; no detector: all signals with boxes "
-      "given (no built-in detector); doasido all: every signal + built-in detector; "
-      "ratio = doasido all / ffmpeg\n");
+      "frames per CPU second. decode: the decoder alone at analysis size; given: every signal "
+      "with boxes given (no built-in detector); all: every signal + the built-in detector; "
+      "ratio = all / ffmpeg scene\n");
 
   std::printf("\nBuilt-in interaction detector (no annotations given) on the real videos\n");
   std::printf("%-16s %6s %12s %8s %9s %22s %22s\n", "file", "hands", "interaction", "missing",

@@ -36,5 +36,8 @@ void AddWorkerCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
 void AddRetargetCommand(CLI::App& app);
+void AddRethresholdCommand(CLI::App& app);
+void AddReportCommand(CLI::App& app);
+void AddReviewCommand(CLI::App& app);
 
 }  // namespace doasido::cli

@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
   using namespace doasido::cli;
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
-                         AddSynthCommand, AddRetargetCommand};
+                         AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
+                         AddReportCommand, AddReviewCommand};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

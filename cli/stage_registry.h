@@ -19,6 +19,9 @@ struct StageEntry {
   bool in_default_pipeline;
   // Builds the stage from the whole config (the stage reads its section).
   std::function<std::unique_ptr<Stage>(const Json& config)> make;
+  // Run() only reads stored measurements (no decoding), so `doasido
+  // rethreshold` may re-decide and re-run it in process.
+  bool decides_from_measurements = false;
 };
 
 const std::vector<StageEntry>& StageTable();

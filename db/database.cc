@@ -602,8 +602,11 @@ void Database::DropLaterStages(ClipId clip, const std::string& stage) {
 std::int64_t Database::InvalidateOtherParams(const std::string& stage,
                                              const std::string& param_hash) {
   Transaction tx(*this);
+  // A run whose current verdict a person gave is not run again.
   Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL"
-          " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?")
+          " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?"
+          " AND IFNULL((SELECT source FROM verdicts v WHERE v.clip_id = stage_runs.clip_id"
+          " AND v.stage = stage_runs.stage ORDER BY v.id DESC LIMIT 1), '') != 'human'")
       .Bind(1, stage)
       .Bind(2, param_hash)
       .Run();
@@ -749,6 +752,56 @@ void Database::SetVerdict(ClipId clip, const std::string& stage, Verdict verdict
   }
   LogEvent(clip, stage, "verdict", source, std::string(ToString(verdict)) + " " + reason);
   tx.Commit();
+}
+
+bool Database::StoreRedecision(ClipId clip, const std::string& stage,
+                               const std::string& param_hash, const StageResult& result,
+                               bool changed) {
+  Transaction tx(*this);
+  auto& last = Prepare("SELECT source FROM verdicts WHERE clip_id = ? AND stage = ?"
+                       " ORDER BY id DESC LIMIT 1");
+  last.Bind(1, clip).Bind(2, stage);
+  const bool human = last.Step() && last.Text(0) == "human";
+  last.Reset();
+  // A person's verdict stands; the run takes the new parameters so that the
+  // worker does not run it again.
+  auto& update = Prepare(human ? "UPDATE stage_runs SET param_hash = ? WHERE clip_id = ?"
+                                 " AND stage = ? AND state = 'done'"
+                               : "UPDATE stage_runs SET param_hash = ?, verdict = ?, reason = ?"
+                                 " WHERE clip_id = ? AND stage = ? AND state = 'done'");
+  update.Bind(1, param_hash);
+  if (!human) update.Bind(2, ToString(result.verdict)).Bind(3, result.reason);
+  update.Bind(human ? 2 : 4, clip).Bind(human ? 3 : 5, stage).Run();
+  if (sqlite3_changes(db_) == 0 || human) {
+    tx.Commit();
+    return false;
+  }
+  const double now = Now();
+  Prepare("UPDATE measurements SET param_hash = ?, data = ?, created_at = ?"
+          " WHERE clip_id = ? AND stage = ?")
+      .Bind(1, param_hash)
+      .Bind(2, result.measurements.dump())
+      .Bind(3, now)
+      .Bind(4, clip)
+      .Bind(5, stage)
+      .Run();
+  if (changed) {
+    Prepare("INSERT INTO verdicts (clip_id, stage, verdict, reason, source, param_hash,"
+            " created_at) VALUES (?,?,?,?,'rethreshold',?,?)")
+        .Bind(1, clip)
+        .Bind(2, stage)
+        .Bind(3, ToString(result.verdict))
+        .Bind(4, result.reason)
+        .Bind(5, param_hash)
+        .Bind(6, now)
+        .Run();
+    DropLaterStages(clip, stage);
+    if (result.verdict == Verdict::kPass) QueueNextStage(clip, stage);
+    LogEvent(clip, stage, "rethreshold", "",
+             std::string(ToString(result.verdict)) + " " + result.reason);
+  }
+  tx.Commit();
+  return true;
 }
 
 }  // namespace doasido

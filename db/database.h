@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -183,6 +184,134 @@ class Database {
   // the clip for the next stage, anything else drops its later stages.
   void SetVerdict(ClipId clip, const std::string& stage, Verdict verdict,
                   const std::string& reason, const std::string& source);
+  // Replaces a finished run's result with one re-derived from its stored
+  // measurements under new parameters (re-thresholding; nothing is decoded):
+  // measurements, parameter hash and verdict are replaced and the verdict
+  // history gets a "rethreshold" row. When `changed`, the clip's later stages
+  // are dropped and, on pass, the next stage is queued, so later stages judge
+  // the new result. Returns false, changing nothing, when the run is not done
+  // or its current verdict was given by a person (source "human").
+  bool StoreRedecision(ClipId clip, const std::string& stage, const std::string& param_hash,
+                       const StageResult& result, bool changed);
+
+  // ---- Reports --------------------------------------------------------------
+  // Bulk reads for `doasido report` (db/database_reports.cc). Read-only.
+
+  // One stage run as the playbook report counts it.
+  struct ReportRun {
+    ClipId clip_id = 0;
+    std::string stage;
+    int position = 0;
+    std::string state;    // pending, running, done, failed
+    std::string verdict;  // empty until decided
+    std::string reason;
+    std::string error;
+    int attempts = 0;
+    std::optional<double> duration_s;  // set once done
+    // Source of the latest verdict history row ('stage', 'rethreshold',
+    // 'human'); empty without one.
+    std::string verdict_source;
+  };
+  // Every stage run, ordered by clip id and pipeline position.
+  std::vector<ReportRun> ReportRuns();
+  // Every clip as GetClip reads it, ordered by id; `videos` (when not null)
+  // gets each clip's absolute video path (or URL) keyed by clip id.
+  std::vector<ClipRecord> ListClips(std::map<ClipId, std::string>* videos = nullptr);
+  // Calls fn(clip, summary) for each clip whose run of `stage` is done, in
+  // clip order, where summary is the measurements' "summary" member (null
+  // when absent). Only that member is parsed: signals can be large.
+  void ForEachSummary(const std::string& stage,
+                      const std::function<void(ClipId, const Json&)>& fn);
+  struct EventCount {
+    std::string stage;
+    std::string kind;
+    std::string worker;
+    std::int64_t count = 0;
+  };
+  // Events grouped by stage, kind and worker.
+  std::vector<EventCount> CountEvents();
+  struct EventRow {
+    std::int64_t id = 0;
+    double at = 0;
+    std::optional<ClipId> clip_id;
+    std::string stage, kind, worker, detail;
+  };
+  // Events of one of `kinds`, oldest first, at most `limit` (0: all).
+  std::vector<EventRow> ListEvents(const std::vector<std::string>& kinds, int limit);
+
+  // ---- Review ---------------------------------------------------------------
+  // (db/database_review.cc) Flagged clips waiting for a person, their
+  // decisions, and the tables of preference studies (schema v2).
+  struct FlaggedRun {
+    ClipId clip_id = 0;
+    std::string external_id;
+    std::string stage;
+    std::string reason;
+  };
+  struct ReviewRow {
+    std::int64_t id = 0;
+    ClipId clip_id = 0;
+    std::string stage, reviewer, decision, reason;  // decision: accept | reject
+    double created_at = 0;
+  };
+  struct VerdictRow {
+    std::string verdict, reason, source;  // source: stage | rethreshold | human
+    double created_at = 0;
+  };
+  struct StudyRecord {
+    std::int64_t id = 0;
+    std::string name;
+    int raters_per_item = 3;
+    std::int64_t seed = 0;
+    std::string items_file;
+    double created_at = 0;
+  };
+  struct StudyItemRecord {
+    std::int64_t id = 0;  // row id; item_id is the name from the items file
+    std::string item_id;
+    std::string source_video, a_video, b_video;  // absolute paths
+    std::string a_label, b_label;
+  };
+  struct StudyTrialRecord {
+    std::int64_t id = 0;
+    std::int64_t item = 0;  // StudyItemRecord::id
+    std::string rater;
+    bool left_is_a = true;
+    std::string side;    // left | right | tie; empty until answered
+    std::string choice;  // a | b | tie; empty until answered
+    double shown_at = 0;
+    std::optional<double> answered_at;
+  };
+
+  // Done runs whose verdict is flag, in clip then pipeline order.
+  std::vector<FlaggedRun> ListFlagged();
+  std::int64_t CountFlagged();
+  // A person's decision on a flagged run, in one transaction: a `reviews`
+  // row, the human verdict (accept -> pass, which queues the next stage;
+  // reject -> reject) with its history, and a "review" event. Throws
+  // Error("not_flagged") and writes nothing when the run is not flagged.
+  void RecordReview(ClipId clip, const std::string& stage, const std::string& reviewer,
+                    bool accept, const std::string& reason);
+  std::vector<ReviewRow> ListReviews();
+  // Verdict history of one run, oldest first.
+  std::vector<VerdictRow> VerdictHistory(ClipId clip, const std::string& stage);
+
+  // Creates a study with its items (paths stored relative to the database
+  // folder when inside it). Throws Error("study_exists") for a taken name.
+  std::int64_t CreateStudy(const StudyRecord& study, const std::vector<StudyItemRecord>& items);
+  std::optional<StudyRecord> GetStudy(const std::string& name);
+  std::vector<StudyItemRecord> GetStudyItems(std::int64_t study_id);
+  std::optional<StudyItemRecord> GetStudyItem(std::int64_t item);  // by row id
+  // Every trial of the study's items, in creation order.
+  std::vector<StudyTrialRecord> GetStudyTrials(std::int64_t study_id);
+  std::optional<StudyTrialRecord> GetStudyTrial(std::int64_t trial_id);
+  // Opens a trial of `item` for `rater`; throws Error("trial_exists") when
+  // the rater already has one for this item.
+  std::int64_t InsertStudyTrial(std::int64_t item, const std::string& rater, bool left_is_a);
+  // Records the rater's side (left | right | tie) and the choice it maps to.
+  // False (nothing written) when the trial is already answered, belongs to
+  // another rater, or its item already has all its ratings.
+  bool AnswerStudyTrial(std::int64_t trial_id, const std::string& rater, const std::string& side);
 
  private:
   db::Statement& Prepare(const std::string& sql);

@@ -115,6 +115,45 @@ CREATE TABLE events (
 );
 CREATE INDEX events_clip ON events(clip_id);
 )sql",
+      // 2: preference studies (review module): items compare two renderings
+      // of a source clip; each trial is one rater's judgement of one item,
+      // with the randomised left/right layout it was shown in.
+      R"sql(
+CREATE TABLE studies (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,
+  raters_per_item INTEGER NOT NULL CHECK (raters_per_item >= 1),
+  seed INTEGER NOT NULL,               -- left/right layout seed
+  items_file TEXT,
+  created_at REAL NOT NULL
+);
+
+CREATE TABLE study_items (
+  id INTEGER PRIMARY KEY,
+  study_id INTEGER NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  position INTEGER NOT NULL,
+  item_id TEXT NOT NULL,
+  source_video TEXT NOT NULL,          -- relative to the database folder when inside it
+  a_video TEXT NOT NULL,
+  b_video TEXT NOT NULL,
+  a_label TEXT NOT NULL,
+  b_label TEXT NOT NULL,
+  UNIQUE (study_id, item_id)
+);
+
+CREATE TABLE study_trials (
+  id INTEGER PRIMARY KEY,
+  item_id INTEGER NOT NULL REFERENCES study_items(id) ON DELETE CASCADE,
+  rater TEXT NOT NULL,
+  left_is_a INTEGER NOT NULL CHECK (left_is_a IN (0, 1)),
+  side TEXT CHECK (side IN ('left', 'right', 'tie')),
+  choice TEXT CHECK (choice IN ('a', 'b', 'tie')),
+  shown_at REAL NOT NULL,
+  answered_at REAL,
+  UNIQUE (item_id, rater)
+);
+CREATE INDEX study_trials_item ON study_trials(item_id);
+)sql",
   };
   return kMigrations;
 }

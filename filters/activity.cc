@@ -102,7 +102,10 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
   result.measurements = measurements;
   result.measurements["summary"] = {{"active_fraction", active},
                                     {"mean_energy", mean_energy / n},
-                                    {"hand_region_fraction", hand_frames / n}};
+                                    {"hand_region_fraction", hand_frames / n},
+                                    {"scores",
+                                     {ScoreEntry("active_fraction", active, false,
+                                                 c.min_active_fraction)}}};
   if (active < c.min_active_fraction) {
     result.verdict = Verdict::kReject;
     result.reason = "no_activity";

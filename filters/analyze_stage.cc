@@ -1,5 +1,6 @@
 #include "filters/analyze_stage.h"
 
+#include "core/error.h"
 #include "filters/stage_support.h"
 
 namespace doasido::filters {
@@ -9,6 +10,12 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   DecoderOptions decode = options;
   decode.analysis_size = config.analysis_size;
   decode.frame_count_tolerance = config.frame_count_tolerance;
+  if (config.decode != "exact" && config.decode != "fast") {
+    throw Error("bad_config", "decode must be \"exact\" or \"fast\", not \"" + config.decode + "\"",
+                {.clip = options.clip, .field = "filters_analyze.decode"});
+  }
+  decode.exact_scaling = config.decode == "exact";
+  decode.skip_loop_filter = config.decode == "fast";
 
   const bool builtin = detections.empty() && config.use_builtin_detector;
   BuiltinHandObjectDetector detector(config.detector);

@@ -35,6 +35,12 @@ namespace doasido::filters {
 
 struct AnalyzeConfig {
   int analysis_size = 256;  // longer side, PySceneDetect's default
+  // "exact": PySceneDetect's pixels (deblocked decode, full-size BGR,
+  // cv::resize), so shot scores equal its published ones. "fast": no
+  // deblocking, YUV scaled straight to analysis size (ingest/video_decoder.h);
+  // scores move by a few per cent, which can move cuts whose score sits at
+  // a threshold (testvideo: 211 and 691).
+  std::string decode = "exact";
   bool use_builtin_detector = true;
   std::int64_t frame_count_tolerance = 0;
   ShotSignalConfig shot;
@@ -43,7 +49,8 @@ struct AnalyzeConfig {
   OutOfFrameSignalConfig out_of_frame;
   BuiltinDetectorConfig detector;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, use_builtin_detector,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, decode,
+                                                use_builtin_detector,
                                                 frame_count_tolerance, shot, activity,
                                                 camera_motion, out_of_frame, detector)
 

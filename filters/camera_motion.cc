@@ -228,7 +228,22 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
                                     {"peak_rotation_rate", m.peak_rotation_rate},
                                     {"peak_scale_rate", m.peak_scale_rate},
                                     {"mean_inlier_ratio", m.mean_inlier_ratio},
-                                    {"valid_fraction", m.valid_fraction}};
+                                    {"valid_fraction", m.valid_fraction},
+                                    {"scores",
+                                     {ScoreEntry("translation_rate", m.translation_rate, true,
+                                                 c.reject_translation_rate,
+                                                 c.flag_translation_rate),
+                                      ScoreEntry("rotation_rate", m.rotation_rate, true,
+                                                 c.reject_rotation_rate, c.flag_rotation_rate),
+                                      ScoreEntry("scale_rate", m.scale_rate, true,
+                                                 c.reject_scale_rate, c.flag_scale_rate),
+                                      ScoreEntry("peak_translation_rate",
+                                                 m.peak_translation_rate, true,
+                                                 c.reject_peak_translation_rate),
+                                      ScoreEntry("peak_rotation_rate", m.peak_rotation_rate,
+                                                 true, c.reject_peak_rotation_rate),
+                                      ScoreEntry("peak_scale_rate", m.peak_scale_rate, true,
+                                                 c.reject_peak_scale_rate)}}};
   const bool reject = m.translation_rate >= c.reject_translation_rate ||
                       m.rotation_rate >= c.reject_rotation_rate ||
                       m.scale_rate >= c.reject_scale_rate ||

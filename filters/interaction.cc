@@ -268,7 +268,10 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
   result.measurements["summary"] = {
       {"covered_fraction", covered_fraction},
       {"hand_fraction", covered > 0 ? static_cast<double>(with_hands) / covered : 0.0},
-      {"interaction_fraction", fraction}};
+      {"interaction_fraction", fraction},
+      {"scores",
+       {ScoreEntry("interaction_fraction", fraction, false, c.min_interaction_fraction),
+        ScoreEntry("covered_fraction", covered_fraction, false, c.min_covered_fraction)}}};
   if (covered_fraction < c.min_covered_fraction) {
     result.verdict = Verdict::kFlag;
     result.reason = "no_detections";

@@ -158,7 +158,13 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
                                     {"hand_missing_fraction", m.hand_missing_fraction},
                                     {"hand_cut_fraction", m.hand_cut_fraction},
                                     {"object_missing_fraction", m.object_missing_fraction},
-                                    {"object_cut_fraction", m.object_cut_fraction}};
+                                    {"object_cut_fraction", m.object_cut_fraction},
+                                    {"scores",
+                                     {ScoreEntry("missing_fraction", m.missing_fraction, true,
+                                                 c.reject_missing_fraction,
+                                                 c.flag_missing_fraction),
+                                      ScoreEntry("cut_fraction", m.cut_fraction, true,
+                                                 c.reject_cut_fraction, c.flag_cut_fraction)}}};
   if (m.covered_fraction < c.min_covered_fraction) {
     result.verdict = Verdict::kFlag;
     result.reason = "no_detections";

@@ -485,6 +485,13 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
                     {"end_frame", first + best_end - 1},
                     {"seconds", segment_s}}}};
   for (std::int64_t b : boundaries) summary["boundaries"].push_back(first + b);
+  // A clip without boundaries passes whatever its length, so only clips with
+  // boundaries have a thresholded score.
+  summary["scores"] = Json::array();
+  if (!boundaries.empty()) {
+    summary["scores"].push_back(
+        ScoreEntry("longest_segment_s", segment_s, false, config.min_segment_s));
+  }
   if (boundaries.empty()) {
     result.verdict = Verdict::kPass;
   } else if (segment_s >= config.min_segment_s) {

@@ -1,6 +1,7 @@
 #include "filters/stage_support.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/error.h"
 
@@ -58,6 +59,16 @@ void RequireAnalysis(const Json& measurements, const std::string& stage) {
     throw Error("bad_measurements", "stored measurements lack \"clip\" or \"signals\"",
                 {.field = stage});
   }
+}
+
+Json ScoreEntry(const std::string& name, double value, bool rejects_above, double reject,
+                double flag) {
+  Json entry = {{"name", name},
+                {"value", value},
+                {"rejects", rejects_above ? "above" : "below"},
+                {"reject", reject}};
+  if (!std::isnan(flag)) entry["flag"] = flag;
+  return entry;
 }
 
 double NumberOr(const Json& object, const std::string& key, double fallback) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,13 @@ ShotSpan SpanOf(const Json& measurements, std::int64_t frames);
 // Checks that `measurements` has "clip" and "signals" objects. Throws
 // Error("bad_measurements") naming `stage` otherwise.
 void RequireAnalysis(const Json& measurements, const std::string& stage);
+
+// One thresholded score of a verdict, as stored in summary["scores"] for
+// reports and the review page: {"name", "value", "rejects": "above" |
+// "below", "reject": threshold, "flag": threshold (only when given)}.
+// "above" rejects value >= reject; "below" rejects value < reject.
+Json ScoreEntry(const std::string& name, double value, bool rejects_above, double reject,
+                double flag = std::numeric_limits<double>::quiet_NaN());
 
 // Number read from a JSON object with a default.
 double NumberOr(const Json& object, const std::string& key, double fallback);

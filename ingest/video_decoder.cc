@@ -3,9 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "core/error.h"
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libswscale/swscale.h>
+}
 
 namespace doasido {
 
@@ -25,23 +30,82 @@ cv::Size AnalysisSize(int width, int height, int analysis_size) {
   return {std::max(1, w), std::max(1, h)};
 }
 
+struct VideoDecoder::Codec {
+  AVFormatContext* format = nullptr;
+  AVCodecContext* context = nullptr;
+  AVPacket* packet = nullptr;
+  AVFrame* frame = nullptr;
+  SwsContext* sws = nullptr;
+  int stream = -1;
+  double time_base = 0;     // seconds per pts unit
+  std::int64_t start_pts = 0;
+  bool flushed = false;     // the end-of-stream packet was sent
+
+  ~Codec() {
+    sws_freeContext(sws);
+    av_frame_free(&frame);
+    av_packet_free(&packet);
+    avcodec_free_context(&context);
+    avformat_close_input(&format);
+  }
+};
+
+namespace {
+
+double Rational(AVRational r) { return r.den != 0 ? av_q2d(r) : 0.0; }
+
+}  // namespace
+
 VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptions& options)
-    : path_(path), options_(options), capture_(std::make_unique<cv::VideoCapture>()) {
+    : path_(path), options_(options), codec_(std::make_unique<Codec>()) {
   const ErrorSite site{.clip = options.clip, .file = path.string()};
   if (!std::filesystem::exists(path)) {
     throw Error("video_open_failed", "video file does not exist", site);
   }
-  if (!capture_->open(path.string(), cv::CAP_FFMPEG) || !capture_->isOpened()) {
+  av_log_set_level(AV_LOG_FATAL);  // our own errors name the clip and file
+  Codec& c = *codec_;
+  if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
+      avformat_find_stream_info(c.format, nullptr) < 0) {
     throw Error("video_open_failed",
                 "FFmpeg could not open the file as a video (not a video, or truncated before "
                 "its index)",
                 site);
   }
-  geometry_.full_width = static_cast<int>(capture_->get(cv::CAP_PROP_FRAME_WIDTH));
-  geometry_.full_height = static_cast<int>(capture_->get(cv::CAP_PROP_FRAME_HEIGHT));
-  geometry_.fps = capture_->get(cv::CAP_PROP_FPS);
-  const double declared = capture_->get(cv::CAP_PROP_FRAME_COUNT);
-  geometry_.declared_frames = declared > 0 ? static_cast<std::int64_t>(declared) : 0;
+  const AVCodec* decoder = nullptr;
+  c.stream = av_find_best_stream(c.format, AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
+  if (c.stream < 0 || decoder == nullptr) {
+    throw Error("video_open_failed", "the file has no video stream FFmpeg can decode", site);
+  }
+  AVStream* stream = c.format->streams[c.stream];
+  c.context = avcodec_alloc_context3(decoder);
+  if (c.context == nullptr ||
+      avcodec_parameters_to_context(c.context, stream->codecpar) < 0) {
+    throw Error("video_open_failed", "cannot set up the video decoder", site);
+  }
+  c.context->thread_count = 1;
+  if (options.skip_loop_filter) c.context->skip_loop_filter = AVDISCARD_ALL;
+  if (avcodec_open2(c.context, decoder, nullptr) < 0) {
+    throw Error("video_open_failed", "cannot open the video decoder", site);
+  }
+  c.packet = av_packet_alloc();
+  c.frame = av_frame_alloc();
+  c.time_base = Rational(stream->time_base);
+  c.start_pts = stream->start_time != AV_NOPTS_VALUE ? stream->start_time : 0;
+
+  geometry_.full_width = c.context->width;
+  geometry_.full_height = c.context->height;
+  geometry_.fps = Rational(stream->avg_frame_rate);
+  if (geometry_.fps <= 0) geometry_.fps = Rational(stream->r_frame_rate);
+  geometry_.declared_frames = stream->nb_frames;
+  if (geometry_.declared_frames <= 0 && geometry_.fps > 0) {
+    // As OpenCV's FFmpeg backend counts a stream without a frame count.
+    double duration_s = stream->duration != AV_NOPTS_VALUE
+                            ? static_cast<double>(stream->duration) * c.time_base
+                            : static_cast<double>(c.format->duration) / AV_TIME_BASE;
+    geometry_.declared_frames =
+        duration_s > 0 ? static_cast<std::int64_t>(std::floor(duration_s * geometry_.fps + 0.5))
+                       : 0;
+  }
   if (geometry_.full_width <= 0 || geometry_.full_height <= 0) {
     throw Error("video_open_failed", "the video stream has no frame size", site);
   }
@@ -63,10 +127,16 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
     throw Error("bad_span", "first frame is negative",
                 {.clip = options.clip, .file = path.string(), .field = "start_frame"});
   }
-  // Grab (decode without colour conversion) up to the span: exact, unlike
-  // seeking, which lands on key frames in some containers.
+  const bool constant_rate =
+      av_cmp_q(stream->avg_frame_rate, stream->r_frame_rate) == 0 && geometry_.fps > 0;
+  if (options_.first_frame >= options_.seek_after_frames && options_.seek_after_frames > 0 &&
+      constant_rate) {
+    SeekBefore(options_.first_frame);
+  }
+  // Decode without converting up to the span.
+  bool rewound = false;
   while (next_index_ < options_.first_frame) {
-    if (!capture_->grab()) {
+    if (!DecodeNext()) {
       if (geometry_.declared_frames > 0 &&
           next_index_ < geometry_.declared_frames - options_.frame_count_tolerance) {
         ThrowTruncated(next_index_, "decoding stopped before the clip's first frame");
@@ -74,11 +144,92 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
       done_ = true;
       break;
     }
-    ++next_index_;
+    if (index_from_pts_ && DecodedIndex() > options_.first_frame && !rewound) {
+      // The seek overshot (no key frame where the index said): start over.
+      rewound = true;
+      av_seek_frame(codec_->format, codec_->stream, codec_->start_pts, AVSEEK_FLAG_BACKWARD);
+      avcodec_flush_buffers(codec_->context);
+      continue;
+    }
+    if (DecodedIndex() >= options_.first_frame) {
+      pending_ = true;  // the seek landed on the first frame: deliver it
+      break;
+    }
+    next_index_ = DecodedIndex() + 1;
   }
 }
 
 VideoDecoder::~VideoDecoder() = default;
+
+void VideoDecoder::SeekBefore(std::int64_t frame) {
+  Codec& c = *codec_;
+  const double seconds = static_cast<double>(frame) / geometry_.fps;
+  const auto target = c.start_pts + static_cast<std::int64_t>(std::floor(seconds / c.time_base));
+  if (av_seek_frame(c.format, c.stream, target, AVSEEK_FLAG_BACKWARD) < 0) return;
+  avcodec_flush_buffers(c.context);
+  index_from_pts_ = true;
+  // The frame index is unknown until the first frame after the seek arrives.
+  next_index_ = -1;
+}
+
+std::int64_t VideoDecoder::DecodedIndex() const {
+  if (!index_from_pts_) return next_index_;
+  const AVFrame* f = codec_->frame;
+  const std::int64_t pts =
+      f->best_effort_timestamp != AV_NOPTS_VALUE ? f->best_effort_timestamp : f->pts;
+  return std::llround(static_cast<double>(pts - codec_->start_pts) * codec_->time_base *
+                      geometry_.fps);
+}
+
+bool VideoDecoder::DecodeNext() {
+  Codec& c = *codec_;
+  while (true) {
+    const int received = avcodec_receive_frame(c.context, c.frame);
+    if (received == 0) return true;
+    if (received != AVERROR(EAGAIN) || c.flushed) return false;
+    // Feed packets until the decoder takes one (corrupt packets are skipped:
+    // the frame count then tells a damaged file from a complete one).
+    while (true) {
+      if (av_read_frame(c.format, c.packet) < 0) {
+        avcodec_send_packet(c.context, nullptr);
+        c.flushed = true;
+        break;
+      }
+      const bool ours = c.packet->stream_index == c.stream;
+      const int sent = ours ? avcodec_send_packet(c.context, c.packet) : -1;
+      av_packet_unref(c.packet);
+      if (ours && sent >= 0) break;
+    }
+  }
+}
+
+void VideoDecoder::Convert(cv::Mat* bgr) {
+  Codec& c = *codec_;
+  const AVFrame* f = c.frame;
+  const bool resize_here = options_.exact_scaling;
+  const int out_w = resize_here ? f->width : geometry_.width;
+  const int out_h = resize_here ? f->height : geometry_.height;
+  c.sws = sws_getCachedContext(c.sws, f->width, f->height, static_cast<AVPixelFormat>(f->format),
+                               out_w, out_h, AV_PIX_FMT_BGR24, SWS_BILINEAR, nullptr, nullptr,
+                               nullptr);
+  if (c.sws == nullptr) {
+    throw Error("corrupt_video", "cannot convert the decoded pixel format",
+                {.clip = options_.clip, .file = path_.string()});
+  }
+  cv::Mat& target = resize_here ? full_ : *bgr;
+  target.create(out_h, out_w, CV_8UC3);
+  uint8_t* planes[1] = {target.data};
+  const int strides[1] = {static_cast<int>(target.step[0])};
+  sws_scale(c.sws, f->data, f->linesize, 0, f->height, planes, strides);
+  if (resize_here) {
+    if (out_w == geometry_.width && out_h == geometry_.height) {
+      *bgr = full_;
+    } else {
+      cv::resize(full_, *bgr, cv::Size(geometry_.width, geometry_.height), 0, 0,
+                 cv::INTER_LINEAR);
+    }
+  }
+}
 
 void VideoDecoder::ThrowTruncated(std::int64_t frame, const std::string& why) const {
   std::string message = why + " (could not decode frame " + std::to_string(frame);
@@ -97,7 +248,7 @@ bool VideoDecoder::Next(AnalysisFrame* frame) {
     done_ = true;
     return false;
   }
-  if (!capture_->read(full_) || full_.empty()) {
+  if (!pending_ && !DecodeNext()) {
     done_ = true;
     if (geometry_.declared_frames > 0 &&
         next_index_ < geometry_.declared_frames - options_.frame_count_tolerance) {
@@ -108,28 +259,31 @@ bool VideoDecoder::Next(AnalysisFrame* frame) {
     }
     return false;
   }
-  frame->index = next_index_;
-  const double pos_ms = capture_->get(cv::CAP_PROP_POS_MSEC);
-  frame->timestamp_s = pos_ms > 0 || next_index_ == 0 || geometry_.fps <= 0
-                           ? pos_ms / 1000.0
-                           : static_cast<double>(next_index_) / geometry_.fps;
-  if (full_.cols != geometry_.full_width || full_.rows != geometry_.full_height) {
+  pending_ = false;
+  const AVFrame* f = codec_->frame;
+  const std::int64_t index = DecodedIndex();
+  if (options_.last_frame >= 0 && index > options_.last_frame) {
+    done_ = true;
+    return false;
+  }
+  if (f->width != geometry_.full_width || f->height != geometry_.full_height) {
     throw Error("corrupt_video",
-                "frame " + std::to_string(next_index_) + " is " + std::to_string(full_.cols) + "x" +
-                    std::to_string(full_.rows) + ", the stream declares " +
+                "frame " + std::to_string(index) + " is " + std::to_string(f->width) + "x" +
+                    std::to_string(f->height) + ", the stream declares " +
                     std::to_string(geometry_.full_width) + "x" +
                     std::to_string(geometry_.full_height),
                 {.clip = options_.clip,
                  .file = path_.string(),
-                 .field = "frame " + std::to_string(next_index_)});
+                 .field = "frame " + std::to_string(index)});
   }
-  if (geometry_.width == full_.cols && geometry_.height == full_.rows) {
-    frame->bgr = full_;
-  } else {
-    cv::resize(full_, frame->bgr, cv::Size(geometry_.width, geometry_.height), 0, 0,
-               cv::INTER_LINEAR);
-  }
-  ++next_index_;
+  frame->index = index;
+  const std::int64_t pts =
+      f->best_effort_timestamp != AV_NOPTS_VALUE ? f->best_effort_timestamp : f->pts;
+  frame->timestamp_s = pts != AV_NOPTS_VALUE
+                           ? static_cast<double>(pts - codec_->start_pts) * codec_->time_base
+                           : (geometry_.fps > 0 ? static_cast<double>(index) / geometry_.fps : 0);
+  Convert(&frame->bgr);
+  next_index_ = index + 1;
   ++delivered_;
   return true;
 }

@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
   libsqlite3-dev sqlite3
-  libopencv-dev ffmpeg
+  libopencv-dev ffmpeg libavcodec-dev libavformat-dev libswscale-dev libavutil-dev
   libeigen3-dev libceres-dev
   libmujoco-dev libqhull-dev
   libassimp-dev libbullet-extras-dev libbullet-dev libtinyxml2-dev

@@ -24,7 +24,11 @@ std::vector<std::int64_t> Golden(const std::string& name) {
 
 ShotSignals Signals(const std::string& video) {
   ShotSignalExtractor extractor;
-  AnalyzeFrames(testing::SharedData() / "shots" / video, DecoderOptions{}, {}, {&extractor});
+  // PySceneDetect's pixels, as the analysis stage decodes by default.
+  DecoderOptions exact;
+  exact.exact_scaling = true;
+  exact.skip_loop_filter = false;
+  AnalyzeFrames(testing::SharedData() / "shots" / video, exact, {}, {&extractor});
   return extractor.signals();
 }
 

@@ -1,0 +1,57 @@
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "db/database.h"
+#include "reports/report.h"
+
+namespace doasido::cli {
+
+void AddReportCommand(CLI::App& app) {
+  struct Options {
+    DbOptions db;
+    std::string out;
+    int max_thumbnails = reports::ThumbnailOptions{}.max_per_reason;
+    bool no_thumbnails = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand(
+      "report", "Write the playbook report: funnel, score distributions, examples per reason, "
+                "sources and run statistics as one self-contained HTML page plus JSON and CSV");
+  AddDbOptions(*cmd, opt->db);
+  cmd->add_option("--out", opt->out, "Folder for report.html, report.json and the CSV files")
+      ->required();
+  cmd->add_option("--max-thumbnails", opt->max_thumbnails,
+                  "Example clips shown per rejection reason")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--no-thumbnails", opt->no_thumbnails,
+                "Skip decoding videos for example thumbnails (numbers and charts only)");
+  cmd->footer("Example:\n  doasido report --db work/doasido.db --out work/report\n"
+              "  xdg-open work/report/report.html\n"
+              "The [report] table of --config sets the rest (histogram_bins, max_failures,\n"
+              "thumbnail.panel_height, thumbnail.jpeg_quality, ...).");
+  cmd->callback([opt, cmd] {
+    // Reading must not create an empty database where a path was mistyped.
+    if (!std::filesystem::exists(opt->db.db)) {
+      throw Error("database", "no database file (create one with `doasido init`)",
+                  {.file = opt->db.db});
+    }
+    Database db(opt->db.db);
+    reports::ReportOptions options;
+    ReadSection(LoadConfig(opt->db), "report", options);
+    // Given on the command line, it wins over the config file.
+    if (cmd->count("--max-thumbnails") > 0) {
+      options.thumbnail.max_per_reason = opt->max_thumbnails;
+    }
+    if (opt->no_thumbnails) options.thumbnails = false;
+    const auto out = reports::WriteReport(db, opt->out, options);
+    const auto& f = out.data.funnel;
+    std::printf("%lld clips, %lld survive (%.1f%%)\n", static_cast<long long>(f.pool),
+                static_cast<long long>(f.survivors), reports::Percent(f.survivors, f.pool));
+    for (const auto& note : out.data.notes) std::printf("note: %s\n", note.c_str());
+    std::printf("wrote %s\n      %s\n", out.html.c_str(), out.json.c_str());
+    for (const auto& p : out.csv) std::printf("      %s\n", p.c_str());
+  });
+}
+
+}  // namespace doasido::cli

@@ -1,0 +1,115 @@
+#include "reports/funnel.h"
+
+#include <algorithm>
+
+namespace doasido::reports {
+namespace {
+
+std::string ReasonKey(const std::string& reason) {
+  return reason.empty() ? kUnspecifiedReason : reason;
+}
+
+}  // namespace
+
+const char* ToString(Outcome o) {
+  switch (o) {
+    case Outcome::kSurvived: return "survived";
+    case Outcome::kRejected: return "rejected";
+    case Outcome::kFlagged: return "flagged";
+    case Outcome::kFailed: return "failed";
+    case Outcome::kInProgress: return "in_progress";
+  }
+  return "?";
+}
+
+std::vector<std::string> FunnelOrder(const std::vector<std::string>& pipeline,
+                                     const std::vector<Database::ReportRun>& runs) {
+  std::vector<std::string> order = pipeline;
+  std::map<std::string, int> extra;  // stage -> smallest position
+  for (const auto& r : runs) {
+    if (std::find(pipeline.begin(), pipeline.end(), r.stage) != pipeline.end()) continue;
+    auto it = extra.find(r.stage);
+    if (it == extra.end() || r.position < it->second) extra[r.stage] = r.position;
+  }
+  std::vector<std::pair<int, std::string>> sorted;
+  for (const auto& [stage, position] : extra) sorted.emplace_back(position, stage);
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [position, stage] : sorted) order.push_back(stage);
+  return order;
+}
+
+Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
+                     const std::vector<Database::ReportRun>& runs, std::int64_t clips) {
+  Funnel funnel;
+  funnel.pool = clips;
+  const auto order = FunnelOrder(pipeline, runs);
+  std::map<std::string, size_t> index;
+  for (const auto& stage : order) {
+    index[stage] = funnel.stages.size();
+    funnel.stages.push_back({.stage = stage});
+  }
+  std::map<ClipId, bool> has_run;
+  for (const auto& r : runs) {
+    has_run[r.clip_id] = true;
+    FunnelStage& s = funnel.stages[index.at(r.stage)];
+    ++s.entering;
+    if (r.state == "failed") {
+      ++s.failed;
+    } else if (r.state != "done" || r.verdict.empty()) {
+      ++s.pending;
+    } else {
+      if (r.verdict_source == "human") ++s.human_by_verdict[r.verdict];
+      if (r.verdict == "pass") {
+        ++s.passed;
+        if (!r.reason.empty()) ++s.passed_by_reason[r.reason];
+      } else if (r.verdict == "reject") {
+        ++s.rejected;
+        ++s.rejected_by_reason[ReasonKey(r.reason)];
+      } else {
+        ++s.flagged;
+        ++s.flagged_by_reason[ReasonKey(r.reason)];
+      }
+    }
+  }
+  if (!pipeline.empty()) funnel.survivors = funnel.stages[pipeline.size() - 1].passed;
+  funnel.without_runs = clips - static_cast<std::int64_t>(has_run.size());
+  return funnel;
+}
+
+std::map<ClipId, ClipOutcome> ComputeOutcomes(const std::vector<std::string>& pipeline,
+                                              const std::vector<Database::ReportRun>& runs) {
+  std::map<ClipId, const Database::ReportRun*> furthest;
+  for (const auto& r : runs) {
+    // Stages run outside the pipeline do not move a clip along it.
+    if (!pipeline.empty() &&
+        std::find(pipeline.begin(), pipeline.end(), r.stage) == pipeline.end()) {
+      continue;
+    }
+    auto& slot = furthest[r.clip_id];
+    if (!slot || r.position > slot->position) slot = &r;
+  }
+  std::map<ClipId, ClipOutcome> out;
+  for (const auto& [clip, r] : furthest) {
+    ClipOutcome o{.clip = clip, .stage = r->stage};
+    o.human = r->verdict_source == "human";
+    if (r->state == "failed") {
+      o.outcome = Outcome::kFailed;
+      o.reason = r->error;
+    } else if (r->state != "done" || r->verdict.empty()) {
+      o.outcome = Outcome::kInProgress;
+    } else if (r->verdict == "reject") {
+      o.outcome = Outcome::kRejected;
+      o.reason = ReasonKey(r->reason);
+    } else if (r->verdict == "flag") {
+      o.outcome = Outcome::kFlagged;
+      o.reason = ReasonKey(r->reason);
+    } else {
+      const bool last = !pipeline.empty() && r->stage == pipeline.back();
+      o.outcome = last ? Outcome::kSurvived : Outcome::kInProgress;
+    }
+    out[clip] = o;
+  }
+  return out;
+}
+
+}  // namespace doasido::reports

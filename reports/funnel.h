@@ -1,0 +1,73 @@
+// The playbook funnel (seed §4.5): for each pipeline stage in order, how
+// many clips entered it, how many it removed and why, how many wait for a
+// person, failed or are still to run, and how many it passed on; and what
+// finally happened to every clip.
+//
+// Counts are of stage runs as they stand now: a verdict a person gave in
+// review (verdict source 'human') counts as what it decided, exactly like a
+// stage's own verdict. A clip enters a stage when it has a run there (it
+// was queued after passing the stage before).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "db/database.h"
+
+namespace doasido::reports {
+
+struct FunnelStage {
+  std::string stage;
+  std::int64_t entering = 0;
+  std::int64_t passed = 0;    // verdict pass: passed on to the next stage
+  std::int64_t rejected = 0;  // verdict reject: removed
+  std::int64_t flagged = 0;   // verdict flag: waiting for review
+  std::int64_t failed = 0;    // the stage errored out (attempts used up)
+  std::int64_t pending = 0;   // queued or running, not decided yet
+  // Reason code -> clips; an empty reason is counted as "unspecified".
+  std::map<std::string, std::int64_t> rejected_by_reason;
+  std::map<std::string, std::int64_t> flagged_by_reason;
+  std::map<std::string, std::int64_t> passed_by_reason;  // e.g. "trimmed"
+  // Current verdicts that a person gave in review, by verdict.
+  std::map<std::string, std::int64_t> human_by_verdict;
+};
+
+struct Funnel {
+  std::int64_t pool = 0;  // clips in the database
+  std::vector<FunnelStage> stages;
+  std::int64_t survivors = 0;  // passed the last stage
+  std::int64_t without_runs = 0;  // clips that never entered the first stage
+};
+
+// Where one clip stands: its furthest stage run decides.
+enum class Outcome { kSurvived, kRejected, kFlagged, kFailed, kInProgress };
+const char* ToString(Outcome o);
+
+struct ClipOutcome {
+  ClipId clip = 0;
+  Outcome outcome = Outcome::kInProgress;
+  std::string stage;   // the stage of the furthest run (empty without runs)
+  std::string reason;  // its reason code (rejected, flagged) or error text (failed)
+  bool human = false;  // the deciding verdict was given by a person
+};
+
+inline constexpr char kUnspecifiedReason[] = "unspecified";
+
+// The stages in funnel order: `pipeline`, then any other stage that has
+// runs, by position.
+std::vector<std::string> FunnelOrder(const std::vector<std::string>& pipeline,
+                                     const std::vector<Database::ReportRun>& runs);
+
+// The funnel over `runs` for a pool of `clips` clips.
+Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
+                     const std::vector<Database::ReportRun>& runs, std::int64_t clips);
+
+// The outcome of every clip that has runs, keyed by clip id. A clip whose
+// furthest run passed is a survivor only when that run is of the last
+// pipeline stage; otherwise it is in progress (its next stage is queued).
+std::map<ClipId, ClipOutcome> ComputeOutcomes(const std::vector<std::string>& pipeline,
+                                              const std::vector<Database::ReportRun>& runs);
+
+}  // namespace doasido::reports

@@ -1,0 +1,355 @@
+#include "reports/thumbnails.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <set>
+
+#include "core/error.h"
+#include "ingest/video_decoder.h"
+
+namespace doasido::reports {
+namespace {
+
+const cv::Scalar kHandColour(60, 200, 60);      // BGR green
+const cv::Scalar kObjectColour(0, 150, 255);    // BGR orange
+const cv::Scalar kHighlight(255, 0, 255);       // magenta
+const cv::Scalar kCutColour(0, 0, 255);         // red
+const cv::Scalar kArrowColour(0, 255, 255);     // yellow
+
+std::string ClipLabel(const ClipRecord& clip) {
+  return clip.external_id.empty() ? "clip " + std::to_string(clip.id) : clip.external_id;
+}
+
+// A panel to be drawn: a file frame and what to put on it.
+struct Panel {
+  std::int64_t frame = 0;
+  std::string label;
+  cv::Mat image;  // filled by decoding, then drawn on
+};
+
+void PutLabel(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.4) {
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+  cv::rectangle(image, {at.x - 1, at.y - size.height - 2}, {at.x + size.width + 1, at.y + baseline},
+                cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1,
+              cv::LINE_AA);
+}
+
+// Boxes on `frame`, or on the nearest frame with boxes within `window`.
+std::vector<Detection> BoxesNear(const std::vector<Detection>& detections, std::int64_t frame,
+                                 int window, std::int64_t* from_frame) {
+  std::int64_t best = -1;
+  std::int64_t best_gap = window + 1;
+  for (const auto& d : detections) {
+    const std::int64_t gap = std::llabs(d.frame - frame);
+    if (gap < best_gap || (gap == best_gap && d.frame < best)) best_gap = gap, best = d.frame;
+  }
+  std::vector<Detection> out;
+  if (best < 0) return out;
+  for (const auto& d : detections) {
+    if (d.frame == best) out.push_back(d);
+  }
+  *from_frame = best;
+  return out;
+}
+
+cv::Mat Compose(std::vector<Panel>& panels, int height, const std::vector<bool>& cut_after) {
+  std::vector<cv::Mat> scaled;
+  int width = 0;
+  for (auto& p : panels) {
+    const double s = static_cast<double>(height) / p.image.rows;
+    cv::Mat r;
+    cv::resize(p.image, r, cv::Size(std::max(1, static_cast<int>(std::lround(p.image.cols * s))),
+                                    height), 0, 0, cv::INTER_AREA);
+    PutLabel(r, p.label, {3, height - 5});
+    width += r.cols;
+    scaled.push_back(r);
+  }
+  const int gap = 4;
+  width += gap * static_cast<int>(scaled.size() - 1);
+  cv::Mat out(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  int x = 0;
+  for (size_t i = 0; i < scaled.size(); ++i) {
+    scaled[i].copyTo(out(cv::Rect(x, 0, scaled[i].cols, height)));
+    x += scaled[i].cols;
+    if (i + 1 < scaled.size()) {
+      // A red bar marks a cut between two panels; white separates others.
+      const cv::Scalar colour = cut_after[i] ? kCutColour : cv::Scalar(255, 255, 255);
+      cv::rectangle(out, cv::Rect(x, 0, gap, height), colour, cv::FILLED);
+      x += gap;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string OverlayKind(const std::string& stage, const std::string& reason) {
+  auto has = [&](const char* word) {
+    return stage.find(word) != std::string::npos || reason.find(word) != std::string::npos;
+  };
+  if (has("shot_boundary") || has("cut")) return "cut";
+  if (has("camera_motion")) return "motion";
+  if (has("out_of_frame")) return "border";
+  if (has("activity")) return "activity";
+  return "boxes";
+}
+
+bool TouchesBorder(const Detection& d, int width, int height, double margin) {
+  return d.x1 <= margin || d.y1 <= margin || d.x2 >= width - margin || d.y2 >= height - margin;
+}
+
+void DrawDetections(cv::Mat& image, const std::vector<Detection>& boxes, double scale,
+                    int highlight) {
+  static const char kContact[] = "NSOPF";
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const Detection& d = boxes[i];
+    const bool hand = d.kind == "hand";
+    const bool hi = static_cast<int>(i) == highlight;
+    const cv::Point p1(static_cast<int>(std::lround(d.x1 * scale)),
+                       static_cast<int>(std::lround(d.y1 * scale)));
+    const cv::Point p2(static_cast<int>(std::lround(d.x2 * scale)) - 1,
+                       static_cast<int>(std::lround(d.y2 * scale)) - 1);
+    cv::rectangle(image, p1, p2, hi ? kHighlight : (hand ? kHandColour : kObjectColour),
+                  hi ? 3 : 2);
+    std::string label = hand ? (d.hand_side == 0 ? "L" : d.hand_side == 1 ? "R" : "H") : "obj";
+    if (hand && d.contact_state >= 0 && d.contact_state <= 4) {
+      label += std::string(" ") + kContact[d.contact_state];
+    }
+    PutLabel(image, label, {std::max(p1.x, 0) + 2, std::max(p1.y, 0) + 12}, 0.35);
+  }
+}
+
+std::vector<MotionVector> TrackMotion(const cv::Mat& a, const cv::Mat& b, int max_corners) {
+  cv::Mat ga, gb;
+  if (a.channels() == 3) cv::cvtColor(a, ga, cv::COLOR_BGR2GRAY); else ga = a;
+  if (b.channels() == 3) cv::cvtColor(b, gb, cv::COLOR_BGR2GRAY); else gb = b;
+  std::vector<cv::Point2f> p0;
+  cv::goodFeaturesToTrack(ga, p0, max_corners, 0.01, 7);
+  std::vector<MotionVector> out;
+  if (p0.empty()) return out;
+  std::vector<cv::Point2f> p1, back;
+  std::vector<unsigned char> ok1, ok2;
+  std::vector<float> err;
+  const cv::Size window(21, 21);
+  cv::calcOpticalFlowPyrLK(ga, gb, p0, p1, ok1, err, window, 3);
+  cv::calcOpticalFlowPyrLK(gb, ga, p1, back, ok2, err, window, 3);
+  for (size_t i = 0; i < p0.size(); ++i) {
+    if (!ok1[i] || !ok2[i]) continue;
+    const cv::Point2f d = back[i] - p0[i];
+    if (d.dot(d) > 1.0f) continue;
+    out.push_back({p0[i], p1[i]});
+  }
+  return out;
+}
+
+std::string Base64(const std::vector<unsigned char>& bytes) {
+  static const char kTable[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = (bytes[i] << 16) | (bytes[i + 1] << 8) | bytes[i + 2];
+    out += kTable[(v >> 18) & 63];
+    out += kTable[(v >> 12) & 63];
+    out += kTable[(v >> 6) & 63];
+    out += kTable[v & 63];
+  }
+  if (i + 1 == bytes.size()) {
+    const unsigned v = bytes[i] << 16;
+    out += kTable[(v >> 18) & 63];
+    out += kTable[(v >> 12) & 63];
+    out += "==";
+  } else if (i + 2 == bytes.size()) {
+    const unsigned v = (bytes[i] << 16) | (bytes[i + 1] << 8);
+    out += kTable[(v >> 18) & 63];
+    out += kTable[(v >> 12) & 63];
+    out += kTable[(v >> 6) & 63];
+    out += '=';
+  }
+  return out;
+}
+
+Thumbnail MakeThumbnail(const ThumbnailRequest& request, const ThumbnailOptions& options) {
+  Thumbnail t;
+  t.clip = request.clip.id;
+  t.label = ClipLabel(request.clip);
+  const std::string& path = request.video_path;
+  const bool url = path.find("://") != std::string::npos;
+  if (url) {
+    t.note = "clip " + t.label + ": video " + path + " is a URL; the report reads local files only";
+    return t;
+  }
+  if (!std::filesystem::exists(path)) {
+    t.note = "clip " + t.label + ": video file not found: " + path;
+    return t;
+  }
+  try {
+    DecoderOptions d;
+    d.analysis_size = options.analysis_size;
+    d.clip = t.label;
+    const ClipRecord& c = request.clip;
+    if (c.start_frame) d.first_frame = *c.start_frame;
+    else if (c.start_s) d.first_s = *c.start_s;
+    VideoDecoder decoder(path, d);
+    const VideoGeometry& g = decoder.geometry();
+    const std::int64_t first = decoder.first_frame();
+    std::int64_t last = -1;
+    if (c.end_frame) last = *c.end_frame;
+    else if (c.end_s && g.fps > 0) last = static_cast<std::int64_t>(std::lround(*c.end_s * g.fps));
+    else if (g.declared_frames > 0) last = g.declared_frames - 1;
+    if (last < first) last = first + std::max<std::int64_t>(1, std::llround(g.fps));
+    const std::int64_t mid = first + (last - first) / 2;
+
+    const std::string kind = OverlayKind(request.stage, request.reason);
+    std::vector<Panel> panels;
+    std::vector<bool> cut_after;
+    int highlight_panel = -1;
+    Detection border_box;
+    if (kind == "cut") {
+      std::vector<std::int64_t> cuts;
+      if (request.shot_summary.is_object() && request.shot_summary.contains("boundaries")) {
+        for (const Json& b : request.shot_summary["boundaries"]) {
+          if (b.is_number_integer() && b.get<std::int64_t>() > first) cuts.push_back(b);
+        }
+      }
+      for (size_t i = 0; i < cuts.size() && i < 2; ++i) {
+        panels.push_back({cuts[i] - 1, "f" + std::to_string(cuts[i] - 1)});
+        panels.push_back({cuts[i], "cut f" + std::to_string(cuts[i])});
+        cut_after.push_back(true);
+        cut_after.push_back(false);
+      }
+      const std::string shown = std::to_string(std::min<size_t>(cuts.size(), 2));
+      t.caption = cuts.empty() ? "middle frame (no boundary recorded)"
+                               : "frames either side of " + shown + " of " +
+                                     std::to_string(cuts.size()) + " cut(s)";
+    } else if (kind == "motion") {
+      const std::int64_t step = std::max<std::int64_t>(1, std::llround(g.fps > 0 ? g.fps / 2 : 15));
+      const std::int64_t a = std::max(first, mid - step);
+      const std::int64_t b = std::min(std::max(a + 1, mid), last);
+      panels.push_back({a, "f" + std::to_string(a)});
+      panels.push_back({b, "f" + std::to_string(b) + " motion"});
+      cut_after = {false, false};
+      t.caption = "camera motion from frame " + std::to_string(a) + " to " + std::to_string(b) +
+                  " (Lucas-Kanade tracks)";
+    } else if (kind == "border") {
+      std::vector<Detection> sorted = request.detections;
+      std::stable_sort(sorted.begin(), sorted.end(), [](const Detection& x, const Detection& y) {
+        // Hands first within a frame.
+        return std::make_pair(x.frame, x.kind != "hand") <
+               std::make_pair(y.frame, y.kind != "hand");
+      });
+      bool found = false;
+      for (const auto& det : sorted) {
+        if (det.frame < first || det.frame > last) continue;
+        if (TouchesBorder(det, g.full_width, g.full_height)) {
+          border_box = det;
+          found = true;
+          break;
+        }
+      }
+      const std::int64_t f = found ? border_box.frame : mid;
+      panels.push_back({f, "f" + std::to_string(f)});
+      cut_after = {false};
+      if (found) highlight_panel = 0;
+      t.caption = found ? "first frame where a " + border_box.kind + " box touches the border"
+                        : "middle frame; no box touches the border (hand or object missing)";
+    } else if (kind == "activity") {
+      panels.push_back({first, "first f" + std::to_string(first)});
+      panels.push_back({mid, "f" + std::to_string(mid)});
+      panels.push_back({last, "last f" + std::to_string(last)});
+      cut_after = {false, false, false};
+      t.caption = "first, middle and last frame of the clip";
+    }
+    if (panels.empty()) {
+      panels.push_back({mid, "f" + std::to_string(mid)});
+      cut_after = {false};
+      if (t.caption.empty()) t.caption = "middle frame with hand and object boxes";
+    }
+
+    // One sequential pass collects every frame the panels need.
+    std::set<std::int64_t> wanted;
+    for (const auto& p : panels) wanted.insert(p.frame);
+    std::map<std::int64_t, cv::Mat> frames;
+    AnalysisFrame frame;
+    std::int64_t last_index = -1;
+    cv::Mat last_decoded;
+    try {
+      while (frames.size() < wanted.size() && decoder.Next(&frame)) {
+        if (wanted.count(frame.index)) frames[frame.index] = frame.bgr.clone();
+        if (frame.index >= *wanted.rbegin()) break;
+        frame.bgr.copyTo(last_decoded);
+        last_index = frame.index;
+      }
+    } catch (const Error& e) {
+      // A file that ends early still shows what could be decoded.
+      if (frames.empty() && last_decoded.empty()) throw;
+      t.caption += " (video ends early: " + e.message() + ")";
+    }
+    for (auto& p : panels) {
+      auto it = frames.find(p.frame);
+      if (it == frames.end()) {
+        // Past the decodable end: fall back to the last decoded frame.
+        if (last_decoded.empty()) throw Error("video_read_failed", "no frame could be decoded");
+        it = frames.emplace(last_index, last_decoded).first;
+        p.frame = last_index;
+      }
+      p.image = it->second.clone();
+    }
+    const double scale = 1.0 / g.downscale;
+    std::vector<MotionVector> vectors;
+    if (kind == "motion" && panels.size() == 2) {
+      vectors = TrackMotion(panels[0].image, panels[1].image);
+    }
+    for (size_t i = 0; i < panels.size(); ++i) {
+      Panel& p = panels[i];
+      std::int64_t from = -1;
+      auto boxes = BoxesNear(request.detections, p.frame, options.box_search_frames, &from);
+      int highlight = -1;
+      if (static_cast<int>(i) == highlight_panel) {
+        for (size_t k = 0; k < boxes.size(); ++k) {
+          if (boxes[k].kind == border_box.kind && boxes[k].x1 == border_box.x1 &&
+              boxes[k].y1 == border_box.y1 && boxes[k].x2 == border_box.x2 &&
+              boxes[k].y2 == border_box.y2) {
+            highlight = static_cast<int>(k);
+          }
+        }
+        // The border edges the box touches.
+        const int w = p.image.cols - 1, h = p.image.rows - 1;
+        const double m = 2.0;
+        if (border_box.x1 <= m) cv::line(p.image, {0, 0}, {0, h}, kHighlight, 3);
+        if (border_box.y1 <= m) cv::line(p.image, {0, 0}, {w, 0}, kHighlight, 3);
+        if (border_box.x2 >= g.full_width - m) cv::line(p.image, {w, 0}, {w, h}, kHighlight, 3);
+        if (border_box.y2 >= g.full_height - m) cv::line(p.image, {0, h}, {w, h}, kHighlight, 3);
+      }
+      DrawDetections(p.image, boxes, scale, highlight);
+      if (kind == "motion" && i == 1) {
+        for (const auto& v : vectors) {
+          cv::arrowedLine(p.image, v.from, v.to, kArrowColour, 1, cv::LINE_AA, 0, 0.3);
+          cv::circle(p.image, v.from, 1, kArrowColour, cv::FILLED);
+        }
+      }
+    }
+    if (kind == "motion") t.caption += ", " + std::to_string(vectors.size()) + " tracks";
+    const cv::Mat strip = Compose(panels, options.panel_height, cut_after);
+    std::vector<unsigned char> jpeg;
+    cv::imencode(".jpg", strip, jpeg, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality});
+    t.jpeg_base64 = Base64(jpeg);
+    t.width = strip.cols;
+    t.height = strip.rows;
+  } catch (const Error& e) {
+    t.note = "clip " + t.label + ": cannot read video " + path + ": " + e.what();
+  } catch (const cv::Exception& e) {
+    t.note = "clip " + t.label + ": cannot read video " + path + ": " + e.what();
+  }
+  return t;
+}
+
+}  // namespace doasido::reports

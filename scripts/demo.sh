@@ -15,5 +15,8 @@ $DOASIDO synth --out "$WORK/synth" --clips 8 --seed 1 --frames 60 \
   --mix clean=0.25,cut=0.125,fade=0.125,pan=0.125,out_of_frame=0.125,no_contact=0.125,static=0.125
 $DOASIDO init --db "$WORK/doasido.db"
 $DOASIDO run --db "$WORK/doasido.db" --jobs 2 examples/demo_clips.csv "$WORK/synth"
+$DOASIDO report --db "$WORK/doasido.db" --out "$WORK/report"
 echo
 echo "Database: $WORK/doasido.db   (try: $DOASIDO status --db $WORK/doasido.db)"
+echo "Report:   $WORK/report/report.html"
+echo "Review the flagged clips: $DOASIDO review serve --db $WORK/doasido.db"

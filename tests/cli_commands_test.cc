@@ -16,7 +16,7 @@ TEST(Commands, EveryCommandHasHelpWithAnExample) {
   const auto top = RunDoasido({"--help"});
   EXPECT_EQ(top.exit_code, 0);
   for (const std::string cmd :
-       {"init", "ingest", "status", "queue", "worker", "run", "rethreshold"}) {
+       {"init", "ingest", "status", "queue", "worker", "run", "rethreshold", "report", "review"}) {
     const auto r = RunDoasido({cmd, "--help"});
     EXPECT_EQ(r.exit_code, 0) << cmd;
     EXPECT_NE(r.out.find("Example"), std::string::npos) << cmd << " --help has no example";

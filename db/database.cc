@@ -7,6 +7,7 @@
 #include <chrono>
 #include <thread>
 
+#include "db/clip_row.h"
 #include "db/schema.h"
 #include "db/statement.h"
 
@@ -307,25 +308,13 @@ void Database::LogEvent(std::optional<ClipId> clip, const std::string& stage,
 // ---- Reading ----------------------------------------------------------------
 
 ClipRecord Database::GetClip(ClipId id) {
-  auto& q = Prepare(
-      "SELECT id, video_id, IFNULL(external_id, ''), start_frame, end_frame, start_s, end_s,"
-      " IFNULL(source_list, ''), IFNULL(source_line, 0), metadata FROM clips WHERE id = ?");
+  auto& q = Prepare(std::string("SELECT ") + db::kClipColumns + " FROM clips c WHERE c.id = ?");
   q.Bind(1, id);
   if (!q.Step()) {
     q.Reset();
     throw Error("no_such_clip", "no clip with this id", {.clip = std::to_string(id)});
   }
-  ClipRecord c;
-  c.id = q.Int(0);
-  c.video_id = q.Int(1);
-  c.external_id = q.Text(2);
-  c.start_frame = q.OptInt(3);
-  c.end_frame = q.OptInt(4);
-  c.start_s = q.OptReal(5);
-  c.end_s = q.OptReal(6);
-  c.source_list = q.Text(7);
-  c.source_line = static_cast<long>(q.Int(8));
-  c.metadata = Json::parse(q.Text(9));
+  ClipRecord c = db::ReadClipRow(q);
   q.Reset();
   return c;
 }

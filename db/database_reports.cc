@@ -1,5 +1,6 @@
 // Bulk, read-only queries behind `doasido report` (the playbook report).
 #include "db/database.h"
+#include "db/clip_row.h"
 #include "db/statement.h"
 
 namespace doasido {
@@ -31,26 +32,11 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
 }
 
 std::vector<ClipRecord> Database::ListClips(std::map<ClipId, std::string>* videos) {
-  auto& q = Prepare(
-      "SELECT c.id, c.video_id, IFNULL(c.external_id, ''), c.start_frame, c.end_frame,"
-      " c.start_s, c.end_s, IFNULL(c.source_list, ''), IFNULL(c.source_line, 0), c.metadata,"
-      " v.path FROM clips c JOIN videos v ON v.id = c.video_id ORDER BY c.id");
+  auto& q = Prepare(std::string("SELECT ") + db::kClipColumns +
+                    ", v.path FROM clips c JOIN videos v ON v.id = c.video_id ORDER BY c.id");
   std::vector<ClipRecord> out;
   while (q.Step()) {
-    ClipRecord c;
-    c.id = q.Int(0);
-    c.video_id = q.Int(1);
-    c.external_id = q.Text(2);
-    c.start_frame = q.OptInt(3);
-    c.end_frame = q.OptInt(4);
-    c.start_s = q.OptReal(5);
-    c.end_s = q.OptReal(6);
-    c.source_list = q.Text(7);
-    c.source_line = static_cast<long>(q.Int(8));
-    // Metadata is whatever the list row carried; a row that is not JSON
-    // must not stop a report.
-    c.metadata = Json::parse(q.Text(9), nullptr, false);
-    if (c.metadata.is_discarded()) c.metadata = Json::object();
+    ClipRecord c = db::ReadClipRow(q);
     if (videos) (*videos)[c.id] = Resolve(q.Text(10)).string();
     out.push_back(std::move(c));
   }

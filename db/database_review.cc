@@ -126,33 +126,37 @@ std::optional<Database::StudyRecord> Database::GetStudy(const std::string& name)
   return out;
 }
 
-std::vector<Database::StudyItemRecord> Database::GetStudyItems(std::int64_t study_id) {
-  auto& q = Prepare(
-      "SELECT id, item_id, source_video, a_video, b_video, a_label, b_label FROM study_items"
-      " WHERE study_id = ? ORDER BY position");
-  q.Bind(1, study_id);
-  std::vector<StudyItemRecord> out;
+namespace {
+
+constexpr const char* kStudyItemColumns =
+    "SELECT id, item_id, source_video, a_video, b_video, a_label, b_label FROM study_items";
+
+// Every row of a prepared study_items query (kStudyItemColumns first).
+std::vector<Database::StudyItemRecord> ReadStudyItems(const Database& db, db::Statement& q) {
+  std::vector<Database::StudyItemRecord> out;
   while (q.Step()) {
-    out.push_back({q.Int(0), q.Text(1), Resolve(q.Text(2)).string(), Resolve(q.Text(3)).string(),
-                   Resolve(q.Text(4)).string(), q.Text(5), q.Text(6)});
+    out.push_back({q.Int(0), q.Text(1), db.Resolve(q.Text(2)).string(),
+                   db.Resolve(q.Text(3)).string(), db.Resolve(q.Text(4)).string(), q.Text(5),
+                   q.Text(6)});
   }
   q.Reset();
   return out;
 }
 
+}  // namespace
+
+std::vector<Database::StudyItemRecord> Database::GetStudyItems(std::int64_t study_id) {
+  auto& q = Prepare(std::string(kStudyItemColumns) + " WHERE study_id = ? ORDER BY position");
+  q.Bind(1, study_id);
+  return ReadStudyItems(*this, q);
+}
+
 std::optional<Database::StudyItemRecord> Database::GetStudyItem(std::int64_t item) {
-  auto& q = Prepare(
-      "SELECT id, item_id, source_video, a_video, b_video, a_label, b_label FROM study_items"
-      " WHERE id = ?");
+  auto& q = Prepare(std::string(kStudyItemColumns) + " WHERE id = ?");
   q.Bind(1, item);
-  std::optional<StudyItemRecord> out;
-  if (q.Step()) {
-    out = StudyItemRecord{q.Int(0), q.Text(1), Resolve(q.Text(2)).string(),
-                          Resolve(q.Text(3)).string(), Resolve(q.Text(4)).string(), q.Text(5),
-                          q.Text(6)};
-  }
-  q.Reset();
-  return out;
+  auto rows = ReadStudyItems(*this, q);
+  if (rows.empty()) return std::nullopt;
+  return rows.front();
 }
 
 namespace {

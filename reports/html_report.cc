@@ -31,7 +31,7 @@ const char kFlag[] = "#ef8f00";
 const char kFail[] = "#5d2b2b";
 const char kPending[] = "#9e9e9e";
 
-std::string E(const std::string& s) { return XmlEscape(s); }
+std::string E(const std::string& s) { return HtmlEscape(s); }
 std::string N(std::int64_t v) { return std::to_string(v); }
 std::string Pct(std::int64_t part, std::int64_t whole) {
   char buf[32];

@@ -16,26 +16,10 @@ std::string Fixed(double v) {
 std::string Text(double x, double y, const std::string& text, const std::string& anchor,
                  const std::string& extra = "") {
   return "<text x=\"" + Fixed(x) + "\" y=\"" + Fixed(y) + "\" text-anchor=\"" + anchor + "\"" +
-         extra + ">" + XmlEscape(text) + "</text>";
+         extra + ">" + HtmlEscape(text) + "</text>";
 }
 
 }  // namespace
-
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 std::string FormatNumber(double value) {
   if (!std::isfinite(value)) return std::isnan(value) ? "NaN" : (value > 0 ? "inf" : "-inf");
@@ -56,11 +40,11 @@ std::string StackedBarChart(const std::vector<BarRow>& rows, std::int64_t scale_
   const double width = label_w + bar_w + note_w;
   const double height = top * 2 + row_h * static_cast<double>(rows.size());
   std::string s = "<svg";
-  if (!id.empty()) s += " id=\"" + XmlEscape(id) + "\"";
-  s += " class=\"" + XmlEscape(css_class) + "\" width=\"" + Fixed(width) + "\" height=\"" +
+  if (!id.empty()) s += " id=\"" + HtmlEscape(id) + "\"";
+  s += " class=\"" + HtmlEscape(css_class) + "\" width=\"" + Fixed(width) + "\" height=\"" +
        Fixed(height) + "\" viewBox=\"0 0 " + Fixed(width) + " " + Fixed(height) +
        "\" role=\"img\" font-family=\"sans-serif\" font-size=\"12\">";
-  s += "<title>" + XmlEscape(title) + "</title>";
+  s += "<title>" + HtmlEscape(title) + "</title>";
   const double scale = scale_max > 0 ? bar_w / static_cast<double>(scale_max) : 0;
   for (size_t i = 0; i < rows.size(); ++i) {
     const BarRow& row = rows[i];
@@ -74,8 +58,8 @@ std::string StackedBarChart(const std::vector<BarRow>& rows, std::int64_t scale_
       const double w = scale * static_cast<double>(seg.value);
       s += "<rect class=\"seg\" x=\"" + Fixed(x) + "\" y=\"" + Fixed(y + 3) + "\" width=\"" +
            Fixed(std::max(w, 0.5)) + "\" height=\"" + Fixed(row_h - 6) + "\" fill=\"" +
-           XmlEscape(seg.colour) + "\"><title>" +
-           XmlEscape(row.label + ": " + seg.label + " " + std::to_string(seg.value)) +
+           HtmlEscape(seg.colour) + "\"><title>" +
+           HtmlEscape(row.label + ": " + seg.label + " " + std::to_string(seg.value)) +
            "</title></rect>";
       x += w;
     }
@@ -94,11 +78,11 @@ std::string HistogramChart(const ScoreDistribution& d) {
   auto sy = [&](double c) { return top + plot_h - c / static_cast<double>(peak) * plot_h; };
 
   std::string s = "<svg class=\"score-chart\" data-stage=\"" +
-                  XmlEscape(d.stage) + "\" data-score=\"" + XmlEscape(d.name) + "\" width=\"" +
+                  HtmlEscape(d.stage) + "\" data-score=\"" + HtmlEscape(d.name) + "\" width=\"" +
                   Fixed(width) + "\" height=\"" + Fixed(height) + "\" viewBox=\"0 0 " +
                   Fixed(width) + " " + Fixed(height) +
                   "\" role=\"img\" font-family=\"sans-serif\" font-size=\"11\">";
-  s += "<title>" + XmlEscape(d.stage + " / " + d.name) + "</title>";
+  s += "<title>" + HtmlEscape(d.stage + " / " + d.name) + "</title>";
   s += Text(left, 14, d.stage + " · " + d.name + " (" + std::to_string(d.values.size()) +
                           " clips)", "start", " font-weight=\"bold\"");
   // The reject side, shaded.
@@ -119,7 +103,7 @@ std::string HistogramChart(const ScoreDistribution& d) {
     s += "<rect class=\"bin\" x=\"" + Fixed(left + bin_w * static_cast<double>(i) + 0.5) +
          "\" y=\"" + Fixed(y) + "\" width=\"" + Fixed(std::max(bin_w - 1, 0.5)) + "\" height=\"" +
          Fixed(top + plot_h - y) + "\" fill=\"#4a78b5\"><title>" +
-         XmlEscape("[" + FormatNumber(lo) + ", " + FormatNumber(hi) + "): " +
+         HtmlEscape("[" + FormatNumber(lo) + ", " + FormatNumber(hi) + "): " +
                    std::to_string(d.bins[i]) + " clips") +
          "</title></rect>";
   }
@@ -144,7 +128,7 @@ std::string HistogramChart(const ScoreDistribution& d) {
     s += "<line class=\"" + cls + "\" x1=\"" + Fixed(x) + "\" y1=\"" + Fixed(top - 4) +
          "\" x2=\"" + Fixed(x) + "\" y2=\"" + Fixed(top + plot_h) + "\" stroke=\"" + colour +
          "\" stroke-width=\"2\" stroke-dasharray=\"5,3\"><title>" +
-         XmlEscape(label + " " + FormatNumber(v)) + "</title></line>";
+         HtmlEscape(label + " " + FormatNumber(v)) + "</title></line>";
     s += Text(x, label_y, label + " " + FormatNumber(v), anchor, " fill=\"" + colour + "\"");
   };
   threshold(d.reject, "#c62828", "threshold reject", "reject", top - 6);

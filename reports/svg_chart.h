@@ -6,12 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "core/html_escape.h"
 #include "reports/score_histogram.h"
 
 namespace doasido::reports {
 
-// Escapes &, <, >, " and ' for XML/HTML text and attribute values.
-std::string XmlEscape(const std::string& text);
 // A short, locale-independent number: integers as such, else 3 significant
 // digits ("0.25", "1.2e+03").
 std::string FormatNumber(double value);

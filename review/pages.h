@@ -6,14 +6,21 @@
 #include <string>
 
 #include "core/config.h"
+#include "core/html_escape.h"
 #include "review/study.h"
 
 namespace doasido::review {
 
-// Escapes text for HTML element content and attribute values.
-std::string HtmlEscape(const std::string& text);
 // JSON safe to place inside a <script> element ("<" written as \u003c).
 std::string ScriptJson(const Json& value);
+// A page with one style and one script element (both carrying `nonce`),
+// `config` as JSON in <script type="application/json" id="cfg">, and before
+// `script` the shared helpers: `api(path, body)` fetches JSON (POST when
+// `body` is given) with the page's token from cfg.token and throws the
+// server's error text on a non-2xx answer.
+std::string ScriptedPage(const std::string& title, const std::string& nonce,
+                         const std::string& style, const std::string& body, const Json& config,
+                         const std::string& script);
 
 // The flagged-clip queue page; `config` holds token and reviewer.
 std::string ReviewPage(const std::string& nonce, const Json& config);

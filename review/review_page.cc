@@ -128,17 +128,6 @@ function toast(text) {
   clearTimeout(toast.timer); toast.timer = setTimeout(() => t.classList.remove('show'), 2500);
 }
 
-async function api(path, body) {
-  const init = { headers: { 'X-Doasido-Token': cfg.token }, credentials: 'same-origin' };
-  if (body !== undefined) {
-    init.method = 'POST'; init.body = JSON.stringify(body);
-    init.headers['Content-Type'] = 'application/json';
-  }
-  const res = await fetch(path, init);
-  const data = await res.json().catch(() => ({}));
-  if (!res.ok) throw new Error(data.error || res.statusText);
-  return data;
-}
 
 function el(tag, text, cls) {
   const e = document.createElement(tag);
@@ -407,11 +396,7 @@ reloadQueue().then(() => {
 }  // namespace
 
 std::string ReviewPage(const std::string& nonce, const Json& config) {
-  return std::string("<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
-                     "<title>doasido review</title>\n<style nonce=\"") +
-         nonce + "\">" + kStyle + "</style></head>\n<body>" + kBody +
-         "<script type=\"application/json\" id=\"cfg\">" + ScriptJson(config) +
-         "</script>\n<script nonce=\"" + nonce + "\">" + kScript + "</script>\n</body></html>\n";
+  return ScriptedPage("doasido review", nonce, kStyle, kBody, config, kScript);
 }
 
 }  // namespace doasido::review

@@ -79,17 +79,6 @@ const state = { trial: null, busy: false, answered: 0, done: false };
 window.doasidoState = state;
 const base = '/api/study/' + encodeURIComponent(cfg.study);
 
-async function api(path, body) {
-  const init = { headers: { 'X-Doasido-Token': cfg.token }, credentials: 'same-origin' };
-  if (body !== undefined) {
-    init.method = 'POST'; init.body = JSON.stringify(body);
-    init.headers['Content-Type'] = 'application/json';
-  }
-  const res = await fetch(path, init);
-  const data = await res.json().catch(() => ({}));
-  if (!res.ok) throw new Error(data.error || res.statusText);
-  return data;
-}
 
 function playAll() {
   for (const v of videos) { v.currentTime = 0; v.play().catch(() => {}); }
@@ -204,11 +193,7 @@ std::string ShareBar(const StudySummary& s) {
 }  // namespace
 
 std::string StudyPage(const std::string& nonce, const Json& config) {
-  return std::string("<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
-                     "<title>doasido study</title>\n<style nonce=\"") +
-         nonce + "\">" + kStyle + "</style></head>\n<body>" + kBody +
-         "<script type=\"application/json\" id=\"cfg\">" + ScriptJson(config) +
-         "</script>\n<script nonce=\"" + nonce + "\">" + kScript + "</script>\n</body></html>\n";
+  return ScriptedPage("doasido study", nonce, kStyle, kBody, config, kScript);
 }
 
 std::string StudySummaryPage(const std::string& nonce, const StudySummary& s) {

@@ -14,28 +14,10 @@
 namespace doasido {
 namespace {
 
+using testing::ReadCsv;
 using testing::ReadFile;
 using testing::RunDoasido;
 using testing::TempDir;
-
-std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path) {
-  std::vector<std::vector<std::string>> rows;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::string cell;
-    bool quoted = false;
-    for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.push_back(cell), cell.clear();
-      else cell += c;
-    }
-    cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
-}
 
 size_t Count(const std::string& text, const std::string& what) {
   size_t n = 0;

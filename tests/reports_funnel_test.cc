@@ -23,6 +23,7 @@ namespace doasido {
 namespace {
 
 using synth::DefectKind;
+using testing::ReadCsv;
 using testing::TempDir;
 
 const std::vector<std::string> kPipeline = {"probe",         "filters_analyze", "interaction",
@@ -229,25 +230,6 @@ void RunQueue(Database& db, const std::vector<DefectKind>& defects) {
     }
   }
   tx.Commit();
-}
-
-std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path) {
-  std::vector<std::vector<std::string>> rows;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::string cell;
-    bool quoted = false;
-    for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.push_back(cell), cell.clear();
-      else cell += c;
-    }
-    cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
 }
 
 class ReportsFunnel : public ::testing::Test {

@@ -42,5 +42,9 @@ CommandResult RunDoasido(const std::vector<std::string>& args);
 // Writes `text` to `path`, creating parent folders.
 void WriteFile(const std::filesystem::path& path, const std::string& text);
 std::string ReadFile(const std::filesystem::path& path);
+// Rows of a CSV file the project wrote, split at commas outside double
+// quotes (quotes dropped; enough for the project's own files, not for
+// quotes inside cells).
+std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path);
 
 }  // namespace doasido::testing

@@ -61,7 +61,10 @@ TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
     EXPECT_EQ(r.state, "done");
     EXPECT_EQ(r.verdict, r.clip_id == human_clip ? "reject" : "pass") << r.clip_id;
   }
-  EXPECT_EQ(interaction_runs, 12);
+  int shot_passes = 0;  // interaction judges exactly the clips the shot filter passed
+  for (const auto& r : db.ListRuns({.stage = "shot_boundary"})) shot_passes += r.verdict == "pass";
+  EXPECT_EQ(interaction_runs, shot_passes);
+  EXPECT_GT(interaction_runs, 6);
   for (const auto& r : db.ListRuns({.stage = "activity"})) {
     ++activity_runs;
     ASSERT_EQ(r.state, "done") << r.clip_id << " " << r.error;

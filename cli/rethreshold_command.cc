@@ -51,6 +51,11 @@ StageTally RethresholdStage(Database& db, const std::string& name, const Json& c
       const bool changed = verdict_changed || WithoutThresholds(*measurements) !=
                                                   WithoutThresholds(result->measurements);
       if (dry_run) {
+        const auto history = db.VerdictHistory(run.clip_id, name);
+        if (!history.empty() && history.back().source == "human") {
+          ++tally.human_kept;
+          continue;
+        }
         ++tally.redecided;
       } else if (!db.StoreRedecision(run.clip_id, name, hash, *result, changed)) {
         ++tally.human_kept;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <sstream>
 
 #include "db/database.h"
 #include "test_util.h"
@@ -50,6 +51,21 @@ TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
                                (dir / "strict.toml").string(), "--dry-run"});
   ASSERT_EQ(dry.exit_code, 0) << dry.err;
   EXPECT_NE(dry.out.find("nothing written"), std::string::npos);
+  {  // The dry run counts the person's verdict as kept, not re-decided.
+    std::istringstream lines(dry.out);
+    std::string line;
+    bool seen = false;
+    while (std::getline(lines, line)) {
+      std::istringstream cells(line);
+      std::string stage;
+      long long redecided = 0, unchanged = 0, person = -1, judged = 0;
+      if (cells >> stage >> redecided >> unchanged >> person >> judged && stage == "interaction") {
+        EXPECT_EQ(person, 1) << line;
+        seen = true;
+      }
+    }
+    EXPECT_TRUE(seen) << dry.out;
+  }
   const auto re =
       RunDoasido({"rethreshold", "--db", db_path, "--config", (dir / "strict.toml").string()});
   ASSERT_EQ(re.exit_code, 0) << re.err << re.out;

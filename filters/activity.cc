@@ -115,12 +115,7 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
 
 }  // namespace
 
-StageResult ActivityStage::Run(const ClipContext& context) {
-  return DecideActivity(CopyAnalysis(context, "activity"), config_);
-}
-
-std::optional<StageResult> ActivityStage::Redecide(const Json& measurements) const {
-  return DecideActivity(measurements, config_);
-}
+ActivityStage::ActivityStage(ActivityConfig config)
+    : MeasuredVerdictStage("activity", std::move(config), DecideActivity) {}
 
 }  // namespace doasido::filters

@@ -25,6 +25,7 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "filters/frame_analyzer.h"
+#include "filters/stage_support.h"
 
 namespace doasido::filters {
 
@@ -68,16 +69,9 @@ double ActiveFraction(const ActivitySignals& s, double min_moving, std::int64_t 
 
 // Stage "activity": decides from the "activity" section of the analysis
 // stage's measurements.
-class ActivityStage : public Stage {
+class ActivityStage : public MeasuredVerdictStage<ActivityConfig> {
  public:
-  explicit ActivityStage(ActivityConfig config = {}) : config_(config) {}
-  std::string Name() const override { return "activity"; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  ActivityConfig config_;
+  explicit ActivityStage(ActivityConfig config = {});
 };
 
 }  // namespace doasido::filters

@@ -267,12 +267,7 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
 
 }  // namespace
 
-StageResult CameraMotionStage::Run(const ClipContext& context) {
-  return DecideCameraMotion(CopyAnalysis(context, "camera_motion"), config_);
-}
-
-std::optional<StageResult> CameraMotionStage::Redecide(const Json& measurements) const {
-  return DecideCameraMotion(measurements, config_);
-}
+CameraMotionStage::CameraMotionStage(CameraMotionConfig config)
+    : MeasuredVerdictStage("camera_motion", std::move(config), DecideCameraMotion) {}
 
 }  // namespace doasido::filters

@@ -130,16 +130,9 @@ CameraMotionSummary SummarizeCameraMotion(const CameraMotionSignals& s, const Sh
 
 // Stage "camera_motion": decides from the "camera_motion" section of the
 // analysis stage's measurements.
-class CameraMotionStage : public Stage {
+class CameraMotionStage : public MeasuredVerdictStage<CameraMotionConfig> {
  public:
-  explicit CameraMotionStage(CameraMotionConfig config = {}) : config_(config) {}
-  std::string Name() const override { return "camera_motion"; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  CameraMotionConfig config_;
+  explicit CameraMotionStage(CameraMotionConfig config = {});
 };
 
 }  // namespace doasido::filters

@@ -284,13 +284,8 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
 
 }  // namespace
 
-StageResult InteractionStage::Run(const ClipContext& context) {
-  return DecideInteraction(CopyAnalysis(context, "interaction"), config_);
-}
-
-std::optional<StageResult> InteractionStage::Redecide(const Json& measurements) const {
-  return DecideInteraction(measurements, config_);
-}
+InteractionStage::InteractionStage(InteractionConfig config)
+    : MeasuredVerdictStage("interaction", std::move(config), DecideInteraction) {}
 
 std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, double min_score,
                                           const std::string& source) {

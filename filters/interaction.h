@@ -57,6 +57,7 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "filters/frame_analyzer.h"
+#include "filters/stage_support.h"
 
 namespace doasido::filters {
 
@@ -134,16 +135,9 @@ double InteractionFraction(const InteractionSignals& s, const std::vector<int>& 
 
 // Stage "interaction": decides from the "interaction" section of the
 // analysis stage's measurements.
-class InteractionStage : public Stage {
+class InteractionStage : public MeasuredVerdictStage<InteractionConfig> {
  public:
-  explicit InteractionStage(InteractionConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "interaction"; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  InteractionConfig config_;
+  explicit InteractionStage(InteractionConfig config = {});
 };
 
 struct ExternalDetectorConfig {

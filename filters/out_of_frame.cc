@@ -182,12 +182,7 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
 
 }  // namespace
 
-StageResult OutOfFrameStage::Run(const ClipContext& context) {
-  return DecideOutOfFrame(CopyAnalysis(context, "out_of_frame"), config_);
-}
-
-std::optional<StageResult> OutOfFrameStage::Redecide(const Json& measurements) const {
-  return DecideOutOfFrame(measurements, config_);
-}
+OutOfFrameStage::OutOfFrameStage(OutOfFrameConfig config)
+    : MeasuredVerdictStage("out_of_frame", std::move(config), DecideOutOfFrame) {}
 
 }  // namespace doasido::filters

@@ -41,6 +41,7 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "filters/frame_analyzer.h"
+#include "filters/stage_support.h"
 
 namespace doasido::filters {
 
@@ -99,16 +100,9 @@ OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t f
 
 // Stage "out_of_frame": decides from the "out_of_frame" section of the
 // analysis stage's measurements.
-class OutOfFrameStage : public Stage {
+class OutOfFrameStage : public MeasuredVerdictStage<OutOfFrameConfig> {
  public:
-  explicit OutOfFrameStage(OutOfFrameConfig config = {}) : config_(config) {}
-  std::string Name() const override { return "out_of_frame"; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  OutOfFrameConfig config_;
+  explicit OutOfFrameStage(OutOfFrameConfig config = {});
 };
 
 }  // namespace doasido::filters

@@ -509,12 +509,7 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
 
 }  // namespace
 
-StageResult ShotBoundaryStage::Run(const ClipContext& context) {
-  return DecideShots(CopyAnalysis(context, "shot_boundary"), config_);
-}
-
-std::optional<StageResult> ShotBoundaryStage::Redecide(const Json& measurements) const {
-  return DecideShots(measurements, config_);
-}
+ShotBoundaryStage::ShotBoundaryStage(ShotBoundaryConfig config)
+    : MeasuredVerdictStage("shot_boundary", std::move(config), DecideShots) {}
 
 }  // namespace doasido::filters

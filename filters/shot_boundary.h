@@ -88,6 +88,7 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "filters/frame_analyzer.h"
+#include "filters/stage_support.h"
 
 namespace doasido::filters {
 
@@ -209,16 +210,9 @@ std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
 
 // Stage "shot_boundary": decides from the "shot_boundary" section of the
 // analysis stage's measurements.
-class ShotBoundaryStage : public Stage {
+class ShotBoundaryStage : public MeasuredVerdictStage<ShotBoundaryConfig> {
  public:
-  explicit ShotBoundaryStage(ShotBoundaryConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "shot_boundary"; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  ShotBoundaryConfig config_;
+  explicit ShotBoundaryStage(ShotBoundaryConfig config = {});
 };
 
 }  // namespace doasido::filters

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,32 @@ void RequireAnalysis(const Json& measurements, const std::string& stage);
 // "above" rejects value >= reject; "below" rejects value < reject.
 Json ScoreEntry(const std::string& name, double value, bool rejects_above, double reject,
                 double flag = std::numeric_limits<double>::quiet_NaN());
+
+// A verdict stage that decides from the analysis stage's measurements only
+// (never decodes): Run copies the stage's section of them, with the kept
+// shot, and applies `rule`; Redecide applies `rule` to stored measurements,
+// so `doasido rethreshold` re-derives the verdict without the video. The
+// stage's name is also its section in the analysis measurements.
+template <typename Config>
+class MeasuredVerdictStage : public Stage {
+ public:
+  using Rule = StageResult (*)(const Json& measurements, const Config& config);
+  MeasuredVerdictStage(std::string name, Config config, Rule rule)
+      : name_(std::move(name)), config_(std::move(config)), rule_(rule) {}
+  std::string Name() const override { return name_; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override {
+    return rule_(CopyAnalysis(context, name_), config_);
+  }
+  std::optional<StageResult> Redecide(const Json& measurements) const override {
+    return rule_(measurements, config_);
+  }
+
+ private:
+  std::string name_;
+  Config config_;
+  Rule rule_;
+};
 
 // Number read from a JSON object with a default.
 double NumberOr(const Json& object, const std::string& key, double fallback);

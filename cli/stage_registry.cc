@@ -45,9 +45,9 @@ const std::vector<StageEntry>& StageTable() {
        Maker<filters::ActivityStage, filters::ActivityConfig>("activity"), true},
       {"camera_motion", "rejects (or flags) clips whose camera pans, shakes or zooms", true,
        Maker<filters::CameraMotionStage, filters::CameraMotionConfig>("camera_motion"), true},
-      {"retarget-kinematic",
+      {retarget::kKinematicStageName,
        "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
-       Maker<retarget::KinematicStage, retarget::KinematicStageConfig>("retarget_kinematic")},
+       Maker<retarget::KinematicStage, retarget::KinematicStageConfig>(retarget::kKinematicStageName)},
       {"noop", "does nothing for work_ms milliseconds (queue diagnostics)", false,
        Maker<NoopStage, NoopConfig>("noop")},
   };

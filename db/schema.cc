@@ -154,6 +154,18 @@ CREATE TABLE study_trials (
 );
 CREATE INDEX study_trials_item ON study_trials(item_id);
 )sql",
+      // 3: the kinematic retargeting stage is named `retarget_kinematic`
+      // (its config section and artifact folder), no longer `retarget-kinematic`.
+      // Artifact paths keep the folder the files were written to.
+      R"sql(
+UPDATE pipeline SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE stage_runs SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE measurements SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE verdicts SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE reviews SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE artifacts SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+UPDATE events SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
+)sql",
   };
   return kMigrations;
 }

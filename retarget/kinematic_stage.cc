@@ -156,7 +156,7 @@ StageResult KinematicStage::Run(const ClipContext& context) {
     result.verdict = redecided->verdict;
     result.reason = redecided->reason;
   }
-  spdlog::info("retarget-kinematic {}: {} frames, scale {:.3f}, fingertip error {:.1f} mm", clip,
+  spdlog::info("{} {}: {} frames, scale {:.3f}, fingertip error {:.1f} mm", kKinematicStageName, clip,
                frames, trajectory.scale, 1000 * m["fingertip_error_mean"].get<double>());
   return result;
 }

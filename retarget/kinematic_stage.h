@@ -1,4 +1,4 @@
-// The `retarget-kinematic` queue stage: a clip's reconstructed right hand
+// The `retarget_kinematic` queue stage: a clip's reconstructed right hand
 // (and object) become the reference robot trajectory and the simulation
 // scene the dynamics-aware optimiser starts from (seed section 3.2).
 //
@@ -32,6 +32,9 @@
 
 namespace doasido::retarget {
 
+// The stage's name: its queue name, its config section and its artifact folder.
+inline constexpr const char* kKinematicStageName = "retarget_kinematic";
+
 struct KinematicStageConfig {
   std::string hand = "sharpa_right";  // embodiment name or description path
   std::string robots_dir;             // folder of descriptions; "" = DefaultRobotsDir()
@@ -48,7 +51,7 @@ std::string DefaultRobotsDir();
 class KinematicStage : public Stage {
  public:
   explicit KinematicStage(KinematicStageConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "retarget-kinematic"; }
+  std::string Name() const override { return kKinematicStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
   std::optional<StageResult> Redecide(const Json& measurements) const override;

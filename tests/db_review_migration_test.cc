@@ -31,7 +31,7 @@ TEST(DbReviewMigration, UpgradesAVersionOneDatabaseInPlace) {
   sqlite3_close(raw);
 
   Database db(path);
-  EXPECT_EQ(db.SchemaVersion(), 2);
+  EXPECT_EQ(db.SchemaVersion(), Database::LatestSchemaVersion());
   EXPECT_EQ(db.GetClip(1).external_id, "old");
   ASSERT_EQ(db.ListReviews().size(), 1u);
   EXPECT_EQ(db.ListReviews()[0].reviewer, "ann");
@@ -59,6 +59,39 @@ TEST(DbReviewMigration, UpgradesAVersionOneDatabaseInPlace) {
   EXPECT_EQ(db.GetStudyTrial(left_a)->choice, "a");
   EXPECT_EQ(db.GetStudyTrial(left_a)->side, "left");
   EXPECT_THROW(db.AnswerStudyTrial(left_a, "r2", "up"), Error);
+}
+
+// Migration 3 renames the kinematic retargeting stage in place: its pipeline
+// position, runs, measurements and verdicts keep their rows under the new name.
+TEST(DbReviewMigration, RenamesTheKinematicStageInPlace) {
+  TempDir dir;
+  const auto path = dir / "v2.db";
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+  const std::string v2 =
+      "CREATE TABLE schema_version (version INTEGER NOT NULL);"
+      "INSERT INTO schema_version VALUES (2);" +
+      db::Migrations().at(0) + db::Migrations().at(1) +
+      "INSERT INTO pipeline VALUES (0, 'probe'), (1, 'retarget-kinematic');"
+      "INSERT INTO videos (id, path) VALUES (1, 'v.mp4');"
+      "INSERT INTO clips (id, video_id, external_id, created_at) VALUES (1, 1, 'old', 0);"
+      "INSERT INTO stage_runs (clip_id, stage, position, state, verdict, param_hash)"
+      " VALUES (1, 'retarget-kinematic', 1, 'done', 'flag', 'h');"
+      "INSERT INTO measurements VALUES (1, 'retarget-kinematic', 'h', '{\"x\": 1}', 0);";
+  char* message = nullptr;
+  ASSERT_EQ(sqlite3_exec(raw, v2.c_str(), nullptr, nullptr, &message), SQLITE_OK) << message;
+  sqlite3_close(raw);
+
+  Database db(path);
+  EXPECT_EQ(db.SchemaVersion(), Database::LatestSchemaVersion());
+  EXPECT_EQ(db.Pipeline(), (std::vector<std::string>{"probe", "retarget_kinematic"}));
+  const auto m = db.GetMeasurements(1, "retarget_kinematic");
+  ASSERT_TRUE(m.has_value());
+  EXPECT_EQ((*m)["x"], 1);
+  EXPECT_FALSE(db.GetMeasurements(1, "retarget-kinematic").has_value());
+  const auto runs = db.ListRuns({});
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].stage, "retarget_kinematic");
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// The retarget-kinematic stage on a synthetic clip bundle: a right hand made
+// The retarget_kinematic stage on a synthetic clip bundle: a right hand made
 // by forward kinematics of the Sharpa hand (so the answer is known), seen
 // from a camera (y down), and a box-shaped object resting under it.
 #include <cmath>
@@ -77,7 +77,7 @@ TEST(KinematicStage, RetargetsASyntheticBundle) {
   ClipContext context;
   context.clip.id = 7;
   context.clip.external_id = "synthetic";
-  context.artifact_dir = root / "artifacts/7/retarget-kinematic";
+  context.artifact_dir = root / "artifacts/7/retarget_kinematic";
   KinematicStageConfig config;
   config.robots_dir = (SharedData() / "robots").string();
   KinematicStage stage(config);
@@ -108,7 +108,7 @@ TEST(KinematicStage, MissingBundleNamesTheClip) {
   TempDir root;
   ClipContext context;
   context.clip.external_id = "clip42";
-  context.artifact_dir = root / "artifacts/42/retarget-kinematic";
+  context.artifact_dir = root / "artifacts/42/retarget_kinematic";
   KinematicStage stage;
   try {
     stage.Run(context);

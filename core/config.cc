@@ -1,4 +1,5 @@
 #include "core/config.h"
+#include "core/config_check.h"
 
 #include <cstdint>
 #include <cstdio>
@@ -46,6 +47,14 @@ Json LoadConfigFile(const std::filesystem::path& path) {
     throw Error("bad_config", std::string(e.description()),
                 {.file = path.string(), .line = static_cast<long>(e.source().begin.line)});
   }
+}
+
+void RequireInRange(const std::string& section, const std::string& key, double value, double lo,
+                    double hi) {
+  if (value >= lo && value <= hi) return;
+  std::ostringstream message;
+  message << "value " << value << " is out of range [" << lo << ", " << hi << "]";
+  throw Error("bad_config", message.str(), {.field = section + "." + key});
 }
 
 std::string ParamHash(const Json& params) {

@@ -39,7 +39,8 @@ Json Slice(const T* p, int n) {
   return Json(std::vector<T>(p, p + n));
 }
 
-// Geoms by body and meshes of a compiled model (visible groups 0-2).
+// Geoms by body and meshes of a compiled model: groups 0-3 (3 holds the
+// object scenes' convex hulls, which are all the object has).
 Json Geometry(const mjModel* m) {
   Json bodies = Json::array(), meshes = Json::array();
   for (int b = 0; b < m->nbody; ++b) {
@@ -48,7 +49,7 @@ Json Geometry(const mjModel* m) {
   }
   for (int g = 0; g < m->ngeom; ++g) {
     const std::string type = GeomType(m->geom_type[g]);
-    if (type.empty() || m->geom_group[g] > 2) continue;
+    if (type.empty() || m->geom_group[g] > 3) continue;
     Json geom = {{"type", type}, {"size", Slice(m->geom_size + 3 * g, 3)},
                  {"pos", Slice(m->geom_pos + 3 * g, 3)}, {"quat", Slice(m->geom_quat + 4 * g, 4)},
                  {"rgba", Slice(m->geom_rgba + 4 * g, 4)}};

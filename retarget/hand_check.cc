@@ -117,8 +117,12 @@ void CheckTips(HandCheck& c) {
 }  // namespace
 
 HandCheck CheckHand(const std::filesystem::path& description, const std::filesystem::path& robots_dir) {
+  return CheckHand(LoadEmbodiment(description, robots_dir));
+}
+
+HandCheck CheckHand(const Embodiment& embodiment) {
   HandCheck c;
-  c.embodiment = LoadEmbodiment(description, robots_dir);
+  c.embodiment = embodiment;
   c.xml = PrepareMjcf(c.embodiment.model_path).xml;
   c.model = CompileMjcfText(c.xml, c.embodiment.model_path.string());
   CheckPoints(c);

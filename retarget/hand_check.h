@@ -52,6 +52,8 @@ struct HandCheck {
 // model (PrepareMjcf; thrown too), then collects the report. Problems are
 // returned, not thrown.
 HandCheck CheckHand(const std::filesystem::path& description, const std::filesystem::path& robots_dir = {});
+// The same for a loaded description (FindEmbodiment, LoadEmbodiment).
+HandCheck CheckHand(const Embodiment& embodiment);
 
 // qpos of `m` with every flexion joint of `s` at `fraction` of the way from 0
 // (clamped into range) to the end of its range farther from 0, the others

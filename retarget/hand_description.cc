@@ -131,10 +131,13 @@ HandChain MakeChain(const mjModel* m, const mjData* d, int leaf, int palm) {
     if (std::abs(JointAxis(d, j).dot(distal_axis)) >= kFlexionCos) c.flexion.push_back(j);
   }
   c.tip_body = leaf;
-  // The finger's direction: from the last hinge to the distal body, or from
-  // the first hinge when the distal body sits on the last hinge (Allegro).
+  // The finger's direction: from the last hinge to the distal body, or along
+  // the segment before the last hinge when the distal body sits on it
+  // (Allegro), or from the first hinge.
   const Vec3 pos = V(d->xpos + 3 * leaf);
-  Vec3 dir = pos - JointAnchor(d, c.joints.back());
+  const size_t n = c.joints.size();
+  Vec3 dir = pos - JointAnchor(d, c.joints[n - 1]);
+  if (dir.norm() < 5e-3 && n >= 2) dir = JointAnchor(d, c.joints[n - 1]) - JointAnchor(d, c.joints[n - 2]);
   if (dir.norm() < 5e-3) dir = pos - JointAnchor(d, c.joints.front());
   if (dir.norm() < 1e-9) return c;
   dir.normalize();

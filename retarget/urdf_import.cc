@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
+#include "core/config_check.h"
 #include "core/error.h"
 #include "core/mesh.h"
 #include "retarget/mj_model.h"
@@ -257,12 +258,6 @@ std::string SafeName(const std::string& s) {
   return out.empty() ? "hand" : out;
 }
 
-void CheckSide(const std::string& side) {
-  if (side != "right" && side != "left") {
-    throw Error("bad_option", "--side must be right or left, not '" + side + "'", {.field = "side"});
-  }
-}
-
 ImportedHand Describe(const fs::path& mjcf, const fs::path& out_dir, const std::string& name,
                       const std::string& side, const std::string& model_field, const std::string& comment) {
   ImportedHand out;
@@ -277,13 +272,20 @@ ImportedHand Describe(const fs::path& mjcf, const fs::path& out_dir, const std::
 
 }  // namespace
 
+void CheckConfig(const HandImportOptions& o, const std::string& section) {
+  if (o.side != "right" && o.side != "left") {
+    throw Error("bad_config", "side must be right or left, not '" + o.side + "'", {.field = section + ".side"});
+  }
+  RequireInRange(section, "hold_deflection", o.hold_deflection, 1e-6, 1.0);
+}
+
 double PositionGain(double subtree_mass, double lever, double range, double hold_deflection) {
   const double g = 9.81;
   return subtree_mass * g * std::max(lever, 0.01) / (hold_deflection * std::max(range, 1e-3));
 }
 
 ImportedHand ImportUrdf(const fs::path& urdf, const fs::path& out_dir, const HandImportOptions& options) {
-  CheckSide(options.side);
+  CheckConfig(options, "hand_import");
   XMLDocument doc;
   LoadUrdf(urdf, doc);
   XMLElement* robot = doc.RootElement();
@@ -306,7 +308,7 @@ ImportedHand ImportUrdf(const fs::path& urdf, const fs::path& out_dir, const Han
 }
 
 ImportedHand DescribeMjcf(const fs::path& mjcf, const fs::path& out_dir, const HandImportOptions& options) {
-  CheckSide(options.side);
+  CheckConfig(options, "hand_import");
   const std::string name = SafeName(options.name.empty() ? mjcf.stem().string() : options.name);
   fs::create_directories(out_dir);
   const fs::path abs = fs::absolute(mjcf).lexically_normal();

@@ -42,6 +42,10 @@ struct HandImportOptions {
   double hold_deflection = 0.05; // PositionGains: fraction of the range that holds the finger
 };
 
+// Throws Error("bad_config") for a side other than right/left or a
+// hold_deflection outside (0, 1].
+void CheckConfig(const HandImportOptions& o, const std::string& section);
+
 struct ImportedHand {
   std::filesystem::path mjcf;         // the model the description points at
   std::filesystem::path description;  // <out>/<name>.json

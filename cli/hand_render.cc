@@ -28,6 +28,8 @@ DataPtr Posed(const mjModel* m, const Eigen::VectorXd& q) {
   return d;
 }
 
+std::vector<std::vector<int>> GeomGroups(const HandCheck& c);
+
 struct View {
   Mat3 rot;  // rows: camera x, y, z in world coordinates
   Vec3 eye;
@@ -60,7 +62,16 @@ View MakeView(const HandCheck& c, const HandRenderOptions& o) {
   }
   Vec3 normal = up.cross(lateral);
   if (normal.dot(curl) < 0) normal = -normal;
-  const TriMesh mesh = retarget::GeomsMesh(m, rest.get(), retarget::DrawnGeoms(m));
+  // Framed on the palm and the fingers (not a forearm or a mount below them).
+  std::vector<int> framed;
+  const auto groups = GeomGroups(c);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    for (int geom : groups[g]) {
+      if (g > 0 || m->geom_bodyid[geom] == c.structure.palm) framed.push_back(geom);
+    }
+  }
+  if (framed.empty()) framed = retarget::DrawnGeoms(m);
+  const TriMesh mesh = retarget::GeomsMesh(m, rest.get(), framed);
   const Vec3 center = 0.5 * (mesh.Min() + mesh.Max());
   double radius = 1e-3;
   for (int i = 0; i < mesh.num_vertices(); ++i) {

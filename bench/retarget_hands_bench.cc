@@ -128,16 +128,11 @@ Row Measure(const std::string& hand, const std::string& description, const Embod
   const HandModel model = BuildHandModel(e);
   for (const ModelPoint& p : model.points) row.tips += p.fingertip;
   KinematicRetargeter solver(model);
-  row.scale = solver.AdaptScale(frames);
-  std::vector<double> err;
-  Eigen::VectorXd prev;
   const auto t0 = Clock::now();
-  for (size_t t = 0; t < frames.size(); ++t) {
-    const FrameSolution s = solver.SolveFrame(frames[t], t ? &prev : nullptr);
-    prev = s.qpos;
-    err.push_back(s.fingertip_mean);
-  }
+  const HandTrajectory t = solver.Solve(frames, {}, 30);  // adapts the scale, then warm-started frames
   row.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / frames.size();
+  row.scale = t.scale;
+  const std::vector<double>& err = t.fingertip_error;
   row.mean = Mean(err);
   row.p95 = P95(err);
   return row;

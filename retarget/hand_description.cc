@@ -209,6 +209,10 @@ Vec3 WristOffset(const mjModel* m, const mjData* d, const HandStructure& s) {
   dir.normalize();
   const auto h = BodySupport(m, d, s.palm, -dir);
   const double t = h ? -*h : origin.dot(dir);  // lowest point of the palm along dir
+  // A palm frame placed at the wrist (Shadow, Sharpa) is the wrist; one at
+  // the knuckles (Allegro) is not.
+  const double depth = centroid.dot(dir) - t, origin_depth = centroid.dot(dir) - origin.dot(dir);
+  if (origin_depth >= 0.6 * depth) return Vec3::Zero();
   const Vec3 wrist = centroid + dir * (t - centroid.dot(dir));
   return r.transpose() * (wrist - origin);
 }
@@ -288,7 +292,8 @@ HandDescription DescribeHand(const mjModel* m, const HandStructure& s, const std
         what + ": anchor of joint " + Name(m, mjOBJ_JOINT, j));
   };
   add(0, s.palm, s.wrist_offset, 1.0, false,
-      "wrist: palm end opposite the fingers, on the line through the knuckles");
+      s.wrist_offset.isZero() ? "wrist: the palm's origin, at the palm's proximal end"
+                              : "wrist: palm end opposite the fingers, on the line through the knuckles");
   for (size_t i = 0; i < s.chains.size(); ++i) {
     const HandChain& c = s.chains[i];
     if (c.finger == "extra") continue;

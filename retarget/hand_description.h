@@ -15,8 +15,10 @@
 //   fingers   the other chains ordered across the palm along their flexion
 //             axis starting from the thumb's side: index, middle, ring, pinky;
 //   tip point the far end of the distal body's geometry along the finger;
-//   wrist     on the palm, the end of its geometry opposite the fingers, on
-//             the line through the knuckles' centroid.
+//   wrist     the palm's origin when it lies in the proximal 40% of the palm
+//             (palm frames placed at the wrist: Shadow, Sharpa), else the end
+//             of the palm's geometry opposite the fingers (Allegro), on the
+//             line through the knuckles' centroid.
 // The OpenPose-21 keypoints map as the hand-written descriptions do: wrist 0
 // (weight 1), fingertips 4 8 12 16 20, knuckles 5 9 13 17 (0.5), the next
 // flexion joints 6 7, 10 11, ... (0.1), thumb IP 3 (0.2) and MCP 2 (0.3).

@@ -65,6 +65,27 @@ TEST_P(ShippedHand, GeneratedDescriptionFindsTheHandWrittenTipsKnucklesAndThumb)
       EXPECT_EQ(got.at(knuckle), want.at(knuckle)) << "knuckle " << knuckle;
     }
   }
+  // The generated wrist and fingertip points sit near the hand-written ones.
+  DataPtr d = MakeData(m);
+  mj_kinematics(m, d.get());
+  auto where = [&](const Embodiment& e, int keypoint) {
+    for (const EmbodimentPoint& p : e.points) {
+      if (p.keypoint != keypoint) continue;
+      const bool site = !p.site.empty();
+      const int id = site ? mj_name2id(m, mjOBJ_SITE, p.site.c_str()) : mj_name2id(m, mjOBJ_BODY, p.body.c_str());
+      ModelPoint mp;
+      (site ? mp.site : mp.body) = id;
+      mp.offset = Vec3(p.pos[0], p.pos[1], p.pos[2]);
+      return PointPosition(m, d.get(), mp);
+    }
+    return Vec3(Vec3::Constant(1e9));
+  };
+  for (int k : {0, 4, 8, 12, 16, 20}) {
+    if (!want.count(k)) continue;
+    const double gap = (where(generated.embodiment, k) - where(written, k)).norm();
+    std::printf("  %s keypoint %d: generated %.1f mm from hand-written\n", GetParam(), k, 1000 * gap);
+    EXPECT_LT(gap, 0.015) << "keypoint " << k;
+  }
   // The thumb: the hand-written thumb tip lies on the chain found to oppose the others.
   const HandChain& thumb = s.chains.front();
   EXPECT_EQ(thumb.finger, "thumb");

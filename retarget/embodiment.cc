@@ -196,12 +196,12 @@ std::string Lower(std::string s) {
 [[noreturn]] void RefuseRobotModel(const std::filesystem::path& model, ErrorSite site) {
   const bool urdf = Lower(model.extension().string()) == ".urdf";
   const std::string command = urdf ? UrdfImportCommand(model) : MjcfImportCommand(model);
-  std::string message = "'" + model.string() + "' is a " + (urdf ? "URDF" : "MJCF") +
+  std::string message = "'" + model.string() + "' is " + (urdf ? "a URDF" : "an MJCF") +
                         " robot model, not a hand description; run `" + command + "` once";
   message += site.field == "model"
                  ? " and use the description it writes, " + ImportedDescriptionPath(model).string() +
                        " (or point \"model\" at the .xml it writes)"
-                 : " and pass --hand " + ImportedDescriptionPath(model).string();
+                 : " and use the description it writes: --hand " + ImportedDescriptionPath(model).string();
   if (site.file.empty()) site.file = model.string();
   throw Error("bad_embodiment", message, site);
 }

@@ -93,7 +93,7 @@ TEST_P(ShippedHand, GeneratedDescriptionFindsTheHandWrittenTipsKnucklesAndThumb)
   for (const std::string& note : s.notes) std::printf("  %s: %s\n", GetParam(), note.c_str());
 }
 
-INSTANTIATE_TEST_SUITE_P(Hands, ShippedHand, ::testing::Values("sharpa_right", "shadow", "allegro"));
+INSTANTIATE_TEST_SUITE_P(Hands, ShippedHand, ::testing::Values("sharpa_right", "sharpa_left", "shadow", "allegro"));
 
 std::vector<Keypoints21> HumanFrames(size_t count) {
   auto frames = ReadKeypointCsv(SharedData() / "retarget/human_hand_keypoints_right.csv");

@@ -98,6 +98,7 @@ void AddImport(CLI::App& hand) {
                                          ? retarget::DescribeMjcf(opt->mjcf, opt->out, opt->import)
                                          : retarget::ImportUrdf(opt->urdf, opt->out, opt->import);
     for (const std::string& line : h.meshes) std::printf("mesh: %s\n", line.c_str());
+    for (const std::string& line : h.warnings) std::printf("warning: %s\n", line.c_str());
     std::printf("model: %s\ndescription: %s (%zu points, %zu fingers)\n", h.mjcf.c_str(),
                 h.description.c_str(), h.described.embodiment.points.size(), h.structure.chains.size());
     for (const HandChain& ch : h.structure.chains) {

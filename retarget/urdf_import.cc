@@ -92,6 +92,21 @@ void CheckJoints(const fs::path& urdf, const XMLElement* robot) {
   }
 }
 
+// MuJoCo 2.2.2's URDF reader drops <mimic>: the coupled joint becomes
+// independent, which the retargeter then moves freely.
+std::vector<std::string> MimicWarnings(const XMLElement* robot) {
+  std::vector<std::string> out;
+  for (const XMLElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const XMLElement* mimic = j->FirstChildElement("mimic");
+    if (!mimic) continue;
+    out.push_back("joint '" + Str(j->Attribute("name")) + "' mimics '" + Str(mimic->Attribute("joint")) +
+                  "' in the URDF; MuJoCo 2.2.2 drops <mimic>, so it moves independently in the MJCF "
+                  "(couple it with an <equality><joint joint1=.. joint2=.. polycoef=..> if it must)");
+    spdlog::warn("hand import: {}", out.back());
+  }
+  return out;
+}
+
 // Where `filename` of a <mesh> points: package:// and file:// prefixes
 // resolved against the URDF's folder and up to three of its parents.
 std::vector<fs::path> MeshCandidates(const fs::path& urdf_dir, std::string filename) {
@@ -304,6 +319,7 @@ ImportedHand ImportUrdf(const fs::path& urdf, const fs::path& out_dir, const Han
                                   ". Edit bodies, offsets (pos, metres, in the body's frame) and weights "
                                   "freely, then run `doasido hand check` on this file.");
   out.meshes = meshes;
+  out.warnings = MimicWarnings(robot);
   return out;
 }
 

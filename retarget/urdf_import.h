@@ -52,6 +52,7 @@ struct ImportedHand {
   HandDescription described;
   HandStructure structure;
   std::vector<std::string> meshes;    // what happened to each mesh ("copied a.obj", "converted b.ply")
+  std::vector<std::string> warnings;  // what the MJCF does not keep (e.g. <mimic> couplings)
 };
 
 // Imports `urdf` into `out_dir` (created) as described above. Throws Error

@@ -185,6 +185,16 @@ TEST(UrdfImport, MissingMeshUnlimitedJointAndWrongRootAreNamed) {
                 "doasido hand import --mjcf");
 }
 
+TEST(UrdfImport, MimicCouplingIsReportedAsDropped) {
+  TempDir dir;
+  TwoFingerHandOptions mimic;
+  mimic.index_dip_mimics_pip = true;
+  EXPECT_TRUE(ImportUrdf(WriteTwoFingerHand(dir / "plain"), dir / "out1").warnings.empty());
+  const ImportedHand h = ImportUrdf(WriteTwoFingerHand(dir / "mimic", mimic), dir / "out2");
+  ASSERT_EQ(h.warnings.size(), 1u);
+  EXPECT_NE(h.warnings[0].find("'index_dip' mimics 'index_pip'"), std::string::npos) << h.warnings[0];
+}
+
 TEST(UrdfImport, UrdfWhereAHandIsExpectedAnswersWithTheImportCommand) {
   TempDir dir;
   const auto urdf = WriteTwoFingerHand(dir.path());

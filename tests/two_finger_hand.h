@@ -15,6 +15,7 @@ namespace doasido::testing {
 
 struct TwoFingerHandOptions {
   bool index_dip_continuous = false;   // an unlimited joint
+  bool index_dip_mimics_pip = false;   // a <mimic> coupling
   std::string palm_mesh = "meshes/palm.ply";
   std::string root = "robot";          // root element name
 };
@@ -101,6 +102,10 @@ inline std::filesystem::path WriteTwoFingerHand(const std::filesystem::path& dir
                  0, 1.75);
   u += HandJoint("index_dip", o.index_dip_continuous ? "continuous" : "revolute", "index_middle",
                  "index_distal", "0 0 0.028", "0 0 0", "0 1 0", 0, 1.4);
+  if (o.index_dip_mimics_pip) {
+    const size_t at = u.find("<child link=\"index_distal\"/>");
+    u.insert(at, "<mimic joint=\"index_pip\" multiplier=\"0.8\"/>");
+  }
   u += HandJoint("index_tip_fixed", "fixed", "index_distal", "index_tip", "0 0 0.024", "0 0 0", "", 0, 0);
   u += "</" + o.root + ">\n";
   const std::filesystem::path path = dir / "two_finger.urdf";

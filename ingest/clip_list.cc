@@ -184,6 +184,13 @@ class RowBuilder {
     Finish(std::move(row));
   }
 
+  // A JSON object's members as cells.
+  void AddObject(const Json& object, long line) {
+    Cells cells;
+    for (const auto& [k, v] : object.items()) cells.emplace_back(k, v);
+    Add(cells, line);
+  }
+
   // Shared final checks: video present and found, span ordered, no duplicate.
   void Finish(ListRow row) {
     const long line = row.line;
@@ -334,7 +341,6 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
   RowBuilder builder(path, options, out);
   std::string text;
   long line = 0, objects = 0;
-  Cells cells;
   while (std::getline(in, text)) {
     ++line;
     if (Trim(text).empty()) {
@@ -357,9 +363,7 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
       continue;
     }
     ++objects;
-    cells.clear();
-    for (const auto& [k, v] : obj.items()) cells.emplace_back(k, v);
-    builder.Add(cells, line);
+    builder.AddObject(obj, line);
   }
   if (objects == 0) NotAList(path, "no line is a JSON object");
 }
@@ -386,9 +390,7 @@ bool ReadJsonDocument(const fs::path& path, const ListOptions& options, ListRead
         continue;
       }
       ++objects;
-      cells.clear();
-      for (const auto& [k, v] : item.items()) cells.emplace_back(k, v);
-      builder.Add(cells, index);
+      builder.AddObject(item, index);
     }
     if (objects == 0) NotAList(path, "a JSON array without clip objects");
     return true;

@@ -109,16 +109,18 @@ void RunDownloadCommand(const DownloadCommand& command, const std::string& url,
   if (exit_code == 0 && fs::exists(output)) return;
   const std::string tail = LastLines(said, 5);
   const std::string how = "command exited " + std::to_string(exit_code) + ": " + tail;
+  // Geo messages first: "This video is not available in your country" also
+  // reads as unavailable.
+  if (exit_code == kExitGeoBlocked ||
+      Says(said, {"available in your country", "geo restrict", "geo-restrict",
+                  "blocked it in your country"})) {
+    throw PermanentError("geo_blocked", how, site);
+  }
   if (exit_code == kExitVideoUnavailable ||
       Says(said, {"video unavailable", "private video", "has been removed",
                   "account associated with this video has been terminated",
                   "this video is not available", "video is unavailable"})) {
     throw PermanentError("video_unavailable", how, site);
-  }
-  if (exit_code == kExitGeoBlocked ||
-      Says(said, {"not available in your country", "geo restrict", "geo-restrict",
-                  "blocked it in your country"})) {
-    throw PermanentError("geo_blocked", how, site);
   }
   if (exit_code == kExitRateLimited ||
       Says(said, {"http error 429", "too many requests", "rate-limit", "rate limit"})) {

@@ -19,10 +19,10 @@
 //
 // How the outcome is read:
 //   exit 0 and {output} exists               success
-//   exit 10, or yt-dlp saying "Video unavailable", "Private video",
-//     "has been removed", "account ... terminated"  video_unavailable (permanent)
-//   exit 11, or "not available in your country", "geo restrict",
-//     "blocked it in your country"          geo_blocked (permanent)
+//   exit 11, or yt-dlp saying "... available in your country", "geo
+//     restrict", "blocked it in your country"   geo_blocked (permanent)
+//   exit 10, or "Video unavailable", "Private video", "has been removed",
+//     "account ... terminated"               video_unavailable (permanent)
 //   exit 12, or "HTTP Error 429", "Too Many Requests", "rate-limit"
 //                                            rate_limited (retried with back-off)
 //   anything else                            download_failed, with the last

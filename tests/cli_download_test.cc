@@ -267,6 +267,9 @@ TEST(Download, TwentyUrlsFromALocalServerDownloadResumeTimeOutAndFilter) {
   const auto report = RunDoasido({"report", "--db", db, "--out", (dir / "report").string(),
                                   "--no-thumbnails"});
   ASSERT_EQ(report.exit_code, 0) << report.err;
+  EXPECT_NE(report.out.find("downloads: 14 fetched"), std::string::npos) << report.out;
+  EXPECT_NE(report.out.find("6 failed (download_timeout 1, http_not_found 5)"), std::string::npos)
+      << report.out;
   const Json downloads = Json::parse(ReadFile(dir / "report" / "report.json"))["downloads"];
   EXPECT_EQ(downloads["fetched"], 14);
   EXPECT_EQ(downloads["failed"], 6);

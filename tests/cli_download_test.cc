@@ -416,6 +416,19 @@ TEST(Download, UrlListsOfIdsIngestAndNonListsAreRefusedWhole) {
     EXPECT_EQ(r.out.find("bad row"), std::string::npos) << r.out;
   }
   EXPECT_EQ(d.CountClips(), 5);
+
+  // Without the download stage, probe says the URL was not downloaded (not
+  // "no such file") and does not retry it.
+  const std::string bare = (dir / "bare.db").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", bare, "--pipeline", "probe"}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", bare, (dir / "whim.json").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const Json failed = QueueList(bare, "failed");
+  ASSERT_EQ(failed.size(), 3u);
+  for (const auto& r : failed) {
+    EXPECT_EQ(r["error"].get<std::string>().rfind("video_not_downloaded:", 0), 0u) << r;
+    EXPECT_EQ(r["attempts"], 1);
+  }
 }
 
 }  // namespace

@@ -108,10 +108,17 @@ int main(int argc, char** argv) {
   for (int r = 0; r < rounds; ++r) {
     fs::remove_all(dir / "media");
     auto t = Clock::now();
+    std::int64_t fetched = 0;
     for (int i = 0; i < files; ++i) {
-      doasido::ingest::DownloadVideo(url(i), dir / "media", dir / "logs", config);
+      const auto out = doasido::ingest::DownloadVideo(url(i), dir / "media", dir / "logs", config);
+      if (out.summary.source == "http") fetched += out.summary.bytes;
     }
     ours = std::min(ours, Since(t));
+    if (fetched != total) {
+      std::fprintf(stderr, "fetched %lld bytes, expected %lld\n", static_cast<long long>(fetched),
+                   static_cast<long long>(total));
+      return 1;
+    }
 
     fs::remove_all(dir / "curl");
     fs::create_directories(dir / "curl");

@@ -170,6 +170,7 @@ DownloadOutcome DownloadVideo(const std::string& url, const fs::path& media_dir,
     });
     out.summary.source = "command";
     out.summary.bytes = static_cast<std::int64_t>(fs::file_size(dest));
+    out.sha256 = FileSha256(dest);
   } else {
     const HttpFetchOptions http{config.connect_timeout_s, config.low_speed_time_s,
                                 config.low_speed_bytes_per_s, config.total_timeout_s,
@@ -178,6 +179,7 @@ DownloadOutcome DownloadVideo(const std::string& url, const fs::path& media_dir,
     WithRetries(config, out.tries, [&] {
       HostSlot slot(media_dir / ".locks", host, config.max_per_host);
       const HttpFetchResult r = FetchUrl(url, dest, http);
+      out.sha256 = r.sha256;
       out.summary.bytes += r.bytes_transferred;
       if (first) out.resumed_from = r.resumed_from;
       first = false;
@@ -185,7 +187,6 @@ DownloadOutcome DownloadVideo(const std::string& url, const fs::path& media_dir,
     out.summary.source = "http";
   }
   out.summary.size_bytes = static_cast<std::int64_t>(fs::file_size(dest));
-  out.sha256 = FileSha256(dest);
   WriteSidecar(dest, {{"url", url}, {"size_bytes", out.summary.size_bytes},
                       {"sha256", out.sha256}, {"downloaded_at", Now()}});
   out.summary.seconds =

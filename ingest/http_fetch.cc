@@ -7,10 +7,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <memory>
 #include <mutex>
 
 #include "core/permanent_error.h"
+#include "ingest/file_sha256.h"
 
 namespace doasido::ingest {
 namespace {
@@ -33,6 +35,7 @@ struct Transfer {
   long status = 0;
   std::int64_t written = 0;
   bool write_failed = false;
+  std::unique_ptr<Sha256> sha;  // of the .part from its first byte
 };
 
 size_t OnBody(char* data, size_t size, size_t count, void* user) {
@@ -46,7 +49,14 @@ size_t OnBody(char* data, size_t size, size_t count, void* user) {
       const bool append = t->status == 206 && t->resume_from > 0;
       if (!append) t->resume_from = 0;
       t->file = std::fopen(t->part.c_str(), append ? "ab" : "wb");
-      if (t->file == nullptr) {
+      try {
+        // No exception may cross libcurl's C frames.
+        t->sha = std::make_unique<Sha256>();
+        if (append) t->sha->UpdateFromFile(t->part);
+      } catch (const std::exception&) {
+        t->sha.reset();
+      }
+      if (t->file == nullptr || !t->sha) {
         t->write_failed = true;
         return 0;
       }
@@ -57,6 +67,7 @@ size_t OnBody(char* data, size_t size, size_t count, void* user) {
     t->write_failed = true;
     return 0;
   }
+  t->sha->Update(data, n);
   t->written += static_cast<std::int64_t>(n);
   return n;
 }
@@ -171,6 +182,7 @@ HttpFetchResult FetchUrl(const std::string& url, const fs::path& dest,
   if (code != CURLE_OK) ThrowForCurl(code, detail, url, fs::exists(t.part, ec));
   if (status != 200 && status != 206) ThrowForStatus(status, url);
 
+  if (!fs::exists(t.part, ec)) std::ofstream(t.part).close();  // an empty body
   curl_off_t announced = -1;
   curl_easy_getinfo(c, CURLINFO_CONTENT_LENGTH_DOWNLOAD_T, &announced);
   const auto size = static_cast<std::int64_t>(fs::file_size(t.part, ec));
@@ -186,6 +198,7 @@ HttpFetchResult FetchUrl(const std::string& url, const fs::path& dest,
   result.bytes_transferred = t.written;
   result.resumed_from = t.resume_from;
   result.http_status = static_cast<int>(status);
+  result.sha256 = t.sha ? t.sha->HexDigest() : FileSha256(dest);
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -27,6 +27,9 @@ struct HttpFetchResult {
   std::int64_t resumed_from = 0;      // bytes of .part kept from an earlier call
   int http_status = 0;
   double seconds = 0;
+  // SHA-256 of the finished file, computed as the bytes arrived (a resumed
+  // .part's prefix is read back once).
+  std::string sha256;
 };
 
 // Fetches `url` into `dest` (through `<dest>.part`; parent folders are

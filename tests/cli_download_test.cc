@@ -404,6 +404,20 @@ TEST(Download, UrlListsOfIdsIngestAndNonListsAreRefusedWhole) {
   for (const auto& c : d.ListClips(&by_clip)) videos[c.external_id] = by_clip[c.id];
   EXPECT_EQ(videos["boardgame_v_abcdefghijk"], "https://www.youtube.com/watch?v=abcdefghijk");
 
+  // A VOC folder whose video is absent (one hand box on one frame).
+  WriteFile(dir / "voc" / "Annotations" / "kitchen_v_Zz9-_a0b1c2_frame000120.xml",
+            "<annotation><object><name>hand</name><bndbox><xmin>10</xmin><ymin>20</ymin>"
+            "<xmax>50</xmax><ymax>70</ymax></bndbox><contactstate>3</contactstate>"
+            "<handside>1</handside></object></annotation>");
+  const auto voc = RunDoasido({"ingest", "--db", db, "--json", (dir / "voc").string(),
+                               "--video-url-template", "https://www.youtube.com/watch?v={id}"});
+  ASSERT_EQ(voc.exit_code, 0) << voc.err;
+  EXPECT_EQ(Json::parse(voc.out)[0]["inserted"], 1);
+  EXPECT_EQ(Json::parse(voc.out)[0]["detections"], 1);
+  by_clip.clear();
+  for (const auto& c : d.ListClips(&by_clip)) videos[c.external_id] = by_clip[c.id];
+  EXPECT_EQ(videos["kitchen_v_Zz9-_a0b1c2"], "https://www.youtube.com/watch?v=Zz9-_a0b1c2");
+
   // Not clip lists: refused whole, saying what was expected.
   WriteFile(dir / "settings.json", R"({"threshold": 0.5, "name": "x"})");
   WriteFile(dir / "number.json", "42\n");
@@ -415,7 +429,7 @@ TEST(Download, UrlListsOfIdsIngestAndNonListsAreRefusedWhole) {
     EXPECT_NE(r.err.find("expected a clip list"), std::string::npos) << r.err;
     EXPECT_EQ(r.out.find("bad row"), std::string::npos) << r.out;
   }
-  EXPECT_EQ(d.CountClips(), 5);
+  EXPECT_EQ(d.CountClips(), 6);
 
   // Without the download stage, probe says the URL was not downloaded (not
   // "no such file") and does not retry it.

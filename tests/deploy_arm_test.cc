@@ -65,6 +65,7 @@ TEST(Ur3e, MjcfForwardKinematicsEqualsDh) {
     // The templated DH used by the IK agrees too.
     worst_p = std::max(worst_p, (DhForwardPose(q).t - ref.topRightCorner<3, 1>()).norm());
   }
+  std::printf("MJCF vs DH at 100 configurations: worst %.2e m, rotation %.2e\n", worst_p, worst_r);
   EXPECT_LT(worst_p, 1e-6);
   EXPECT_LT(worst_r, 1e-6);
   // Published reach: the flange of the stretched arm is |a2| + |a3| + ... away.
@@ -162,15 +163,21 @@ retarget::HandTrajectory PathWithGap(Pose* centre_out) {
   return t;
 }
 
-TEST(Plan, UnreachableFramesReportedWithTimes) {
-  Pose centre;
-  const retarget::HandTrajectory t = PathWithGap(&centre);
+// No search, and the placement that maps PathWithGap's poses onto themselves.
+PlanConfig IdentityPlacement(const Pose& centre) {
   PlanConfig config;
-  config.workspace.x = centre.t.x();  // placement = identity: the path is in the base frame
+  config.workspace.x = centre.t.x();
   config.workspace.y = centre.t.y();
   config.workspace.yaw_steps = 1;
   config.workspace.offset_steps = 1;
   config.home = {0.3, -1.9, 1.7, -1.4, -1.5, 0.2};
+  return config;
+}
+
+TEST(Plan, UnreachableFramesReportedWithTimes) {
+  Pose centre;
+  const retarget::HandTrajectory t = PathWithGap(&centre);
+  const PlanConfig config = IdentityPlacement(centre);  // the path is in the base frame
   const Plan plan = MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config);
   ASSERT_EQ(plan.times.size(), 60u);
   EXPECT_FALSE(plan.ok);
@@ -196,12 +203,7 @@ TEST(Plan, ReachablePathPassesAndSpeedLimitIsChecked) {
   Pose centre;
   retarget::HandTrajectory t = PathWithGap(&centre);
   for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;  // close the gap
-  PlanConfig config;
-  config.workspace.x = centre.t.x();
-  config.workspace.y = centre.t.y();
-  config.workspace.yaw_steps = 1;
-  config.workspace.offset_steps = 1;
-  config.home = {0.3, -1.9, 1.7, -1.4, -1.5, 0.2};
+  PlanConfig config = IdentityPlacement(centre);
   const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
   const Plan plan = MakePlan(t, e, config);
   EXPECT_TRUE(plan.ok) << plan.unreachable.size() << " unreachable, " << plan.too_fast.size()
@@ -235,12 +237,7 @@ TEST(Plan, ReplayMeasuresObjectError) {
       retarget::BuildObjectScene(retarget::MakeMug(), mug_pose, scene_config, dir);
   std::ifstream in(scene.xml_path);
   const std::string xml((std::istreambuf_iterator<char>(in)), {});
-  PlanConfig config;
-  config.workspace.x = centre.t.x();
-  config.workspace.y = centre.t.y();
-  config.workspace.yaw_steps = 1;
-  config.workspace.offset_steps = 1;
-  config.home = {0.3, -1.9, 1.7, -1.4, -1.5, 0.2};
+  PlanConfig config = IdentityPlacement(centre);
   const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
   Plan plan = MakePlan(t, e, config);
   ASSERT_TRUE(plan.ok);

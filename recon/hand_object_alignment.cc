@@ -3,11 +3,9 @@
 #include <cmath>
 #include <limits>
 
-#include <opencv2/imgproc.hpp>
 
 #include "core/config_check.h"
 #include "recon/ray_caster.h"
-#include "recon/recon_metrics.h"
 #include "recon/visible_centroid.h"
 
 namespace doasido::recon {
@@ -36,27 +34,25 @@ VisibleHand CastHands(const ClipBundle& b, int t, const cv::Mat& points) {
   return sum;
 }
 
-// Centroid of the object points (rotated by `pose`, translation excluded)
-// that are visible at `pose` and project inside the mask (dilated by one
-// pixel: surface points on the silhouette round either way). count = 0 when none.
-Vec3 VisibleMeshCentroid(const TriMesh& object, const std::vector<Vec3>& points, const Pose& pose,
-                         const Mat3& K, const cv::Mat& mask, double tolerance, int* count) {
-  cv::Mat grown;
-  cv::dilate(mask, grown, cv::Mat::ones(3, 3, CV_8U));
+// c_mesh: the mean first hit, minus the translation, of one ray per
+// object-mask pixel onto the object posed at `pose` (count = rays that hit).
+// Pixel-weighted like c_obj^M, so both average the same visible surface.
+Vec3 VisibleMeshCentroid(const TriMesh& object, const Pose& pose, const Mat3& K,
+                         const cv::Mat& mask, int* count) {
   const RayCaster caster(object.Transformed(pose).vertices, object.faces);
-  const Camera cam = Camera::FromK(K, mask.cols, mask.rows);
+  const Mat3 k_inv = K.inverse();
   Vec3 sum = Vec3::Zero();
   int n = 0;
-  for (const Vec3& x : points) {
-    const Vec3 p = pose * x;
-    if (p.z() <= 1e-6) continue;
-    const Vec2 uv = cam.Project(p);
-    const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-    if (u < 0 || v < 0 || u >= mask.cols || v >= mask.rows || !grown.at<std::uint8_t>(v, u)) continue;
-    const auto hit = caster.FirstHit(Vec3::Zero(), p);
-    if (hit && *hit < p.norm() - tolerance) continue;  // hidden behind the object itself
-    sum += pose.q * x;
-    ++n;
+  for (int v = 0; v < mask.rows; ++v) {
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < mask.cols; ++u) {
+      if (!m[u]) continue;
+      const Vec3 dir = (k_inv * Vec3(u, v, 1)).normalized();
+      if (const auto hit = caster.FirstHit(Vec3::Zero(), dir)) {
+        sum += *hit * dir - pose.t;
+        ++n;
+      }
+    }
   }
   *count = n;
   return n ? Vec3(sum / n) : Vec3::Zero();
@@ -84,8 +80,6 @@ void FillGaps(std::vector<double>& scale, std::vector<std::string>& fill, int ma
 void CheckConfig(const HandObjectAlignmentConfig& c, const std::string& section) {
   RequireInRange(section, "min_hand_hits", c.min_hand_hits, 1, 1e9);
   RequireInRange(section, "min_object_pixels", c.min_object_pixels, 1, 1e9);
-  RequireInRange(section, "mesh_samples", c.mesh_samples, 0, 1e7);
-  RequireInRange(section, "visibility_tolerance", c.visibility_tolerance, 0, 1);
   RequireInRange(section, "max_gap_frames", c.max_gap_frames, 0, 1e6);
   RequireInRange(section, "smooth_weight", c.smooth_weight, 0, 1e6);
   RequireInRange(section, "robust_scale", c.robust_scale, 1e-6, 10);
@@ -96,8 +90,7 @@ double TranslationScale(const Vec3& t, const Vec3& c_mesh, const Vec3& target) {
   return tt > 0 ? t.dot(target - c_mesh) / tt : kNaN;
 }
 
-FrameAlignment MeasureFrame(const ClipBundle& b, int t, const TriMesh& object,
-                            const std::vector<Vec3>& object_points, const Pose& pose,
+FrameAlignment MeasureFrame(const ClipBundle& b, int t, const TriMesh& object, const Pose& pose,
                             const HandObjectAlignmentConfig& config) {
   FrameAlignment f;
   if (static_cast<size_t>(t) >= b.depth.size() && static_cast<size_t>(t) >= b.points.size()) {
@@ -130,8 +123,8 @@ FrameAlignment MeasureFrame(const ClipBundle& b, int t, const TriMesh& object,
   f.scale = TranslationScale(pose.t, Vec3::Zero(), f.target);
   for (int pass = 0; pass < 2 && std::isfinite(f.scale) && f.scale > 0; ++pass) {
     int visible = 0;
-    f.c_mesh = VisibleMeshCentroid(object, object_points, {pose.q, f.scale * pose.t}, b.KAt(t),
-                                   b.mask_object[t], config.visibility_tolerance, &visible);
+    f.c_mesh = VisibleMeshCentroid(object, {pose.q, f.scale * pose.t}, b.KAt(t),
+                                   b.mask_object[t], &visible);
     if (visible == 0) {
       f.skipped = kSkipNoVisibleObject;
       return f;
@@ -147,12 +140,6 @@ HandObjectAlignment AlignHandObject(const ClipBundle& b, const std::vector<Pose>
                                     const std::vector<bool>& pose_valid,
                                     const HandObjectAlignmentConfig& config) {
   const TriMesh& object = *b.object_mesh;
-  std::vector<Vec3> points;
-  for (int v = 0; v < object.num_vertices(); ++v) points.push_back(object.vertices.row(v));
-  if (config.mesh_samples > 0) {
-    const Points3 s = SampleSurface(object, config.mesh_samples, 7);
-    for (Eigen::Index i = 0; i < s.rows(); ++i) points.push_back(s.row(i));
-  }
   const int T = b.frames;
   HandObjectAlignment a;
   a.scale.assign(T, kNaN);
@@ -161,7 +148,7 @@ HandObjectAlignment AlignHandObject(const ClipBundle& b, const std::vector<Pose>
     const bool has_pose = static_cast<size_t>(t) < poses.size() && pose_valid[t];
     FrameAlignment f;
     if (has_pose) {
-      f = MeasureFrame(b, t, object, points, poses[t], config);
+      f = MeasureFrame(b, t, object, poses[t], config);
     } else {
       f.skipped = kSkipNoPose;
     }

@@ -86,8 +86,12 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
   for (const char* bad : {"fail", "hang", "millimetres", "missing_frame", "empty_mask", "nan_joints"}) {
     video_of[bad] = rows[1][0];
   }
-  std::string list = "video,id\n";
-  for (const auto& [id, video] : video_of) list += video + "," + id + "\n";
+  // Distinct spans: the same video and span would be one clip.
+  std::string list = "video,id,start_frame,end_frame\n";
+  int end = 23;
+  for (const auto& [id, video] : video_of) {
+    list += video + "," + id + ",0," + std::to_string(end--) + "\n";
+  }
   WriteFile(synth / "list.csv", list);
   WriteFile(dir / "model.py", kModel);
   WriteFile(dir / "config.toml", "[bundle]\ncommand = \"python3 " + (dir / "model.py").string() +

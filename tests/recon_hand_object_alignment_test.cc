@@ -167,7 +167,6 @@ TEST(HandObjectAlignment, RecoversAKnownScaleExactlyOnNoiseFreeData) {
   const std::vector<double> sigma = {1.3, 0.8, 1.1, 0.95};
   const Scene s = Render(sigma);
   HandObjectAlignmentConfig config;
-  config.mesh_samples = 0;  // the square's corners: their centroid is its centre
   const std::vector<bool> valid(sigma.size(), true);
   const HandObjectAlignment a = AlignHandObject(s.bundle, s.model_poses, valid, config);
   ASSERT_EQ(a.aligned_frames, 4);
@@ -187,7 +186,6 @@ TEST(HandObjectAlignment, SkipsFramesWithoutEvidenceAndInterpolatesShortGaps) {
   s.bundle.mask_object[3].setTo(0);                // no object mask
   std::vector<bool> valid(sigma.size(), true);
   HandObjectAlignmentConfig config;
-  config.mesh_samples = 0;
   config.max_gap_frames = 2;
   const HandObjectAlignment a = AlignHandObject(s.bundle, s.model_poses, valid, config);
   EXPECT_EQ(a.frames[2].skipped, kSkipNoHand);
@@ -205,7 +203,6 @@ TEST(HandObjectAlignment, SmoothingKeepsExactScalesOnNoiseFreeData) {
   const std::vector<double> sigma = {1.0, 1.0, 1.0, 1.0};
   const Scene s = Render(sigma);
   HandObjectAlignmentConfig config;
-  config.mesh_samples = 0;
   config.smooth = true;
   const HandObjectAlignment a = AlignHandObject(s.bundle, s.model_poses, std::vector<bool>(4, true), config);
   // The object moves at constant velocity, so the acceleration prior is zero at the truth.

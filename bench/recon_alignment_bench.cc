@@ -118,11 +118,8 @@ Pose LookAt(const Vec3& eye, const Vec3& target) {
   Vec3 x = z.cross(Vec3::UnitZ());
   if (x.norm() < 1e-6) x = z.cross(Vec3::UnitY());
   x.normalize();
-  const Vec3 y = z.cross(x);
   Mat3 r;
-  r.row(0) = x.transpose();
-  r.row(1) = y.transpose();
-  r.row(2) = z.transpose();
+  r << x.transpose(), z.cross(x).transpose(), z.transpose();  // rows: camera axes in world
   return {Quat(r), -(r * eye)};
 }
 

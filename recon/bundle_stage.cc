@@ -1,25 +1,29 @@
 #include "recon/bundle_stage.h"
 
 #include <chrono>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/permanent_error.h"
+#include "core/shell_words.h"
 #include "recon/bundle.h"
 #include "recon/model_command.h"
 
 namespace doasido::recon {
 namespace {
 
-// ReadBundle with the clip named in the error.
+// ReadBundle with the clip named in the error. A bad bundle stays bad on a
+// retry (the command is deterministic in what it was given): permanent.
 ClipBundle Validate(const std::filesystem::path& dir, const std::string& clip) {
   try {
     return ReadBundle(dir);
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = clip;
-    throw Error(e.code(), e.message(), site);
+    throw PermanentError(e.code(), e.message(), site);
   }
 }
 
@@ -45,7 +49,7 @@ StageResult BundleStage::Run(const ClipContext& context) {
   } else {
     dir = context.artifact_dir;
     if (config_.command.empty()) {
-      throw Error(kErrorNoBundle, "the list names no bundle and bundle.command is empty",
+      throw PermanentError(kErrorNoBundle, "the list names no bundle and bundle.command is empty",
                   {.clip = clip, .field = "bundle.command"});
     }
     std::error_code ec;
@@ -53,12 +57,14 @@ StageResult BundleStage::Run(const ClipContext& context) {
     std::filesystem::create_directories(dir);
     std::string command = config_.command;
     const double fps = context.video.info ? context.video.info->fps : 0.0;
-    SubstituteQuoted(command, "{video}", std::filesystem::absolute(context.video.path).string());
-    SubstituteQuoted(command, "{first_frame}", std::to_string(context.clip.start_frame.value_or(0)));
-    SubstituteQuoted(command, "{last_frame}", std::to_string(context.clip.end_frame.value_or(-1)));
-    SubstituteQuoted(command, "{fps}", std::to_string(fps));
-    SubstituteQuoted(command, "{clip}", clip);
-    SubstituteQuoted(command, "{output}", dir.string());
+    const std::pair<const char*, std::string> values[] = {
+        {"{video}", std::filesystem::absolute(context.video.path).string()},
+        {"{first_frame}", std::to_string(context.clip.start_frame.value_or(0))},
+        {"{last_frame}", std::to_string(context.clip.end_frame.value_or(-1))},
+        {"{fps}", std::to_string(fps)},
+        {"{clip}", clip}};
+    for (const auto& [key, value] : values) ReplaceAll(command, key, ShellQuote(value));
+    ReplaceAll(command, "{output}", ShellQuote(dir.string()));
     const auto log = dir / "command.log";
     const CommandOutcome run =
         RunModelCommand(command, log, config_.timeout_s, config_.log_tail_lines);

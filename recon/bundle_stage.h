@@ -15,7 +15,9 @@
 //     the message holds the last log lines), bundle_timeout (killed with its
 //     whole process group after timeout_s), bad_bundle (ReadBundle's
 //     complaint naming file and field), no_bundle (no command configured and
-//     no bundle named).
+//     no bundle named). bad_bundle and no_bundle are PermanentErrors (the
+//     worker does not retry them); a failed or timed-out command may be
+//     transient (a busy GPU) and is retried.
 // Measurements: source ("list" or "command"), seconds, frames, parts found.
 #pragma once
 

@@ -30,15 +30,6 @@ std::string Tail(const std::filesystem::path& log, int lines) {
 
 }  // namespace
 
-void SubstituteQuoted(std::string& text, const std::string& key, const std::string& value) {
-  std::string quoted = "'";
-  for (char c : value) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  quoted += "'";
-  for (size_t pos = text.find(key); pos != std::string::npos; pos = text.find(key, pos + quoted.size())) {
-    text.replace(pos, key.size(), quoted);
-  }
-}
-
 CommandOutcome RunModelCommand(const std::string& command, const std::filesystem::path& log,
                                double timeout_s, int tail_lines) {
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

@@ -20,7 +20,4 @@ struct CommandOutcome {
 CommandOutcome RunModelCommand(const std::string& command, const std::filesystem::path& log,
                                double timeout_s, int tail_lines);
 
-// Replaces every `key` in `text` by the single-quoted shell word of `value`.
-void SubstituteQuoted(std::string& text, const std::string& key, const std::string& value);
-
 }  // namespace doasido::recon

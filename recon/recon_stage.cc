@@ -6,6 +6,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/permanent_error.h"
 #include "recon/bundle_location.h"
 #include "recon/npy.h"
 
@@ -72,7 +73,7 @@ StageResult ReconStage::Run(const ClipContext& context) {
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = clip;
-    throw Error(e.code(), e.message(), site);
+    throw PermanentError(e.code(), e.message(), site);  // the same files fail again
   }
   StageResult result;
   result.measurements["bundle"] = dir.string();

@@ -104,9 +104,12 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
 
   Database check(db);
   std::map<std::string, StageRunRow> bundle_runs, recon_runs;
+  std::string table = run.out + run.err;
   for (const StageRunRow& r : check.ListRuns({})) {
     (r.stage == "bundle" ? bundle_runs : recon_runs)[r.external_id] = r;
+    table += "\n" + r.external_id + " " + r.stage + " " + r.state + " " + r.error;
   }
+  ASSERT_EQ(bundle_runs.size(), 8u) << table;
   const std::map<std::string, std::vector<std::string>> expected = {
       {"fail", {"bundle_command_failed", "CUDA out of memory", "field bundle.command"}},
       {"hang", {"bundle_timeout", "field bundle.command"}},
@@ -115,6 +118,7 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
       {"empty_mask", {"bad_bundle", "000003.png"}},
       {"nan_joints", {"bad_bundle", "hands.npz", "_joints"}}};
   for (const auto& [clip, parts] : expected) {
+    ASSERT_EQ(bundle_runs.count(clip), 1u) << clip << table;
     const StageRunRow& r = bundle_runs.at(clip);
     EXPECT_EQ(r.state, "failed") << clip;
     EXPECT_THAT(r.error, HasSubstr("clip " + clip)) << clip;
@@ -124,6 +128,7 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
 
   for (int i = 0; i < 2; ++i) {
     const std::string clip = "good" + std::to_string(i);
+    ASSERT_EQ(recon_runs.count(clip), 1u) << clip << table;
     ASSERT_EQ(recon_runs.at(clip).state, "done") << recon_runs.at(clip).error;
     EXPECT_EQ(recon_runs.at(clip).verdict, "pass") << recon_runs.at(clip).reason;
     const recon::Reconstruction r =

@@ -9,6 +9,8 @@
 #include "filters/shot_boundary.h"
 #include "ingest/download_stage.h"
 #include "ingest/probe.h"
+#include "recon/bundle_stage.h"
+#include "recon/recon_stage.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::cli {
@@ -50,8 +52,14 @@ const std::vector<StageEntry>& StageTable() {
        Maker<filters::ActivityStage, filters::ActivityConfig>("activity"), true},
       {"camera_motion", "rejects (or flags) clips whose camera pans, shakes or zooms", true,
        Maker<filters::CameraMotionStage, filters::CameraMotionConfig>("camera_motion"), true},
+      {recon::kBundleStageName,
+       "runs the model command that writes the clip bundle (or checks the bundle the list names)",
+       false, Maker<recon::BundleStage, recon::BundleStageConfig>(recon::kBundleStageName)},
+      {recon::kReconStageName,
+       "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction", false,
+       Maker<recon::ReconStage, recon::ReconStageConfig>(recon::kReconStageName)},
       {retarget::kKinematicStageName,
-       "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
+       "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)", false,
        Maker<retarget::KinematicStage, retarget::KinematicStageConfig>(retarget::kKinematicStageName)},
       {"noop", "does nothing for work_ms milliseconds (queue diagnostics)", false,
        Maker<NoopStage, NoopConfig>("noop")},

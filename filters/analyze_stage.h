@@ -53,6 +53,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, de
                                                 use_builtin_detector,
                                                 frame_count_tolerance, shot, activity,
                                                 camera_motion, out_of_frame, detector)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const AnalyzeConfig& c, const std::string& section);
 
 // Everything one analysis pass produced (for callers outside the queue,
 // such as benchmarks and tests).
@@ -71,7 +73,7 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
 class AnalyzeStage : public Stage {
  public:
   explicit AnalyzeStage(AnalyzeConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "filters_analyze"; }
+  std::string Name() const override { return kAnalyzeStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 

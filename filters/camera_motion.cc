@@ -208,7 +208,7 @@ CameraMotionSummary SummarizeCameraMotion(const CameraMotionSignals& s, const Sh
 namespace {
 
 StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfig& c) {
-  RequireAnalysis(measurements, "camera_motion");
+  RequireAnalysis(measurements, kCameraMotionStageName);
   const CameraMotionSignals s = CameraMotionSignalsFromJson(measurements.at("signals"));
   const std::int64_t frames =
       static_cast<std::int64_t>(NumberOr(measurements.at("clip"), "frames", 0));
@@ -268,6 +268,6 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
 }  // namespace
 
 CameraMotionStage::CameraMotionStage(CameraMotionConfig config)
-    : MeasuredVerdictStage("camera_motion", std::move(config), DecideCameraMotion) {}
+    : MeasuredVerdictStage(kCameraMotionStageName, std::move(config), DecideCameraMotion) {}
 
 }  // namespace doasido::filters

@@ -252,7 +252,7 @@ double InteractionFraction(const InteractionSignals& s, const std::vector<int>& 
 namespace {
 
 StageResult DecideInteraction(const Json& measurements, const InteractionConfig& c) {
-  RequireAnalysis(measurements, "interaction");
+  RequireAnalysis(measurements, kInteractionStageName);
   const InteractionSignals s = InteractionSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
   size_t covered = 0, with_hands = 0;
@@ -285,7 +285,7 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
 }  // namespace
 
 InteractionStage::InteractionStage(InteractionConfig config)
-    : MeasuredVerdictStage("interaction", std::move(config), DecideInteraction) {}
+    : MeasuredVerdictStage(kInteractionStageName, std::move(config), DecideInteraction) {}
 
 std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, double min_score,
                                           const std::string& source) {

@@ -144,7 +144,7 @@ OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t f
 namespace {
 
 StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c) {
-  RequireAnalysis(measurements, "out_of_frame");
+  RequireAnalysis(measurements, kOutOfFrameStageName);
   const OutOfFrameSignals s = OutOfFrameSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
   const OutOfFrameSummary m = SummarizeOutOfFrame(s, span.first, span.last);
@@ -183,6 +183,6 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
 }  // namespace
 
 OutOfFrameStage::OutOfFrameStage(OutOfFrameConfig config)
-    : MeasuredVerdictStage("out_of_frame", std::move(config), DecideOutOfFrame) {}
+    : MeasuredVerdictStage(kOutOfFrameStageName, std::move(config), DecideOutOfFrame) {}
 
 }  // namespace doasido::filters

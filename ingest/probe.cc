@@ -4,9 +4,15 @@
 
 #include <opencv2/videoio.hpp>
 
+#include "core/config_check.h"
 #include "core/error.h"
 
 namespace doasido::ingest {
+
+void CheckConfig(const ProbeConfig& c, const std::string& section) {
+  RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
+  RequireInRange(section, "max_missing_fraction", c.max_missing_fraction, 0, 1);
+}
 
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
   const ErrorSite site{.file = path.string()};

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "filters/kept_shot.h"
 #include "ingest/video_decoder.h"
 
 namespace doasido::reports {
@@ -215,10 +216,8 @@ Thumbnail MakeThumbnail(const ThumbnailRequest& request, const ThumbnailOptions&
     Detection border_box;
     if (kind == "cut") {
       std::vector<std::int64_t> cuts;
-      if (request.shot_summary.is_object() && request.shot_summary.contains("boundaries")) {
-        for (const Json& b : request.shot_summary["boundaries"]) {
-          if (b.is_number_integer() && b.get<std::int64_t>() > first) cuts.push_back(b);
-        }
+      for (std::int64_t b : filters::KeptShotFromSummary(request.shot_summary).boundaries) {
+        if (b > first) cuts.push_back(b);
       }
       for (size_t i = 0; i < cuts.size() && i < 2; ++i) {
         panels.push_back({cuts[i] - 1, "f" + std::to_string(cuts[i] - 1)});

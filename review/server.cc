@@ -14,6 +14,8 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "db/database.h"
+#include "filters/kept_shot.h"
+#include "filters/shot_boundary.h"
 #include "review/http_range.h"
 #include "review/pages.h"
 #include "review/study.h"
@@ -81,6 +83,15 @@ bool ValidName(const std::string& s) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' ||
            c == ' ' || c == '@';
   });
+}
+
+// The shot the filters judged for `clip`: the block a verdict stage copied
+// into its measurements `m` (the span it judged), else the shot-boundary
+// stage's own decision.
+filters::KeptShot KeptShotOf(Database& db, ClipId clip, const std::optional<Json>& m) {
+  if (auto judged = filters::ReadJudgedShot(m)) return *judged;
+  return filters::ReadKeptShot(db.GetMeasurements(clip, filters::kShotBoundaryStageName))
+      .value_or(filters::KeptShot{});
 }
 
 }  // namespace
@@ -329,17 +340,13 @@ void ReviewServer::Impl::Routes() {
       // stage (copied into later stages' "shot" block, or its summary).
       const auto m = stage.empty() ? std::nullopt : d.GetMeasurements(id, stage);
       out["summary"] = m && m->contains("summary") ? m->at("summary") : Json(nullptr);
-      Json shot = m && m->contains("shot") ? m->at("shot") : Json::object();
-      if (!shot.contains("boundaries")) {
-        const auto sb = d.GetMeasurements(id, "shot_boundary");
-        if (sb && sb->contains("summary")) {
-          const Json& s = sb->at("summary");
-          shot["boundaries"] = s.value("boundaries", Json::array());
-          if (s.contains("trim")) shot["trim"] = s.at("trim");
-        }
+      const filters::KeptShot shot = KeptShotOf(d, id, m);
+      out["cuts"] = shot.boundaries;
+      out["trim"] = nullptr;
+      if (shot.trim) {
+        out["trim"] = {{"start_frame", shot.trim->start_frame},
+                       {"end_frame", shot.trim->end_frame}};
       }
-      out["cuts"] = shot.value("boundaries", Json::array());
-      out["trim"] = shot.contains("trim") ? shot.at("trim") : Json(nullptr);
       Json history = Json::array();
       for (const auto& v : d.VerdictHistory(id, stage)) {
         history.push_back({{"verdict", v.verdict}, {"reason", v.reason}, {"source", v.source},

@@ -40,7 +40,8 @@ void AddRetargetCommand(CLI::App& app) {
   cmd->add_option("--out", opt->out, "Output folder (created)")->required();
   cmd->add_option("--robots-dir", opt->robots_dir,
                   "Folder of robot models the descriptions refer to (default: "
-                  "../shared/data/robots beside the source tree)");
+                  "$DOASIDO_ROBOTS_DIR, else share/doasido/robots beside the executable's "
+                  "folder)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->capture_default_str();
   cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")
       ->capture_default_str();

@@ -107,8 +107,7 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
                                      {ScoreEntry("active_fraction", active, false,
                                                  c.min_active_fraction)}}};
   if (active < c.min_active_fraction) {
-    result.verdict = Verdict::kReject;
-    result.reason = "no_activity";
+    SetVerdict(result, Verdict::kReject, "no_activity");
   }
   return result;
 }

@@ -273,11 +273,9 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
        {ScoreEntry("interaction_fraction", fraction, false, c.min_interaction_fraction),
         ScoreEntry("covered_fraction", covered_fraction, false, c.min_covered_fraction)}}};
   if (covered_fraction < c.min_covered_fraction) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "no_detections";
+    SetVerdict(result, Verdict::kFlag, "no_detections");
   } else if (fraction < c.min_interaction_fraction) {
-    result.verdict = Verdict::kReject;
-    result.reason = "no_interaction";
+    SetVerdict(result, Verdict::kReject, "no_interaction");
   }
   return result;
 }

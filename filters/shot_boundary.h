@@ -1,7 +1,7 @@
 // Shot boundaries and fades, scored as PySceneDetect scores them.
 //
 // Per-frame signals (computed once, in the analysis pass, on frames
-// downscaled as PySceneDetect downscales them; see ingest/video_decoder.h):
+// downscaled as PySceneDetect downscales them; see video/video_decoder.h):
 //   - delta_hue/sat/lum: mean |difference| of each HSV channel (OpenCV 8-bit
 //     HSV, hue 0..179) against the previous frame (ContentDetector).
 //   - hash_distance: Hamming distance / size^2 between perceptual hashes of

@@ -78,6 +78,12 @@ class MeasuredVerdictStage : public Stage {
   Rule rule_;
 };
 
+// A verdict other than pass, with its reason code.
+inline void SetVerdict(StageResult& result, Verdict verdict, std::string reason) {
+  result.verdict = verdict;
+  result.reason = std::move(reason);
+}
+
 // Number read from a JSON object with a default.
 double NumberOr(const Json& object, const std::string& key, double fallback);
 

@@ -9,7 +9,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
-#include "ingest/probe.h"
+#include "video/probe.h"
 #include "pipeline/noop_stage.h"
 #include "retarget/kinematic_stage.h"
 
@@ -43,8 +43,8 @@ StageEntry Entry(const std::string& name, std::string summary, bool in_default_p
 const std::vector<StageEntry>& StageTable() {
   using namespace filters;
   static const std::vector<StageEntry> kTable = {
-      Entry<ingest::ProbeStage, ingest::ProbeConfig>(
-          ingest::kProbeStageName,
+      Entry<video::ProbeStage, video::ProbeConfig>(
+          video::kProbeStageName,
           "size, fps, frame count, rotation and codec; rejects spans outside the video", true),
       Entry<ExternalDetectorStage, ExternalDetectorConfig>(
           kExternalDetectorStageName,

@@ -8,11 +8,8 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
+#include "core/data_dirs.h"
 #include "core/error.h"
-
-#ifndef DOASIDO_RETARGET_MODELS
-#define DOASIDO_RETARGET_MODELS "retarget/models"
-#endif
 
 namespace doasido::retarget {
 namespace {
@@ -194,7 +191,7 @@ std::filesystem::path FindModelFile(const std::string& model, const std::filesys
 
 }  // namespace
 
-std::filesystem::path BuiltinModelsDir() { return DOASIDO_RETARGET_MODELS; }
+std::filesystem::path BuiltinModelsDir() { return DataDir("models", "DOASIDO_MODELS_DIR"); }
 
 Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
                           const std::filesystem::path& robots_dir) {

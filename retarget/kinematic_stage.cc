@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/data_dirs.h"
 #include "core/error.h"
 #include "recon/bundle.h"
 #include "retarget/embodiment.h"
@@ -42,7 +43,7 @@ Mat3 UpToZ(const Vec3& up_camera) {
 }  // namespace
 
 std::string DefaultRobotsDir() {
-  const std::filesystem::path p = BuiltinModelsDir() / "../../../shared/data/robots";
+  const std::filesystem::path p = DataDir("robots", "DOASIDO_ROBOTS_DIR");
   return std::filesystem::exists(p) ? std::filesystem::weakly_canonical(p).string() : std::string();
 }
 

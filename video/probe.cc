@@ -1,4 +1,4 @@
-#include "ingest/probe.h"
+#include "video/probe.h"
 
 #include <cmath>
 
@@ -7,7 +7,7 @@
 #include "core/config_check.h"
 #include "core/error.h"
 
-namespace doasido::ingest {
+namespace doasido::video {
 
 void CheckConfig(const ProbeConfig& c, const std::string& section) {
   RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
@@ -102,4 +102,4 @@ StageResult ProbeStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::ingest
+}  // namespace doasido::video

@@ -8,7 +8,7 @@
 #include "db/records.h"
 #include "db/stage.h"
 
-namespace doasido::ingest {
+namespace doasido::video {
 
 inline constexpr const char* kProbeStageName = "probe";
 
@@ -46,4 +46,4 @@ class ProbeStage : public Stage {
   ProbeConfig config_;
 };
 
-}  // namespace doasido::ingest
+}  // namespace doasido::video

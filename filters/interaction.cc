@@ -15,13 +15,6 @@
 namespace doasido::filters {
 namespace {
 
-std::vector<int> IntArray(const Json& j, const char* key) {
-  if (!j.contains(key) || !j.at(key).is_array()) {
-    throw Error("bad_measurements", "missing per-frame array", {.field = key});
-  }
-  return j.at(key).get<std::vector<int>>();
-}
-
 // Gap between two boxes in pixels (0 when they overlap).
 double BoxGap(const cv::Rect2d& a, const cv::Rect2d& b) {
   const double dx = std::max({0.0, b.x - (a.x + a.width), a.x - (b.x + b.width)});

@@ -9,16 +9,6 @@
 #include "filters/stage_support.h"
 
 namespace doasido::filters {
-namespace {
-
-std::vector<int> IntArray(const Json& j, const char* key) {
-  if (!j.contains(key) || !j.at(key).is_array()) {
-    throw Error("bad_measurements", "missing per-frame array", {.field = key});
-  }
-  return j.at(key).get<std::vector<int>>();
-}
-
-}  // namespace
 
 Json ToJson(const OutOfFrameSignals& s) {
   return Json{{"covered", s.covered},

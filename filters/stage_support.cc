@@ -64,6 +64,13 @@ Json ScoreEntry(const std::string& name, double value, bool rejects_above, doubl
   return entry;
 }
 
+std::vector<int> IntArray(const Json& j, const char* key) {
+  if (!j.contains(key) || !j.at(key).is_array()) {
+    throw Error("bad_measurements", "missing per-frame array", {.field = key});
+  }
+  return j.at(key).get<std::vector<int>>();
+}
+
 double NumberOr(const Json& object, const std::string& key, double fallback) {
   if (!object.is_object()) return fallback;
   auto it = object.find(key);

@@ -84,6 +84,10 @@ inline void SetVerdict(StageResult& result, Verdict verdict, std::string reason)
   result.reason = std::move(reason);
 }
 
+// The per-frame integer array `key` of stored signals. Throws
+// Error("bad_measurements") naming the key when it is missing.
+std::vector<int> IntArray(const Json& signals, const char* key);
+
 // Number read from a JSON object with a default.
 double NumberOr(const Json& object, const std::string& key, double fallback);
 

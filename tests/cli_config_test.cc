@@ -95,7 +95,7 @@ INSTANTIATE_TEST_SUITE_P(
                   "[retarget_kinematic.scene.decomposition]\nmin_solidity = 2\n",
                   "retarget_kinematic.scene.decomposition.min_solidity",
                   "value 2 is out of range [0, 1]"}),
-    [](const ::testing::TestParamInfo<BadConfig>& info) { return info.param.name; });
+    [](const ::testing::TestParamInfo<BadConfig>& p) { return p.param.name; });
 
 TEST(CliConfig, AGoodFileRunsAndDefaultsPass) {
   TempDir dir;

@@ -55,24 +55,38 @@ class CliConfigTest : public ::testing::TestWithParam<BadConfig> {
   std::vector<std::string> before_;
 };
 
-TEST_P(CliConfigTest, RefusedBeforeAnyClipIsClaimed) {
+// Checks that `command` refuses `bad` (written to a file) with exit code 2
+// and a message naming the file, section.key and the reason, and leaves the
+// queue as it was.
+void ExpectRefused(const std::vector<std::string>& command, const BadConfig& bad,
+                   const std::filesystem::path& config, const std::filesystem::path& db,
+                   const std::vector<std::string>& before) {
+  const auto r = RunDoasido(command);
+  EXPECT_EQ(r.exit_code, 2) << command[0] << ": " << r.out << r.err;
+  EXPECT_THAT(r.err, HasSubstr(config.string())) << command[0];
+  EXPECT_THAT(r.err, HasSubstr("field " + bad.field)) << command[0];
+  EXPECT_THAT(r.err, HasSubstr(bad.detail)) << command[0];
+  EXPECT_EQ(QueueState(db), before) << command[0] << " changed the queue";
+}
+
+TEST_P(CliConfigTest, RunRefusesItBeforeAnyClipIsClaimed) {
   const BadConfig& bad = GetParam();
   const auto config = dir_ / bad.file;
   WriteFile(config, bad.text);
-  for (const std::vector<std::string>& command :
-       {std::vector<std::string>{"run", "--db", db_.string(), "--config", config.string()},
-        std::vector<std::string>{"worker", "--db", db_.string(), "--until-empty", "--config",
-                                 config.string()},
-        std::vector<std::string>{"rethreshold", "--db", db_.string(), "--config",
-                                 config.string()},
-        std::vector<std::string>{"init", "--db", db_.string(), "--config", config.string()}}) {
-    const auto r = RunDoasido(command);
-    EXPECT_EQ(r.exit_code, 2) << command[0] << ": " << r.out << r.err;
-    EXPECT_THAT(r.err, HasSubstr(config.string())) << command[0];
-    EXPECT_THAT(r.err, HasSubstr("field " + bad.field)) << command[0];
-    EXPECT_THAT(r.err, HasSubstr(bad.detail)) << command[0];
-    EXPECT_EQ(QueueState(db_), before_) << command[0] << " changed the queue";
-  }
+  ExpectRefused({"run", "--db", db_.string(), "--config", config.string()}, bad, config, db_,
+                before_);
+}
+
+// The other commands that take --config refuse it the same way.
+TEST_F(CliConfigTest, WorkerRethresholdAndInitRefuseItToo) {
+  const BadConfig bad{"OutOfRange", "strict.toml", "[activity]\nmin_active_fraction = -0.3\n",
+                      "activity.min_active_fraction", "value -0.3 is out of range [0, 1]"};
+  const auto config = dir_ / bad.file;
+  WriteFile(config, bad.text);
+  const std::string c = config.string(), d = db_.string();
+  ExpectRefused({"worker", "--db", d, "--until-empty", "--config", c}, bad, config, db_, before_);
+  ExpectRefused({"rethreshold", "--db", d, "--config", c}, bad, config, db_, before_);
+  ExpectRefused({"init", "--db", d, "--config", c}, bad, config, db_, before_);
 }
 
 INSTANTIATE_TEST_SUITE_P(

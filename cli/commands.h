@@ -42,5 +42,6 @@ void AddRetargetCommand(CLI::App& app);
 void AddRethresholdCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
+void AddHandCommand(CLI::App& app);
 
 }  // namespace doasido::cli

@@ -118,8 +118,8 @@ ClipRecord Database::GetClip(ClipId id) {
 
 VideoRecord Database::GetVideo(VideoId id) {
   auto& q = Prepare(
-      "SELECT id, path, width, height, fps, frame_count, duration_s, variable_frame_rate,"
-      " rotation_deg, codec, probed_at FROM videos WHERE id = ?");
+      "SELECT id, COALESCE(local_path, path), width, height, fps, frame_count, duration_s,"
+      " variable_frame_rate, rotation_deg, codec, probed_at FROM videos WHERE id = ?");
   q.Bind(1, id);
   if (!q.Step()) {
     q.Reset();

@@ -122,6 +122,9 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
         .Run();
   }
   if (!result.detections.empty()) AddDetections(claim.clip_id, result.detections);
+  if (result.measurements.contains(kVideoFileKey)) {
+    RecordVideoFile(claim.clip_id, result.measurements.at(kVideoFileKey));
+  }
   if (result.video_info) {
     const auto& v = *result.video_info;
     Prepare("UPDATE videos SET width = ?, height = ?, fps = ?, frame_count = ?, duration_s = ?,"

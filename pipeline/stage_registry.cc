@@ -9,6 +9,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "ingest/download_stage.h"
 #include "video/probe.h"
 #include "pipeline/noop_stage.h"
 #include "retarget/kinematic_stage.h"
@@ -43,6 +44,11 @@ StageEntry Entry(const std::string& name, std::string summary, bool in_default_p
 const std::vector<StageEntry>& StageTable() {
   using namespace filters;
   static const std::vector<StageEntry> kTable = {
+      Entry<ingest::DownloadStage, ingest::DownloadConfig>(
+          ingest::kDownloadStageName,
+          "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
+          "template for sites); local videos pass at once",
+          true),
       Entry<video::ProbeStage, video::ProbeConfig>(
           video::kProbeStageName,
           "size, fps, frame count, rotation and codec; rejects spans outside the video", true),

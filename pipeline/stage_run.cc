@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/log.h"
+#include "core/permanent_error.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -19,6 +20,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
                                const std::string& worker, const std::string& param_hash,
                                int max_attempts, const std::function<void()>& in_same_commit) {
   StageRunReport report;
+  bool permanent = false;  // a retry cannot fix it: fail now
   report.clip = std::to_string(claim.clip_id);
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -26,6 +28,9 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
     report.clip = ClipLabel(context);
     std::filesystem::create_directories(context.artifact_dir);
     report.result = stage.Run(context);
+  } catch (const PermanentError& e) {
+    report.error = e.what();
+    permanent = true;
   } catch (const Error& e) {
     report.error = e.what();
   } catch (const std::exception& e) {
@@ -37,7 +42,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
   if (!report.error.empty()) {
     spdlog::warn("{} on clip {} (attempt {}): {}", claim.stage, report.clip, claim.attempts,
                  report.error);
-    db.Fail(claim, worker, report.error, max_attempts);
+    db.Fail(claim, worker, report.error, permanent ? claim.attempts : max_attempts);
     report.outcome = RunOutcome::kFailed;
   } else if (db.Complete(claim, worker, param_hash, report.result, report.seconds)) {
     spdlog::debug("{} {} -> {} {}", claim.stage, report.clip, ToString(report.result.verdict),

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const doasido::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
+    return e.code() == "bad_config" ? 2 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

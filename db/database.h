@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "db/records.h"
@@ -33,6 +34,14 @@ class Statement;
 
 enum class RunState { kPending, kRunning, kDone, kFailed };
 const char* ToString(RunState s);
+// Inverse of ToString; throws Error("database") for any other text.
+RunState ParseRunState(std::string_view text);
+// A state equals its stored name ("pending", "running", "done", "failed").
+inline bool operator==(RunState state, std::string_view text) { return text == ToString(state); }
+
+// The verdict-history source of a person's decision (the others are "stage"
+// and "rethreshold").
+inline constexpr const char* kHumanVerdictSource = "human";
 
 // A stage run handed to a worker.
 struct Claim {
@@ -47,7 +56,7 @@ struct StageRunRow {
   ClipId clip_id = 0;
   std::string external_id;
   std::string stage;
-  std::string state;
+  RunState state = RunState::kPending;
   int attempts = 0;
   std::string verdict;  // empty until decided
   std::string reason;

@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/data_dirs.h"
 #include "core/error.h"
 #include "recon/bundle.h"
 #include "recon/bundle_location.h"
@@ -113,17 +114,10 @@ StageInput LoadInput(const ClipContext& context, const std::string& clip) {
   }
 }
 
-double Percentile(std::vector<double> v, double q) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
-
 }  // namespace
 
 std::string DefaultRobotsDir() {
-  const std::filesystem::path p = BuiltinModelsDir() / "../../../shared/data/robots";
+  const std::filesystem::path p = DataDir("robots", "DOASIDO_ROBOTS_DIR");
   return std::filesystem::exists(p) ? std::filesystem::weakly_canonical(p).string() : std::string();
 }
 
@@ -172,22 +166,15 @@ StageResult KinematicStage::Run(const ClipContext& context) {
   result.artifacts.emplace_back("trajectory", "trajectory.json");
   result.artifacts.emplace_back("trajectory_csv", "trajectory.csv");
 
-  double sum = 0;
-  int n = 0;
-  for (double e : trajectory.fingertip_error) {
-    if (std::isfinite(e)) {
-      sum += e;
-      ++n;
-    }
-  }
+  const FingertipErrorStats error = SummarizeFingertipError(trajectory.fingertip_error);
   Json& m = result.measurements;
   m["bundle"] = in.source;
   m["embodiment"] = trajectory.embodiment;
   m["frames"] = frames;
-  m["valid_frames"] = n;
+  m["valid_frames"] = error.frames;
   m["scale"] = trajectory.scale;
-  m["fingertip_error_mean"] = n ? sum / n : 0.0;
-  m["fingertip_error_p95"] = Percentile(trajectory.fingertip_error, 0.95);
+  m["fingertip_error_mean"] = error.mean;
+  m["fingertip_error_p95"] = error.p95;
   m["compat_changes"] = model.changes.size();
   if (auto redecided = Redecide(m)) {
     result.verdict = redecided->verdict;

@@ -23,6 +23,7 @@
 
 #include "core/config.h"
 #include "db/stage.h"
+#include "retarget/config_checks.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/scene_builder.h"
 
@@ -40,8 +41,12 @@ struct KinematicStageConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, robots_dir,
                                                 flag_fingertip_error, kinematic, scene)
+// Also checks the nested kinematic and scene tables (retarget/config_checks.h).
+void CheckConfig(const KinematicStageConfig& c, const std::string& section);
 
-// ../shared/data/robots beside the source checkout when it exists, else "".
+// The folder of third-party robot models and descriptions: $DOASIDO_ROBOTS_DIR,
+// else share/doasido/robots beside the executable's folder (the build links
+// it to ../shared/data/robots when that exists), when it exists; else "".
 std::string DefaultRobotsDir();
 
 class KinematicStage : public Stage {

@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <numbers>
 
-#include "cli/stage_registry.h"
+#include "pipeline/stage_registry.h"
 #include "db/database.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
@@ -105,7 +105,7 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
   ASSERT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()})
                 .exit_code, 0);
   Database db(db_path);
-  auto probe = cli::MakeStage("probe", Json::object());
+  auto probe = pipeline::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
     const StageResult result = probe->Run(db.LoadContext(claim->clip_id, "probe"));
     ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));

@@ -8,6 +8,7 @@
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
 #include "ingest/probe.h"
+#include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::cli {
@@ -48,6 +49,11 @@ const std::vector<StageEntry>& StageTable() {
       {retarget::kKinematicStageName,
        "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
        Maker<retarget::KinematicStage, retarget::KinematicStageConfig>(retarget::kKinematicStageName)},
+      {retarget::kRetargetStageName,
+       "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed 3.2)",
+       false,
+       Maker<retarget::DynamicRetargetStage, retarget::DynamicRetargetConfig>(
+           retarget::kRetargetStageName)},
       {"noop", "does nothing for work_ms milliseconds (queue diagnostics)", false,
        Maker<NoopStage, NoopConfig>("noop")},
   };

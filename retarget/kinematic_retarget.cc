@@ -349,6 +349,12 @@ void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& p
   for (const Pose& p : t.object_poses) {
     j["object_poses"].push_back({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
   }
+  if (!t.ctrl.empty()) {
+    j["ctrl_names"] = t.ctrl_names;
+    j["ctrl"] = Json::array();
+    for (const auto& c : t.ctrl) j["ctrl"].push_back(std::vector<double>(c.data(), c.data() + c.size()));
+  }
+  if (!t.metrics.empty()) j["metrics"] = t.metrics;
   std::ofstream out(path);
   out << j.dump(1);
   if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
@@ -378,6 +384,14 @@ HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path) {
                                      {.file = path.string(), .field = "object_poses"});
       t.object_poses.push_back({Quat(v[3], v[4], v[5], v[6]), Vec3(v[0], v[1], v[2])});
     }
+    if (j.contains("ctrl")) {
+      t.ctrl_names = j.at("ctrl_names").get<std::vector<std::string>>();
+      for (const auto& row : j.at("ctrl")) {
+        const auto v = row.get<std::vector<double>>();
+        t.ctrl.push_back(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+      }
+    }
+    if (j.contains("metrics")) t.metrics = j.at("metrics");
   } catch (const nlohmann::json::exception& e) {
     throw Error("bad_trajectory", e.what(), {.file = path.string()});
   }

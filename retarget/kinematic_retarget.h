@@ -61,10 +61,15 @@ struct HandTrajectory {
   std::vector<bool> valid;                 // (T) human hand seen; else the pose is held
   std::vector<double> fingertip_error;     // (T) mean fingertip distance to target, m
   std::vector<Pose> object_poses;          // (T) object->world, or empty
+  // Written by the dynamics-aware `retarget` stage; empty from retarget_kinematic.
+  std::vector<std::string> ctrl_names;     // (nu) actuator names
+  std::vector<Eigen::VectorXd> ctrl;       // (T, nu) position targets, or empty
+  Json metrics = Json::object();           // e.g. {"e_pos", "e_rot", "success"}
 };
 
 // JSON: {"embodiment", "fps", "scale", "qpos_names", "qpos": [[...]], "valid",
-// "fingertip_error", "object_poses": [[tx,ty,tz,qw,qx,qy,qz]]}. Throws Error("io").
+// "fingertip_error", "object_poses": [[tx,ty,tz,qw,qx,qy,qz]]} plus, when
+// present, "ctrl_names", "ctrl": [[...]] and "metrics". Throws Error("io").
 void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path);
 // CSV: frame,time,valid,fingertip_error,<qpos names...>[,obj_tx..obj_qz]; one row a frame.
 void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path);

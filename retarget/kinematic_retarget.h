@@ -7,8 +7,9 @@
 // over q within the joint limits, where x_i = wrist + s (k_i - wrist) are
 // the human keypoints scaled about the wrist by the human->robot scale s,
 // and p_i(q) come from MuJoCo forward kinematics with Jacobians from mj_jac.
-// The solver is Levenberg-Marquardt with an active set for the joint limits
-// (a joint at a limit whose gradient pushes outward is held). Each frame is
+// The solver is Ceres' Levenberg-Marquardt with analytic Jacobians from
+// mj_jac, the joint limits as parameter bounds and a Huber loss on each
+// point (robust_loss_scale, in units of sigma). Each frame is
 // solved from the previous frame's answer (warm start) and from `restarts`
 // random configurations (wrist from a Kabsch fit of the palm points, fingers
 // uniform in their ranges); the lowest objective wins, which avoids the local
@@ -46,10 +47,11 @@ struct KinematicConfig {
   unsigned seed = 0;             // random starts
   double wrist_noise_rad = 0.3;  // spread of random starts' wrist rotation
   double wrist_noise_m = 0.01;   // and translation
+  double robust_loss_scale = 2;  // Huber threshold per point, in sigma; 0 = plain least squares
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_iterations, sigma,
                                                 smooth_weight, use_intermediate, scale, seed,
-                                                wrist_noise_rad, wrist_noise_m)
+                                                wrist_noise_rad, wrist_noise_m, robust_loss_scale)
 
 // The reference the dynamics-aware optimiser tracks.
 struct HandTrajectory {
@@ -123,6 +125,7 @@ class KinematicRetargeter {
                    Eigen::MatrixXd* jacobian);
   Eigen::VectorXd Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                            const Eigen::VectorXd* previous, double* objective);
+  class PointEvaluator;
   Eigen::VectorXd KabschStart(const std::vector<Vec3>& targets) const;
   void Clamp(Eigen::VectorXd& q) const;
 

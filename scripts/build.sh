@@ -5,7 +5,15 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "$@" >/dev/null
+# ccache, when installed (scripts/setup.sh installs it), makes rebuilds and
+# fresh clones cheap; paths below the checkout's parent are hashed relative
+# to the build folder, so two clones share the cache.
+launcher=()
+if command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$(cd .. && pwd)}
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "${launcher[@]}" "$@" >/dev/null
 # BUILD_TARGETS (space-separated) limits the build, e.g. BUILD_TARGETS=doasido.
 targets=()
 for t in ${BUILD_TARGETS:-}; do targets+=(--target "$t"); done

@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git ccache
   libsqlite3-dev sqlite3
   libopencv-dev ffmpeg libavcodec-dev libavformat-dev libswscale-dev libavutil-dev
   libeigen3-dev libceres-dev

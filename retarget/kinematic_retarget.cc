@@ -276,8 +276,9 @@ class SmoothCost : public ceres::CostFunction {
 }  // namespace
 
 // Ceres trust-region Levenberg-Marquardt: one residual block per matched
-// point under a Huber loss (a keypoint far off, e.g. a mis-detected finger,
-// pulls linearly, not quadratically), the smoothness block without one, and
+// point, under a Huber loss when robust_loss_scale > 0 (a keypoint far off,
+// e.g. a mis-detected finger, then pulls linearly, not quadratically), the
+// smoothness block without one, and
 // the joint limits as parameter bounds. The returned objective is the plain
 // least-squares one (Objective), so starts compare as before.
 Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,

@@ -39,5 +39,7 @@ void AddRetargetCommand(CLI::App& app);
 void AddRethresholdCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
+void AddHandCommand(CLI::App& app);
+void AddDeployCommand(CLI::App& app);
 
 }  // namespace doasido::cli

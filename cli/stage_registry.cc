@@ -7,8 +7,14 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "ingest/download_stage.h"
 #include "ingest/probe.h"
+<<<<<<< HEAD
 #include "retarget/dynamic_stage.h"
+=======
+#include "recon/bundle_stage.h"
+#include "recon/recon_stage.h"
+>>>>>>> main
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::cli {
@@ -27,6 +33,10 @@ std::function<std::unique_ptr<Stage>(const Json&)> Maker(const std::string& sect
 
 const std::vector<StageEntry>& StageTable() {
   static const std::vector<StageEntry> kTable = {
+      {ingest::kDownloadStageName,
+       "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
+       "template for sites); local videos pass at once",
+       true, Maker<ingest::DownloadStage, ingest::DownloadConfig>(ingest::kDownloadStageName)},
       {"probe", "size, fps, frame count, rotation and codec; rejects spans outside the video",
        true, Maker<ingest::ProbeStage, ingest::ProbeConfig>("probe")},
       {"hand_object_detector",
@@ -46,8 +56,14 @@ const std::vector<StageEntry>& StageTable() {
        Maker<filters::ActivityStage, filters::ActivityConfig>("activity"), true},
       {"camera_motion", "rejects (or flags) clips whose camera pans, shakes or zooms", true,
        Maker<filters::CameraMotionStage, filters::CameraMotionConfig>("camera_motion"), true},
+      {recon::kBundleStageName,
+       "runs the model command that writes the clip bundle (or checks the bundle the list names)",
+       false, Maker<recon::BundleStage, recon::BundleStageConfig>(recon::kBundleStageName)},
+      {recon::kReconStageName,
+       "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction", false,
+       Maker<recon::ReconStage, recon::ReconStageConfig>(recon::kReconStageName)},
       {retarget::kKinematicStageName,
-       "fingertip retargeting of the clip bundle's right hand onto a robot hand (MuJoCo)", false,
+       "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)", false,
        Maker<retarget::KinematicStage, retarget::KinematicStageConfig>(retarget::kKinematicStageName)},
       {retarget::kRetargetStageName,
        "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed 3.2)",

@@ -313,6 +313,53 @@ class Database {
   // another rater, or its item already has all its ratings.
   bool AnswerStudyTrial(std::int64_t trial_id, const std::string& rater, const std::string& side);
 
+  // ---- Downloads ------------------------------------------------------------
+  // (db/database_downloads.cc, schema v4) Videos listed by URL and fetched
+  // into the database's media folder by the download stage.
+
+  // The measurements member by which a stage hands over the local file of
+  // the clip's video: {"path": absolute path, "size_bytes": n, "sha256": hex}.
+  // Complete() records it on the clip's videos row (RecordVideoFile); from
+  // then on GetVideo, and so every later stage's ClipContext, gives the local
+  // file instead of the URL.
+  static constexpr const char* kVideoFileKey = "video_file";
+  struct VideoFile {
+    std::string url;         // the video as listed
+    std::string local_path;  // absolute
+    std::int64_t size_bytes = 0;
+    std::string sha256;
+    double downloaded_at = 0;
+  };
+  // Records `file` (a kVideoFileKey member) on the videos row of `clip`.
+  // Throws Error("bad_measurements") when it lacks path, size or checksum.
+  void RecordVideoFile(ClipId clip, const Json& file);
+  // The downloaded file of a video, or nullopt when it has none.
+  std::optional<VideoFile> GetVideoFile(VideoId video);
+  // Videos with a downloaded file.
+  std::int64_t CountDownloadedVideos();
+
+  // ---- Trajectory verification ----------------------------------------------
+  // (db/database_verify.cc) Robot trajectories waiting for a person to
+  // verify them in the review app (docs/review.md). "Verified" is the
+  // trajectory stage's verdict pass set by a person (source "human"), which
+  // `dataset create --select verified` selects.
+  struct TrajectoryRun {
+    ClipId clip_id = 0;
+    std::string external_id;
+    std::string stage;
+    std::string verdict;  // pass | flag
+    std::string reason;
+  };
+  // Done runs of `stages` with verdict pass or flag whose latest verdict was
+  // not set by a person, in clip order.
+  std::vector<TrajectoryRun> ListTrajectoriesToVerify(const std::vector<std::string>& stages);
+  // A person's verification, in one transaction: a `reviews` row, the human
+  // verdict (accept -> pass with reason "", reject -> reject with `reason`)
+  // and a "review" event. Throws Error("not_verifiable") and writes nothing
+  // unless the run is done with verdict pass or flag.
+  void RecordVerification(ClipId clip, const std::string& stage, const std::string& reviewer,
+                          bool accept, const std::string& reason);
+
  private:
   db::Statement& Prepare(const std::string& sql);
   // The first column of the first row of a query, or 0 without rows.

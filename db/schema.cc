@@ -166,6 +166,15 @@ UPDATE reviews SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinemati
 UPDATE artifacts SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
 UPDATE events SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
 )sql",
+      // 4: videos named by URL are downloaded into <db folder>/media by the
+      // download stage; the row keeps the URL (path) and gains the local
+      // file, its size and SHA-256.
+      R"sql(
+ALTER TABLE videos ADD COLUMN local_path TEXT;    -- relative to the database folder
+ALTER TABLE videos ADD COLUMN size_bytes INTEGER;
+ALTER TABLE videos ADD COLUMN sha256 TEXT;
+ALTER TABLE videos ADD COLUMN downloaded_at REAL;
+)sql",
   };
   return kMigrations;
 }

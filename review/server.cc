@@ -17,6 +17,7 @@
 #include "review/http_range.h"
 #include "review/pages.h"
 #include "review/study.h"
+#include "review/verify_routes.h"
 
 namespace doasido::review {
 namespace {
@@ -485,6 +486,12 @@ void ReviewServer::Impl::Routes() {
     });
     if (!path.empty()) ServeFile(req, res, path);
   });
+
+  AddVerifyRoutes(http, {.with_db = [this](httplib::Response& res,
+                                           const std::function<void(Database&)>& fn) { WithDb(res, fn); },
+                         .make_nonce = [] { return RandomHex(16); },
+                         .token = token,
+                         .reviewer = options.reviewer});
 }
 
 ReviewServer::ReviewServer(const std::filesystem::path& db_path, const ServeOptions& options)

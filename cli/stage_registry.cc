@@ -9,12 +9,9 @@
 #include "filters/shot_boundary.h"
 #include "ingest/download_stage.h"
 #include "ingest/probe.h"
-<<<<<<< HEAD
-#include "retarget/dynamic_stage.h"
-=======
 #include "recon/bundle_stage.h"
 #include "recon/recon_stage.h"
->>>>>>> main
+#include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::cli {

@@ -16,7 +16,7 @@ DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : confi
 StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   const std::string clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                             : context.clip.external_id;
-  const std::filesystem::path dir = context.artifact_dir.parent_path() / kReconArtifactFolder;
+  const std::filesystem::path dir = context.artifact_dir.parent_path() / recon::kReconStageName;
   recon::Reconstruction r;
   TriMesh mesh;
   try {

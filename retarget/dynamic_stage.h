@@ -22,15 +22,13 @@
 #include <string>
 
 #include "db/stage.h"
+#include "recon/recon_stage.h"
 #include "retarget/dynamic_retarget.h"
 
 namespace doasido::retarget {
 
 // The stage's name: its queue name, its config section and its artifact folder.
 inline constexpr const char* kRetargetStageName = "retarget";
-// The folder beside this stage's holding the reconstruction (the `recon`
-// stage's artifact folder; recon/reconstruction.h).
-inline constexpr const char* kReconArtifactFolder = "recon";
 
 // Reason codes of the stage's verdicts.
 inline constexpr const char* kReasonTrackingFailed = "tracking_failed";

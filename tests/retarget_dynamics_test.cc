@@ -230,7 +230,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   recon::Reconstruction r = Reference();
   SaveObj(Cylinder(), root / "cylinder.obj");
   r.object_mesh = root / "cylinder.obj";
-  recon::WriteReconstruction(r, root / "artifacts/9" / kReconArtifactFolder);
+  recon::WriteReconstruction(r, root / "artifacts/9" / recon::kReconStageName);
   ClipContext context;
   context.clip.id = 9;
   context.clip.external_id = "synthetic9";
@@ -260,7 +260,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
 
   // Without an object mesh there is nothing to track.
   r.object_mesh.clear();
-  recon::WriteReconstruction(r, root / "artifacts/10" / kReconArtifactFolder);
+  recon::WriteReconstruction(r, root / "artifacts/10" / recon::kReconStageName);
   context.artifact_dir = root / "artifacts/10" / kRetargetStageName;
   const StageResult none = stage.Run(context);
   EXPECT_EQ(none.verdict, Verdict::kReject);

@@ -18,7 +18,7 @@ TrajectoryFiles FilesBeside(const std::filesystem::path& trajectory_json) {
 
 std::optional<TrajectoryFiles> FindTrajectoryFiles(const Database& db, ClipId clip) {
   const std::filesystem::path kinematic = db.ArtifactDir(clip, retarget::kKinematicStageName);
-  for (const char* stage : {kDynamicsStageName, retarget::kKinematicStageName}) {
+  for (const char* stage : {retarget::kRetargetStageName, retarget::kKinematicStageName}) {
     const std::filesystem::path dir = db.ArtifactDir(clip, stage);
     if (!std::filesystem::exists(dir / "trajectory.json")) continue;
     TrajectoryFiles f = FilesBeside(dir / "trajectory.json");

@@ -10,12 +10,9 @@
 #include <string>
 
 #include "db/database.h"
+#include "retarget/dynamic_stage.h"
 
 namespace doasido::deploy {
-
-// The dynamics stage's queue and artifact name. Its own header (retarget/)
-// is written in parallel; the lead points this at that constant on merge.
-inline constexpr const char* kDynamicsStageName = "retarget";
 
 struct TrajectoryFiles {
   std::string stage;                 // the stage whose trajectory this is

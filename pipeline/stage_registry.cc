@@ -14,6 +14,7 @@
 #include "pipeline/noop_stage.h"
 #include "recon/bundle_stage.h"
 #include "recon/recon_stage.h"
+#include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::pipeline {
@@ -86,6 +87,11 @@ const std::vector<StageEntry>& StageTable() {
       Entry<retarget::KinematicStage, retarget::KinematicStageConfig>(
           retarget::kKinematicStageName,
           "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)",
+          false),
+      Entry<retarget::DynamicRetargetStage, retarget::DynamicRetargetConfig>(
+          retarget::kRetargetStageName,
+          "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed "
+          "3.2)",
           false),
       Entry<NoopStage, NoopConfig>(kNoopStageName,
                                    "does nothing for work_ms milliseconds (queue diagnostics)",

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <sstream>
 
 #include <Eigen/Cholesky>
+#include <ceres/ceres.h>
 #include <Eigen/SVD>
 #include <spdlog/spdlog.h>
 
@@ -181,56 +183,177 @@ double KinematicRetargeter::Objective(const Eigen::VectorXd& q, const std::vecto
   return r.squaredNorm();
 }
 
-Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
+// Forward kinematics and point Jacobians (mj_jac) of every matched point at
+// one q, computed once however many residual blocks ask for it.
+class KinematicRetargeter::PointEvaluator {
+ public:
+  PointEvaluator(const KinematicRetargeter& r, const std::vector<Vec3>& targets)
+      : r_(r), targets_(targets), n_(static_cast<int>(r.qpos_adr_.size())),
+        jacp_(3 * r.hand_.model->nv), residual_(r.active_.size()), jacobian_(r.active_.size()) {}
+
+  // Residual (3) and, when `jacobian` is set, its row-major 3 x n Jacobian
+  // of matched point `i` (index into active_) at q.
+  void Evaluate(const double* q, int i, double* residual, double* jacobian) {
+    if (!valid_ || !std::equal(q, q + n_, last_.begin())) Update(q);
+    std::copy(residual_[i].data(), residual_[i].data() + 3, residual);
+    if (jacobian) std::copy(jacobian_[i].data(), jacobian_[i].data() + 3 * n_, jacobian);
+  }
+
+ private:
+  void Update(const double* q) {
+    const mjModel* m = r_.hand_.model.get();
+    mjData* d = r_.data_.get();
+    for (int k = 0; k < n_; ++k) d->qpos[r_.qpos_adr_[k]] = q[k];
+    mj_kinematics(m, d);
+    mj_comPos(m, d);
+    for (size_t a = 0; a < r_.active_.size(); ++a) {
+      const ModelPoint& p = r_.hand_.points[r_.active_[a]];
+      const double w = std::sqrt(p.weight) / r_.config_.sigma;
+      const Vec3 x = PointPosition(m, d, p);
+      residual_[a] = w * (x - targets_[r_.active_[a]]);
+      mj_jac(m, d, jacp_.data(), nullptr, x.data(), p.site >= 0 ? m->site_bodyid[p.site] : p.body);
+      jacobian_[a].resize(3 * n_);
+      for (int row = 0; row < 3; ++row) {
+        for (int k = 0; k < n_; ++k) jacobian_[a][row * n_ + k] = w * jacp_[row * m->nv + r_.dof_adr_[k]];
+      }
+    }
+    last_.assign(q, q + n_);
+    valid_ = true;
+  }
+
+  const KinematicRetargeter& r_;
+  const std::vector<Vec3>& targets_;
+  int n_;
+  std::vector<mjtNum> jacp_;
+  std::vector<Vec3> residual_;
+  std::vector<std::vector<double>> jacobian_;
+  std::vector<double> last_;
+  bool valid_ = false;
+};
+
+namespace {
+
+// One matched point's residual block.
+class PointCost : public ceres::CostFunction {
+ public:
+  template <typename Evaluator>
+  PointCost(Evaluator* e, int i, int n) : evaluate_([e, i](const double* q, double* r, double* j) {
+      e->Evaluate(q, i, r, j);
+    }) {
+    set_num_residuals(3);
+    mutable_parameter_block_sizes()->push_back(n);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    evaluate_(parameters[0], residuals, jacobians ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  std::function<void(const double*, double*, double*)> evaluate_;
+};
+
+// sqrt(lambda) (q - previous): the smoothness term.
+class SmoothCost : public ceres::CostFunction {
+ public:
+  SmoothCost(const Eigen::VectorXd& previous, double weight) : previous_(previous), w_(weight) {
+    set_num_residuals(static_cast<int>(previous.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(previous.size()));
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int n = static_cast<int>(previous_.size());
+    for (int k = 0; k < n; ++k) residuals[k] = w_ * (parameters[0][k] - previous_[k]);
+    if (jacobians && jacobians[0]) {
+      std::fill(jacobians[0], jacobians[0] + n * n, 0.0);
+      for (int k = 0; k < n; ++k) jacobians[0][k * n + k] = w_;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::VectorXd previous_;
+  double w_;
+};
+
+}  // namespace
+
+// Ceres trust-region Levenberg-Marquardt: one residual block per matched
+// point, under a Huber loss when robust_loss_scale > 0 (a keypoint far off,
+// e.g. a mis-detected finger, then pulls linearly, not quadratically), the
+// smoothness block without one, and
+// the joint limits as parameter bounds. The returned objective is the plain
+// least-squares one (Objective), so starts compare as before.
+Eigen::VectorXd KinematicRetargeter::MinimiseCeres(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                                               const Eigen::VectorXd* previous, double* objective) {
   const int n = static_cast<int>(q.size());
   Clamp(q);
-  Eigen::VectorXd r;
-  Eigen::MatrixXd J;
-  double cost = Objective(q, targets, previous, &r, &J);
-  double mu = 1e-3;
-  for (int it = 0; it < config_.max_iterations; ++it) {
-    const Eigen::VectorXd g = J.transpose() * r;
-    const Eigen::MatrixXd H = J.transpose() * J;
-    // Active set: hold joints at a limit that the gradient pushes outward.
-    std::vector<int> free;
-    for (int k = 0; k < n; ++k) {
-      const bool at_lower = q[k] <= lower_[k] + 1e-12 && g[k] > 0;
-      const bool at_upper = q[k] >= upper_[k] - 1e-12 && g[k] < 0;
-      if (!at_lower && !at_upper) free.push_back(k);
-    }
-    if (free.empty()) break;
-    const int f = static_cast<int>(free.size());
-    Eigen::MatrixXd A(f, f);
-    Eigen::VectorXd b(f);
-    for (int i = 0; i < f; ++i) {
-      b[i] = -g[free[i]];
-      for (int j = 0; j < f; ++j) A(i, j) = H(free[i], free[j]);
-    }
-    bool accepted = false;
-    double gain = 0;
-    for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
-      Eigen::MatrixXd Ad = A;
-      for (int i = 0; i < f; ++i) Ad(i, i) += mu * (A(i, i) + 1e-6);
-      const Eigen::VectorXd step = Ad.ldlt().solve(b);
-      Eigen::VectorXd qn = q;
-      for (int i = 0; i < f; ++i) qn[free[i]] += step[i];
-      Clamp(qn);
-      const double cn = Objective(qn, targets, previous, nullptr, nullptr);
-      if (cn < cost) {
-        gain = cost - cn;
-        q = qn;
-        cost = Objective(q, targets, previous, &r, &J);
-        mu = std::max(mu / 3, 1e-9);
-        accepted = true;
-      } else {
-        mu *= 4;
-      }
-    }
-    if (!accepted || gain < 1e-12 * (1 + cost)) break;
+  PointEvaluator evaluator(*this, targets);
+  ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (size_t i = 0; i < active_.size(); ++i) {
+    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
+                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
   }
-  if (objective) *objective = cost;
+  if (previous) {
+    problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
+                             q.data());
+  }
+  for (int k = 0; k < n; ++k) {
+    if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
+    if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = config_.max_iterations;
+  options.function_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-12;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
   return q;
+}
+
+// Levenberg-Marquardt with an active set for the joint limits (a joint at a
+// limit whose gradient pushes outward is held).
+Eigen::VectorXd KinematicRetargeter::MinimiseLm(Eigen::VectorXd q, const std::vector<Vec3>& targets,
+                                              const Eigen::VectorXd* previous, double* objective) {
+  const int n = static_cast<int>(q.size());
+  Clamp(q);
+  PointEvaluator evaluator(*this, targets);
+  ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (size_t i = 0; i < active_.size(); ++i) {
+    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
+                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
+  }
+  if (previous) {
+    problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
+                             q.data());
+  }
+  for (int k = 0; k < n; ++k) {
+    if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
+    if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = config_.max_iterations;
+  options.function_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-12;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
+  return q;
+}
+
+Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
+                                              const Eigen::VectorXd* previous, double* objective) {
+  return config_.solver == "ceres" ? MinimiseCeres(std::move(q), targets, previous, objective)
+                                   : MinimiseLm(std::move(q), targets, previous, objective);
 }
 
 Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& targets) const {
@@ -371,6 +494,12 @@ void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& p
   for (const Pose& p : t.object_poses) {
     j["object_poses"].push_back({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
   }
+  if (!t.ctrl.empty()) {
+    j["ctrl_names"] = t.ctrl_names;
+    j["ctrl"] = Json::array();
+    for (const auto& c : t.ctrl) j["ctrl"].push_back(std::vector<double>(c.data(), c.data() + c.size()));
+  }
+  if (!t.metrics.empty()) j["metrics"] = t.metrics;
   std::ofstream out(path);
   out << j.dump(1);
   if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
@@ -400,6 +529,14 @@ HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path) {
                                      {.file = path.string(), .field = "object_poses"});
       t.object_poses.push_back({Quat(v[3], v[4], v[5], v[6]), Vec3(v[0], v[1], v[2])});
     }
+    if (j.contains("ctrl")) {
+      t.ctrl_names = j.at("ctrl_names").get<std::vector<std::string>>();
+      for (const auto& row : j.at("ctrl")) {
+        const auto v = row.get<std::vector<double>>();
+        t.ctrl.push_back(Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()));
+      }
+    }
+    if (j.contains("metrics")) t.metrics = j.at("metrics");
   } catch (const nlohmann::json::exception& e) {
     throw Error("bad_trajectory", e.what(), {.file = path.string()});
   }

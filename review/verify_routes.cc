@@ -16,7 +16,7 @@ namespace doasido::review {
 namespace {
 
 const std::vector<std::string>& TrajectoryStages() {
-  static const std::vector<std::string> stages{deploy::kDynamicsStageName,
+  static const std::vector<std::string> stages{retarget::kRetargetStageName,
                                                retarget::kKinematicStageName};
   return stages;
 }

@@ -1,0 +1,80 @@
+// What the dynamics-aware optimiser tracks (seed section 3.2), sampled at
+// every simulation step of a hand + object scene:
+//  - the kinematic retargeting's robot joint positions, which are also the
+//    reference position targets (every hand joint carries a position
+//    actuator, embodiment.h BuildHandModel);
+//  - the reconstructed object pose;
+//  - a stage label per step: "in hand" when the reconstructed hand is within
+//    epsilon of the object surface, else "resting" (seed: transition reward).
+// Time: `warmup_steps` steps (seed "Warmup Steps") precede frame 0 and
+// repeat it; step s is at time (s - warmup_steps) * dt from frame 0.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/mesh.h"
+#include "recon/reconstruction.h"
+#include "retarget/kinematic_retarget.h"
+#include "retarget/knot_spline.h"
+#include "retarget/mj_model.h"
+
+namespace doasido::retarget {
+
+// The parts of a hand + object scene (BuildHandModel with a BuildObjectScene
+// scene) the optimiser reads and writes.
+struct SceneIndex {
+  int object_body = -1;
+  int object_qpos = -1;          // free joint: xyz then quaternion wxyz
+  int object_dof = -1;
+  int floor_geom = -1;
+  std::vector<int> act_qpos;     // per actuator: qpos address of its joint
+  std::vector<int> act_kind;     // per actuator: kBasePos, kBaseRot or kFinger
+  std::vector<double> ctrl_lo, ctrl_hi;
+};
+inline constexpr int kBasePos = 0, kBaseRot = 1, kFinger = 2;
+
+// Throws Error("bad_mjcf") when the body "object" (with a free joint), the
+// geom "floor" or a joint actuator is missing.
+SceneIndex IndexScene(const mjModel* m);
+
+struct DynamicReference {
+  double dt = 0.005;       // simulation step, s
+  double fps = 30;         // of the source frames
+  int frames = 0;          // source frames
+  int warmup_steps = 0;
+  RowMatrix ctrl;          // (steps, nu) reference position targets
+  std::vector<Vec3> object_pos;    // (steps)
+  std::vector<Quat> object_quat;   // (steps)
+  std::vector<uint8_t> in_hand;    // (steps) 1 = in-hand stage
+
+  int steps() const { return static_cast<int>(ctrl.rows()); }
+  // The simulation step at which source frame f is reached.
+  int StepOfFrame(int f) const;
+};
+
+// Checks the reconstruction the optimiser is about to track: every frame
+// marked valid is finite, at least one hand and one object frame are valid.
+// Throws Error("bad_reference") naming `label` (file), the array and the frame.
+void CheckReference(const recon::Reconstruction& r, const std::string& label);
+
+// Object poses per frame with invalid frames filled by the nearest earlier
+// valid frame (the first valid one before it).
+std::vector<Pose> FilledObjectPoses(const recon::Reconstruction& r);
+
+// Per frame: whether a valid reconstructed hand joint lies within `epsilon`
+// of the object surface (`mesh` in the object frame, posed by `object`).
+// Invalid hand frames are "resting".
+std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<Pose>& object,
+                              const TriMesh& mesh, double epsilon);
+
+// Samples `kinematic` (HandTrajectory from KinematicRetargeter, whose
+// qpos_names name the actuated joints), `object` and `in_hand` (one per
+// frame) at the model's timestep, after `warmup_seconds` of frame 0.
+// Throws Error("bad_reference") on a non-finite value or a size mismatch.
+DynamicReference BuildReference(const mjModel* m,
+                                const HandTrajectory& kinematic, const std::vector<Pose>& object,
+                                const std::vector<bool>& in_hand, double warmup_seconds);
+
+}  // namespace doasido::retarget

@@ -1,0 +1,89 @@
+#include "retarget/dynamic_stage.h"
+
+#include <fstream>
+
+#include <spdlog/spdlog.h>
+
+#include "core/error.h"
+#include "retarget/kinematic_stage.h"
+
+namespace doasido::retarget {
+
+DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : config_(std::move(config)) {
+  CheckConfig(config_, kRetargetStageName);
+}
+
+StageResult DynamicRetargetStage::Run(const ClipContext& context) {
+  const std::string clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
+                                                            : context.clip.external_id;
+  const std::filesystem::path dir = context.artifact_dir.parent_path() / recon::kReconStageName;
+  recon::Reconstruction r;
+  TriMesh mesh;
+  try {
+    r = recon::ReadReconstruction(dir);
+    if (!r.object_mesh.empty()) mesh = LoadMesh(r.object_mesh);
+  } catch (const Error& e) {
+    ErrorSite site = e.site();
+    site.clip = clip;
+    throw Error(e.code(), e.message(), site);
+  }
+  StageResult result;
+  result.measurements["reconstruction"] = dir.string();
+  int hands = 0;
+  for (bool v : r.right_valid) hands += v;
+  if (hands == 0 || r.object_mesh.empty()) {
+    result.verdict = Verdict::kReject;
+    result.reason = hands == 0 ? kReasonNoRightHand : kReasonNoObject;
+    return result;
+  }
+  const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;
+  std::filesystem::create_directories(context.artifact_dir);
+  const DynamicRetargetRun run = RetargetReconstruction(
+      r, mesh, FindEmbodiment(config_.hand, robots), config_, context.artifact_dir / "scene", clip);
+
+  WriteTrajectoryJson(run.trajectory, context.artifact_dir / "trajectory.json");
+  WriteTrajectoryCsv(run.trajectory, context.artifact_dir / "trajectory.csv");
+  WriteTrajectoryJson(run.kinematic, context.artifact_dir / "kinematic_reference.json");
+  std::ofstream(context.artifact_dir / "robot_scene.xml") << run.robot_scene_xml;
+  result.artifacts = {{"trajectory", "trajectory.json"},
+                      {"trajectory_csv", "trajectory.csv"},
+                      {"kinematic_reference", "kinematic_reference.json"},
+                      {"scene", "scene/scene.xml"},
+                      {"robot_scene", "robot_scene.xml"}};
+  Json& m = result.measurements;
+  m["e_pos"] = run.metrics.e_pos;
+  m["e_rot"] = run.metrics.e_rot;
+  m["success"] = run.metrics.success;
+  m["frames"] = r.frames();
+  m["in_hand_frames"] = run.in_hand_frames;
+  m["plans"] = run.stats.plans;
+  m["iterations"] = run.stats.iterations;
+  m["rollouts"] = run.stats.rollouts;
+  m["sim_steps"] = run.stats.sim_steps;
+  m["optimizer_seconds"] = run.stats.seconds;
+  m["rollout_steps_per_second"] =
+      run.stats.rollout_seconds > 0 ? run.stats.sim_steps / run.stats.rollout_seconds : 0.0;
+  if (auto redecided = Redecide(m)) {
+    result.verdict = redecided->verdict;
+    result.reason = redecided->reason;
+  }
+  spdlog::info("{} {}: E_pos {:.3f} m, E_rot {:.3f} rad, {} in {:.0f} s", kRetargetStageName, clip,
+               run.metrics.e_pos, run.metrics.e_rot, run.metrics.success ? "success" : "failure",
+               run.stats.seconds);
+  return result;
+}
+
+std::optional<StageResult> DynamicRetargetStage::Redecide(const Json& measurements) const {
+  if (!measurements.contains("e_pos") || !measurements.contains("e_rot")) return std::nullopt;
+  StageResult r;
+  r.measurements = measurements;
+  const double e_pos = measurements["e_pos"].is_number() ? measurements["e_pos"].get<double>() : 1e9;
+  const double e_rot = measurements["e_rot"].is_number() ? measurements["e_rot"].get<double>() : 1e9;
+  if (!(e_pos < kSuccessPosition && e_rot < kSuccessRotation)) {
+    r.verdict = Verdict::kReject;
+    r.reason = kReasonTrackingFailed;
+  }
+  return r;
+}
+
+}  // namespace doasido::retarget

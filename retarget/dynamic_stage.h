@@ -1,0 +1,50 @@
+// The `retarget` queue stage (after `recon`): the dynamics-aware
+// retargeting of seed section 3.2 (dynamic_retarget.h) on the clip's
+// reconstruction artifact.
+//
+// Input: <artifacts>/<clip>/recon/ (recon/reconstruction.h, ReadReconstruction).
+// Output in artifact_dir:
+//   trajectory.json / trajectory.csv  the simulated robot trajectory at the
+//       reconstruction's frame rate: qpos, ctrl (position targets), object
+//       pose, metrics (kinematic_retarget.h HandTrajectory; ReadTrajectoryJson
+//       reads it like retarget_kinematic's)
+//   kinematic_reference.json  the kinematic reference it tracked
+//   scene/scene.xml + hull OBJs, robot_scene.xml  the scene it ran in
+// Measurements: e_pos, e_rot, success, frames, in_hand_frames, plans,
+// iterations, rollouts, sim_steps, optimizer_seconds, rollout_steps_per_second.
+// Verdict: pass on success (E_pos < 0.1 m and E_rot < 0.5 rad); reject with
+// kReasonTrackingFailed otherwise, kReasonNoRightHand / kReasonNoObject when
+// there is nothing to retarget. Errors (the clip fails, the batch goes on):
+// bad_reconstruction / bad_reference (NaN frames), bad_mesh (decomposition
+// failed), unstable_simulation (NaN state).
+#pragma once
+
+#include <string>
+
+#include "db/stage.h"
+#include "recon/recon_stage.h"
+#include "retarget/dynamic_retarget.h"
+
+namespace doasido::retarget {
+
+// The stage's name: its queue name, its config section and its artifact folder.
+inline constexpr const char* kRetargetStageName = "retarget";
+
+// Reason codes of the stage's verdicts.
+inline constexpr const char* kReasonTrackingFailed = "tracking_failed";
+inline constexpr const char* kReasonNoRightHand = "no_right_hand";
+inline constexpr const char* kReasonNoObject = "no_object";
+
+class DynamicRetargetStage : public Stage {
+ public:
+  explicit DynamicRetargetStage(DynamicRetargetConfig config = {});
+  std::string Name() const override { return kRetargetStageName; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+  std::optional<StageResult> Redecide(const Json& measurements) const override;
+
+ private:
+  DynamicRetargetConfig config_;
+};
+
+}  // namespace doasido::retarget

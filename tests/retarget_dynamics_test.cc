@@ -1,0 +1,271 @@
+// Dynamics-aware retargeting (annealed sampling, seed section 3.2): the
+// sampler's pieces against hand-computed values, the metrics against their
+// published definition, determinism, the named errors, and the `retarget`
+// stage on a synthetic reconstruction (scripted pick-and-place episode of
+// the synth module, a cylinder on the floor).
+#include <cmath>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "retarget/annealed_sampler.h"
+#include "retarget/dynamic_reference.h"
+#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic_stage.h"
+#include "retarget/kinematic_stage.h"
+#include "synth/objects.h"
+#include "synth/reconstruction_noise.h"
+#include "tests/test_util.h"
+
+namespace doasido::retarget {
+namespace {
+
+using doasido::testing::SharedData;
+using doasido::testing::TempDir;
+
+constexpr int kFrames = 20;
+
+TriMesh Cylinder() { return synth::MakeCylinder(0.03, 0.08, 16); }
+
+recon::Reconstruction Reference(int frames = kFrames) {
+  synth::EpisodeSpec spec;
+  spec.frames = frames;
+  return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, Cylinder()), 30.0);
+}
+
+// A tiny but complete configuration: every component on, a handful of samples.
+DynamicRetargetConfig SmallConfig(int threads = 2) {
+  DynamicRetargetConfig c;
+  c.preset = "";
+  c.robots_dir = (SharedData() / "robots").string();
+  c.kinematic.restarts = 1;
+  AnnealedSamplerConfig& s = c.sampler;
+  s.num_samples = 8;
+  s.max_num_iterations = 2;
+  s.horizon = 0.2;
+  s.knot_dt = 0.1;
+  s.ctrl_dt = 0.1;
+  s.warmup_seconds = 0.1;
+  s.num_perturb_samples = 2;
+  s.threads = threads;
+  s.seed = 3;
+  return c;
+}
+
+DynamicRetargetRun Retarget(const recon::Reconstruction& r, const DynamicRetargetConfig& c,
+                       const TempDir& dir) {
+  return RetargetReconstruction(r, Cylinder(), FindEmbodiment(c.hand, c.robots_dir), c,
+                                dir / "scene", "synthetic");
+}
+
+std::string ErrorCode(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  return "no error";
+}
+
+TEST(KnotSpline, InterpolatesLinearlyAndHoldsTheLastKnot) {
+  const double knots[] = {0, 10, 1, 20, 3, 40};  // 3 knots, 2 dims
+  double out[2];
+  EXPECT_EQ(KnotCount(1.0, 0.25), 5);
+  EXPECT_EQ(KnotCount(3.0, 0.2), 16);
+  EvaluateKnots(knots, 3, 2, 0.2, 0.05, out);
+  EXPECT_NEAR(out[0], 0.25, 1e-12);
+  EXPECT_NEAR(out[1], 12.5, 1e-12);
+  EvaluateKnots(knots, 3, 2, 0.2, 0.3, out);
+  EXPECT_NEAR(out[0], 2.0, 1e-12);
+  EXPECT_NEAR(out[1], 30.0, 1e-12);
+  EvaluateKnots(knots, 3, 2, 0.2, 7.0, out);
+  EXPECT_EQ(out[0], 3.0);
+  EXPECT_EQ(out[1], 40.0);
+}
+
+TEST(AnnealedSampler, NoiseGrowsAlongTheHorizonBySeedScales) {
+  const AnnealedSamplerConfig c;  // seed table
+  const RowMatrix sigma = NoiseScales(c, {kBasePos, kBaseRot, kFinger}, 16);
+  EXPECT_NEAR(sigma(0, 0), 0.01, 1e-12);
+  EXPECT_NEAR(sigma(0, 1), 0.01, 1e-12);
+  EXPECT_NEAR(sigma(0, 2), 0.1, 1e-12);
+  EXPECT_NEAR(sigma(15, 2), 0.4, 1e-12);
+  EXPECT_NEAR(sigma(8, 2) / sigma(7, 2), std::pow(4.0, 1.0 / 15), 1e-12);
+}
+
+TEST(AnnealedSampler, SampleZeroIsNoiseFreeAndOthersHaveTheAnnealedSpread) {
+  RowMatrix nominal(4, 2), sigma = RowMatrix::Constant(4, 2, 0.1);
+  nominal << 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8;
+  const std::vector<double> lo(2, -10), hi(2, 10);
+  std::vector<double> out;
+  const int samples = 2000;
+  DrawSamples(nominal, sigma, 0.5, 11, lo, hi, samples, out);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(out[i], nominal.data()[i]);
+  double sum2 = 0;
+  for (int c = 1; c < samples; ++c) {
+    for (int i = 0; i < 8; ++i) sum2 += std::pow(out[c * 8 + i] - nominal.data()[i], 2);
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / ((samples - 1) * 8)), 0.05, 0.002);
+  std::vector<double> again;
+  DrawSamples(nominal, sigma, 0.5, 11, lo, hi, samples, again);
+  EXPECT_EQ(out, again);
+  const std::vector<double> tight_lo(2, 0.3), tight_hi(2, 0.5);
+  DrawSamples(nominal, sigma, 1.0, 12, tight_lo, tight_hi, 50, out);
+  for (double v : out) EXPECT_TRUE(v >= 0.3 && v <= 0.5);
+}
+
+TEST(AnnealedSampler, WeightsAreASoftmaxOfZScoredTopReturns) {
+  const std::vector<double> returns = {1, 2, 3, 4, 5, 6, 7, 8, 10, 9};
+  std::vector<double> w;
+  WeightSamples(returns, 0.2, 1.0, w);  // top 2: {10, 9}, mean 9.5, sd 0.5, z = +-1
+  const double e = std::exp(2.0);
+  EXPECT_NEAR(w[8], e / (e + 1), 1e-9);
+  EXPECT_NEAR(w[9], 1 / (e + 1), 1e-9);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(w[i], 0.0);
+  WeightSamples(returns, 0.2, 0.1, w);  // temperature 0.1: z / 0.1 = +-10
+  EXPECT_NEAR(w[8], 1 / (1 + std::exp(-20.0)), 1e-12);
+}
+
+TEST(AnnealedSampler, PresetsAndRangeChecks) {
+  EXPECT_EQ(SamplerPreset("seed").num_samples, 1024);
+  EXPECT_EQ(SamplerPreset("seed").max_num_iterations, 32);
+  EXPECT_EQ(SamplerPreset("fast").num_samples, 64);
+  EXPECT_EQ(ErrorCode([] { SamplerPreset("turbo"); }), "bad_config");
+  AnnealedSamplerConfig bad;
+  bad.perturb_prob = 1.5;
+  EXPECT_EQ(ErrorCode([&] { CheckConfig(bad, "retarget.sampler"); }), "bad_config");
+  DynamicRetargetConfig c;
+  c.sampler.reward.transition_epsilon = 0;
+  EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
+}
+
+TEST(RetargetMetrics, MatchHandComputedErrors) {
+  const Quat z20(Eigen::AngleAxisd(0.2, Vec3::UnitZ())), z40(Eigen::AngleAxisd(0.4, Vec3::UnitZ()));
+  const std::vector<Pose> ref = {{Quat::Identity(), Vec3(0, 0, 0)}, {Quat::Identity(), Vec3(1, 0, 0)},
+                                 {Quat::Identity(), Vec3(0, 0, 0)}};
+  const std::vector<Pose> sim = {{z20, Vec3(0.03, 0.04, 0)}, {z40, Vec3(1, 0.15, 0)},
+                                 {Quat::Identity(), Vec3(5, 0, 0)}};
+  TrackingMetrics m = ObjectTrackingMetrics(sim, ref, {true, true, false});
+  EXPECT_NEAR(m.e_pos, 0.1, 1e-12);  // (0.05 + 0.15) / 2
+  EXPECT_NEAR(m.e_rot, 0.3, 1e-12);
+  EXPECT_EQ(m.frames, 2);
+  EXPECT_FALSE(m.success);  // 0.1 is not < 0.1
+  m = ObjectTrackingMetrics({sim[0]}, {ref[0]});
+  EXPECT_NEAR(m.e_pos, 0.05, 1e-12);
+  EXPECT_TRUE(m.success);
+  EXPECT_NEAR(RotationError(Quat::Identity(), z40).z(), 0.4, 1e-12);
+}
+
+TEST(DynamicRetarget, SameSeedGivesTheSameTrajectoryForAnyThreadCount) {
+  const recon::Reconstruction r = Reference();
+  TempDir dir;
+  const DynamicRetargetRun a = Retarget(r, SmallConfig(2), dir);
+  const DynamicRetargetRun b = Retarget(r, SmallConfig(2), dir);
+  const DynamicRetargetRun c = Retarget(r, SmallConfig(1), dir);
+  DynamicRetargetConfig other = SmallConfig(2);
+  other.sampler.seed = 4;
+  const DynamicRetargetRun d = Retarget(r, other, dir);
+  ASSERT_EQ(a.trajectory.qpos.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(a.trajectory.ctrl.size(), static_cast<size_t>(kFrames));
+  EXPECT_GT(a.stats.rollouts, 0);
+  bool differs = false;
+  for (int f = 0; f < kFrames; ++f) {
+    EXPECT_EQ(a.trajectory.qpos[f], b.trajectory.qpos[f]) << "frame " << f;
+    EXPECT_EQ(a.trajectory.ctrl[f], b.trajectory.ctrl[f]) << "frame " << f;
+    EXPECT_EQ(a.trajectory.qpos[f], c.trajectory.qpos[f]) << "frame " << f;
+    EXPECT_EQ(a.trajectory.object_poses[f].t, c.trajectory.object_poses[f].t);
+    differs |= a.trajectory.ctrl[f] != d.trajectory.ctrl[f];
+  }
+  EXPECT_TRUE(differs) << "another seed must draw other samples";
+  const TrackingMetrics m = ObjectTrackingMetrics(a.trajectory.object_poses, FilledObjectPoses(r));
+  EXPECT_EQ(a.metrics.e_pos, m.e_pos);
+  EXPECT_EQ(a.trajectory.metrics["success"].get<bool>(), a.metrics.success);
+}
+
+TEST(DynamicRetarget, NanFramesAndBadMeshesAreNamedErrors) {
+  TempDir dir;
+  recon::Reconstruction r = Reference();
+  r.right_joints[5](3, 1) = std::nan("");
+  EXPECT_EQ(ErrorCode([&] { Retarget(r, SmallConfig(), dir); }), "bad_reference");
+  r = Reference();
+  r.object_poses[2].t.x() = std::nan("");
+  try {
+    Retarget(r, SmallConfig(), dir);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_reference");
+    EXPECT_EQ(e.site().field, "object_poses");
+    EXPECT_EQ(e.site().clip, "synthetic");
+  }
+  TriMesh empty = Cylinder();
+  empty.faces.resize(0, 3);
+  const DynamicRetargetConfig c = SmallConfig();
+  EXPECT_EQ(ErrorCode([&] {
+              RetargetReconstruction(Reference(), empty, FindEmbodiment(c.hand, c.robots_dir), c,
+                                     dir / "scene", "synthetic");
+            }),
+            "bad_mesh");
+}
+
+TEST(DynamicRetarget, AnUnstableSimulationIsANamedError) {
+  TempDir dir;
+  const DynamicRetargetConfig c = SmallConfig();
+  const recon::Reconstruction r = Reference();
+  const std::vector<Pose> object = FilledObjectPoses(r);
+  const ObjectScene scene = BuildObjectScene(Cylinder(), object[0], c.scene, dir / "scene");
+  std::ifstream in(scene.xml_path);
+  const std::string xml((std::istreambuf_iterator<char>(in)), {});
+  const HandModel hand = BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene");
+  KinematicRetargeter kinematic(hand, c.kinematic);
+  HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+  const DynamicReference ref =
+      BuildReference(hand.model.get(), t, object, std::vector<bool>(kFrames, false), 0.0);
+  ModelPtr broken(mj_copyModel(nullptr, hand.model.get()));
+  broken->opt.gravity[2] = -1e300;  // the state overflows in the first step
+  EXPECT_EQ(ErrorCode([&] { RetargetDynamics(broken.get(), ref, c.sampler); }), "unstable_simulation");
+}
+
+TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
+  TempDir root;
+  recon::Reconstruction r = Reference();
+  SaveObj(Cylinder(), root / "cylinder.obj");
+  r.object_mesh = root / "cylinder.obj";
+  recon::WriteReconstruction(r, root / "artifacts/9" / recon::kReconStageName);
+  ClipContext context;
+  context.clip.id = 9;
+  context.clip.external_id = "synthetic9";
+  context.artifact_dir = root / "artifacts/9" / kRetargetStageName;
+  DynamicRetargetStage stage(SmallConfig());
+  const StageResult result = stage.Run(context);
+  const HandTrajectory t = ReadTrajectoryJson(context.artifact_dir / "trajectory.json");
+  ASSERT_EQ(t.qpos.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(t.ctrl.size(), static_cast<size_t>(kFrames));
+  EXPECT_EQ(t.ctrl_names.size(), t.ctrl[0].size());
+  EXPECT_EQ(t.object_poses.size(), static_cast<size_t>(kFrames));
+  const bool success = result.measurements["success"].get<bool>();
+  EXPECT_EQ(t.metrics["success"].get<bool>(), success);
+  EXPECT_EQ(result.verdict, success ? Verdict::kPass : Verdict::kReject);
+  EXPECT_EQ(result.reason, success ? "" : kReasonTrackingFailed);
+  EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "robot_scene.xml"));
+  EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "scene/scene.xml"));
+  ReadTrajectoryJson(context.artifact_dir / "kinematic_reference.json");
+
+  // Redecide from measurements alone: a 0.2 m position error rejects.
+  Json m = result.measurements;
+  m["e_pos"] = 0.2;
+  EXPECT_EQ(stage.Redecide(m)->reason, kReasonTrackingFailed);
+  m["e_pos"] = 0.05;
+  m["e_rot"] = 0.1;
+  EXPECT_EQ(stage.Redecide(m)->verdict, Verdict::kPass);
+
+  // Without an object mesh there is nothing to track.
+  r.object_mesh.clear();
+  recon::WriteReconstruction(r, root / "artifacts/10" / recon::kReconStageName);
+  context.artifact_dir = root / "artifacts/10" / kRetargetStageName;
+  const StageResult none = stage.Run(context);
+  EXPECT_EQ(none.verdict, Verdict::kReject);
+  EXPECT_EQ(none.reason, kReasonNoObject);
+}
+
+}  // namespace
+}  // namespace doasido::retarget

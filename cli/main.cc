@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
-                         AddReportCommand, AddReviewCommand};
+                         AddReportCommand, AddReviewCommand, AddShardCommands};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

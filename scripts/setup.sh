@@ -20,6 +20,7 @@ PACKAGES=(
   libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium chromium-driver
+  slurm-wlm munge
 )
 
 missing=()

@@ -39,6 +39,7 @@ void AddRetargetCommand(CLI::App& app);
 void AddRethresholdCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
+void AddHandCommand(CLI::App& app);
 // shard, merge and slurm (cli/shard_command.cc).
 void AddShardCommands(CLI::App& app);
 // Per-shard progress under the status table; nothing without shards.

@@ -24,6 +24,10 @@ void AddIngestOptions(CLI::App& cmd, IngestOptions& opt) {
                  "VOC / frame names: multiply annotated frame numbers by this to get video "
                  "frames")
       ->capture_default_str();
+  cmd.add_option("--video-url-template", opt.list.video_url_template,
+                 "VOC / frame names / JSON id maps: URL of a video id, {id} replaced, for "
+                 "videos not in the video folder (JSON id maps default to "
+                 "https://www.youtube.com/watch?v={id}); the download stage fetches them");
   cmd.add_flag("!--no-check-files", opt.list.check_files,
                "Accept CSV/TSV/JSONL rows whose local video file does not exist");
 }
@@ -76,11 +80,19 @@ void AddIngestCommand(CLI::App& app) {
   cmd->add_flag("--json", opt->ingest.json, "Print the summary, with every bad row, as JSON");
   cmd->footer(
       "A bad row (missing column, bad timestamp, end before start, missing file, duplicate, "
-      "...) is reported with its file, line and field; the other rows are ingested.\n\n"
+      "...) is reported with its file, line and field; the other rows are ingested. "
+      "A file that is not a clip list at all is refused whole (exit code 1), saying what was "
+      "expected.\n\n"
+      "Videos named by URL are fetched by the `download` stage (first in the default pipeline) "
+      "into <db folder>/media; YouTube and other sites go through its command template "
+      "(e.g. yt-dlp; see README).\n\n"
       "Examples:\n"
       "  doasido ingest --db work/doasido.db clips.csv\n"
       "  doasido ingest --db work/doasido.db EPIC_100_validation.csv --video-root /data/EPIC\n"
-      "  doasido ingest --db work/doasido.db 100doh/ --video-dir 100doh/videos --frame-scale 60");
+      "  doasido ingest --db work/doasido.db 100doh/ --video-dir 100doh/videos --frame-scale 60\n"
+      "  doasido ingest --db work/doasido.db frames.txt "
+      "--video-url-template 'https://www.youtube.com/watch?v={id}'\n"
+      "  doasido ingest --db work/doasido.db whim_train.json   # {\"<youtubeId>\": {...}, ...}");
   cmd->callback([opt] {
     if (opt->ingest.lists.empty()) throw Error("usage", "give at least one list to ingest");
     Database db(opt->db.db);

@@ -28,7 +28,8 @@ int main(int argc, char** argv) {
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
-                         AddReportCommand, AddReviewCommand, AddShardCommands};
+                         AddReportCommand, AddReviewCommand, AddHandCommand,
+                         AddShardCommands};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

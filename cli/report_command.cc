@@ -48,6 +48,17 @@ void AddReportCommand(CLI::App& app) {
     const auto& f = out.data.funnel;
     std::printf("%lld clips, %lld survive (%.1f%%)\n", static_cast<long long>(f.pool),
                 static_cast<long long>(f.survivors), reports::Percent(f.survivors, f.pool));
+    const auto& dl = out.data.downloads;
+    if (dl.fetched + dl.reused + dl.failed > 0) {
+      std::string reasons;
+      for (const auto& [reason, n] : dl.failures_by_reason) {
+        reasons += (reasons.empty() ? " (" : ", ") + reason + " " + std::to_string(n);
+      }
+      std::printf("downloads: %lld fetched, %.1f MB at %.1f MB/s, %lld reused, %lld failed%s\n",
+                  static_cast<long long>(dl.fetched), static_cast<double>(dl.bytes) / 1e6,
+                  dl.bytes_per_s / 1e6, static_cast<long long>(dl.reused),
+                  static_cast<long long>(dl.failed), (reasons + (reasons.empty() ? "" : ")")).c_str());
+    }
     for (const auto& note : out.data.notes) std::printf("note: %s\n", note.c_str());
     std::printf("wrote %s\n      %s\n", out.html.c_str(), out.json.c_str());
     for (const auto& p : out.csv) std::printf("      %s\n", p.c_str());

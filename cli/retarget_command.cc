@@ -34,7 +34,8 @@ void AddRetargetCommand(CLI::App& app) {
       "under joint limits, scale adapted, several random starts per frame) and write the\n"
       "reference robot trajectory");
   cmd->add_option("--hand", opt->hand,
-                  "sharpa_right, sharpa_left, shadow, allegro, or an embodiment .json")
+                  "sharpa_right, sharpa_left, shadow, allegro, or an embodiment .json (for a URDF or "
+                  "MJCF hand, `doasido hand import` writes one)")
       ->capture_default_str();
   cmd->add_option("--keypoints", opt->keypoints,
                   "CSV with header k0_x,k0_y,k0_z,...,k20_z; one frame a row, metres")

@@ -7,6 +7,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "ingest/download_stage.h"
 #include "ingest/probe.h"
 #include "retarget/kinematic_stage.h"
 
@@ -26,6 +27,10 @@ std::function<std::unique_ptr<Stage>(const Json&)> Maker(const std::string& sect
 
 const std::vector<StageEntry>& StageTable() {
   static const std::vector<StageEntry> kTable = {
+      {ingest::kDownloadStageName,
+       "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
+       "template for sites); local videos pass at once",
+       true, Maker<ingest::DownloadStage, ingest::DownloadConfig>(ingest::kDownloadStageName)},
       {"probe", "size, fps, frame count, rotation and codec; rejects spans outside the video",
        true, Maker<ingest::ProbeStage, ingest::ProbeConfig>("probe")},
       {"hand_object_detector",

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "cli/stage_registry.h"
+#include "core/permanent_error.h"
 #include "core/log.h"
 #include "core/progress.h"
 #include "db/database.h"
@@ -112,6 +113,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
     heartbeat.Set(claim->run_id);
     const auto start = std::chrono::steady_clock::now();
     std::string error;
+    bool permanent = false;  // a retry cannot fix it: fail now
     StageResult result;
     std::string label = std::to_string(claim->clip_id);
     try {
@@ -119,6 +121,9 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       label = ClipLabel(context);
       std::filesystem::create_directories(context.artifact_dir);
       result = stages.at(claim->stage)->Run(context);
+    } catch (const PermanentError& e) {
+      error = e.what();
+      permanent = true;
     } catch (const Error& e) {
       error = e.what();
     } catch (const std::exception& e) {
@@ -130,7 +135,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
     Database::Transaction tx(db);
     if (!error.empty()) {
       spdlog::warn("{} on clip {} (attempt {}): {}", claim->stage, label, claim->attempts, error);
-      db.Fail(*claim, worker, error, options.max_attempts);
+      db.Fail(*claim, worker, error, permanent ? claim->attempts : options.max_attempts);
       ++stats.failed_attempts;
     } else if (db.Complete(*claim, worker, hashes.at(claim->stage), result, seconds)) {
       ++stats.done;

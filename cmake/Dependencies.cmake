@@ -22,6 +22,9 @@ pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)
 pkg_check_modules(TINYXML2 REQUIRED IMPORTED_TARGET tinyxml2)
 pkg_check_modules(QHULL REQUIRED IMPORTED_TARGET qhull_r)
 pkg_check_modules(LIBAV REQUIRED IMPORTED_TARGET libavformat libavcodec libswscale libavutil)
+# The download stage: HTTP(S) with range requests, and SHA-256 of what it fetched.
+find_package(CURL REQUIRED)
+find_package(OpenSSL REQUIRED COMPONENTS Crypto)
 
 # OpenCV's CMake package has no imported target; give it one so modules
 # link it like everything else.

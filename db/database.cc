@@ -321,8 +321,8 @@ ClipRecord Database::GetClip(ClipId id) {
 
 VideoRecord Database::GetVideo(VideoId id) {
   auto& q = Prepare(
-      "SELECT id, path, width, height, fps, frame_count, duration_s, variable_frame_rate,"
-      " rotation_deg, codec, probed_at FROM videos WHERE id = ?");
+      "SELECT id, COALESCE(local_path, path), width, height, fps, frame_count, duration_s,"
+      " variable_frame_rate, rotation_deg, codec, probed_at FROM videos WHERE id = ?");
   q.Bind(1, id);
   if (!q.Step()) {
     q.Reset();
@@ -524,6 +524,9 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
         .Run();
   }
   if (!result.detections.empty()) AddDetections(claim.clip_id, result.detections);
+  if (result.measurements.contains(kVideoFileKey)) {
+    RecordVideoFile(claim.clip_id, result.measurements.at(kVideoFileKey));
+  }
   if (result.video_info) {
     const auto& v = *result.video_info;
     Prepare("UPDATE videos SET width = ?, height = ?, fps = ?, frame_count = ?, duration_s = ?,"

@@ -314,6 +314,30 @@ class Database {
   // another rater, or its item already has all its ratings.
   bool AnswerStudyTrial(std::int64_t trial_id, const std::string& rater, const std::string& side);
 
+  // ---- Downloads ------------------------------------------------------------
+  // (db/database_downloads.cc, schema v4) Videos listed by URL and fetched
+  // into the database's media folder by the download stage.
+
+  // The measurements member by which a stage hands over the local file of
+  // the clip's video: {"path": absolute path, "size_bytes": n, "sha256": hex}.
+  // Complete() records it on the clip's videos row (RecordVideoFile); from
+  // then on GetVideo, and so every later stage's ClipContext, gives the local
+  // file instead of the URL.
+  static constexpr const char* kVideoFileKey = "video_file";
+  struct VideoFile {
+    std::string url;         // the video as listed
+    std::string local_path;  // absolute
+    std::int64_t size_bytes = 0;
+    std::string sha256;
+    double downloaded_at = 0;
+  };
+  // Records `file` (a kVideoFileKey member) on the videos row of `clip`.
+  // Throws Error("bad_measurements") when it lacks path, size or checksum.
+  void RecordVideoFile(ClipId clip, const Json& file);
+  // The downloaded file of a video, or nullopt when it has none.
+  std::optional<VideoFile> GetVideoFile(VideoId video);
+  // Videos with a downloaded file.
+  std::int64_t CountDownloadedVideos();
   // ---- Shards ---------------------------------------------------------------
   // (db/database_shards.cc) Splitting the queue into self-contained shard
   // databases and folding their results back (doasido shard, merge, slurm).

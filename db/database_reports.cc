@@ -33,7 +33,7 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
 
 std::vector<ClipRecord> Database::ListClips(std::map<ClipId, std::string>* videos) {
   auto& q = Prepare(std::string("SELECT ") + db::kClipColumns +
-                    ", v.path FROM clips c JOIN videos v ON v.id = c.video_id ORDER BY c.id");
+                    ", COALESCE(v.local_path, v.path) FROM clips c JOIN videos v ON v.id = c.video_id ORDER BY c.id");
   std::vector<ClipRecord> out;
   while (q.Step()) {
     ClipRecord c = db::ReadClipRow(q);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <set>
+#include <tuple>
 
 #include "db/database.h"
 #include "db/statement.h"
@@ -166,12 +167,21 @@ void Database::WriteShard(const ShardSpec& spec) {
   {
     // Stored paths are relative to this database's folder; the shard lives
     // elsewhere, so it gets absolute (or remapped) ones.
-    db::Statement videos(db_, "SELECT id, path FROM shard.videos");
-    db::Statement update(db_, "UPDATE shard.videos SET path = ? WHERE id = ?");
-    std::vector<std::pair<VideoId, std::string>> paths;
-    while (videos.Step()) paths.emplace_back(videos.Int(0), videos.Text(1));
-    for (const auto& [id, stored] : paths) {
-      update.Bind(1, Rewrite(Resolve(stored).string(), spec.media_map)).Bind(2, id).Run();
+    db::Statement videos(db_, "SELECT id, path, local_path FROM shard.videos");
+    db::Statement update(db_, "UPDATE shard.videos SET path = ?, local_path = ? WHERE id = ?");
+    std::vector<std::tuple<VideoId, std::string, std::optional<std::string>>> rows;
+    while (videos.Step()) {
+      rows.emplace_back(videos.Int(0), videos.Text(1),
+                        videos.IsNull(2) ? std::nullopt : std::optional(videos.Text(2)));
+    }
+    for (const auto& [id, stored, local] : rows) {
+      update.Bind(1, Rewrite(Resolve(stored).string(), spec.media_map));
+      if (local) {
+        update.Bind(2, Rewrite(Resolve(*local).string(), spec.media_map));
+      } else {
+        update.BindNull(2);
+      }
+      update.Bind(3, id).Run();
     }
   }
   db::Exec(db_, "INSERT INTO shard.clips SELECT * FROM clips WHERE id IN temp.selected");
@@ -325,6 +335,24 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
            "      s.rotation_deg, s.codec, s.probed_at) IS NOT (videos.width, videos.height,"
            "      videos.fps, videos.frame_count, videos.duration_s, videos.variable_frame_rate,"
            "      videos.rotation_deg, videos.codec, videos.probed_at))");
+  {  // Files the shard downloaded: the shard's folder holds them.
+    const auto shard_root = std::filesystem::absolute(file).parent_path();
+    db::Statement local(db_, "SELECT id, local_path, size_bytes, sha256, downloaded_at"
+                             " FROM shard.videos WHERE local_path IS NOT NULL AND id IN"
+                             " (SELECT video_id FROM main.clips WHERE id IN temp.selected)");
+    db::Statement update(db_, "UPDATE main.videos SET local_path = ?, size_bytes = ?, sha256 = ?,"
+                              " downloaded_at = ? WHERE id = ? AND (local_path, size_bytes, sha256,"
+                              " downloaded_at) IS NOT (?, ?, ?, ?)");
+    while (local.Step()) {
+      std::filesystem::path p = local.Text(1);
+      if (p.is_relative()) p = shard_root / p;
+      const std::string stored = Store(p.lexically_normal().string());
+      update.Bind(1, stored).Bind(2, local.OptInt(2)).Bind(3, local.IsNull(3) ? "" : local.Text(3));
+      update.Bind(4, local.OptReal(4)).Bind(5, local.Int(0)).Bind(6, stored);
+      update.Bind(7, local.OptInt(2)).Bind(8, local.IsNull(3) ? "" : local.Text(3));
+      update.Bind(9, local.OptReal(4)).Run();
+    }
+  }
   stats.changed_clips = static_cast<std::int64_t>(changed.size());
   stats.clips = QueryInt("SELECT COUNT(*) FROM temp.selected");
   stats.finished_runs = Count(db_, 

@@ -166,7 +166,16 @@ UPDATE reviews SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinemati
 UPDATE artifacts SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
 UPDATE events SET stage = 'retarget_kinematic' WHERE stage = 'retarget-kinematic';
 )sql",
-      // 4: shards. Every database gets an identity (meta.uuid). A parent
+      // 4: videos named by URL are downloaded into <db folder>/media by the
+      // download stage; the row keeps the URL (path) and gains the local
+      // file, its size and SHA-256.
+      R"sql(
+ALTER TABLE videos ADD COLUMN local_path TEXT;    -- relative to the database folder
+ALTER TABLE videos ADD COLUMN size_bytes INTEGER;
+ALTER TABLE videos ADD COLUMN sha256 TEXT;
+ALTER TABLE videos ADD COLUMN downloaded_at REAL;
+)sql",
+      // 5: shards. Every database gets an identity (meta.uuid). A parent
       // records the shard databases it split its queue into and which clip
       // went where; a shard records its parent and the config it runs with.
       R"sql(

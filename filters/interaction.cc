@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/shell_words.h"
 #include "filters/out_of_frame.h"
 #include "filters/stage_support.h"
 
@@ -48,25 +49,6 @@ std::vector<Component> Components(const cv::Mat& mask, cv::Mat& labels) {
   std::sort(out.begin(), out.end(),
             [](const Component& a, const Component& b) { return a.area > b.area; });
   return out;
-}
-
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
-void ReplaceAll(std::string& text, const std::string& key, const std::string& value) {
-  for (size_t pos = text.find(key); pos != std::string::npos;
-       pos = text.find(key, pos + value.size())) {
-    text.replace(pos, key.size(), value);
-  }
 }
 
 }  // namespace

@@ -67,6 +67,24 @@ std::string Lower(std::string s) {
 
 bool IsUrl(const std::string& s) { return s.find("://") != std::string::npos; }
 
+std::string VideoUrl(std::string url_template, const std::string& id) {
+  for (auto pos = url_template.find("{id}"); pos != std::string::npos;
+       pos = url_template.find("{id}", pos + id.size())) {
+    url_template.replace(pos, 4, id);
+  }
+  return url_template;
+}
+
+[[noreturn]] void NotAList(const fs::path& path, const std::string& what) {
+  throw Error("not_a_clip_list",
+              what + "; expected a clip list: CSV/TSV with a header naming a video column, "
+                     "JSON Lines of clip objects, a JSON array of clip objects, a JSON object "
+                     "mapping video ids to metadata objects ({\"<youtubeId>\": {\"fps\": ...}}), "
+                     "an EPIC-KITCHENS CSV, a 100DOH VOC folder or a text file of 100DOH frame "
+                     "names",
+              {.file = path.string()});
+}
+
 // Strict integer: digits only (optional sign), nothing after.
 std::optional<std::int64_t> ParseInt(const std::string& text) {
   const std::string t = Trim(text);
@@ -164,6 +182,13 @@ class RowBuilder {
       return;
     }
     Finish(std::move(row));
+  }
+
+  // A JSON object's members as cells.
+  void AddObject(const Json& object, long line) {
+    Cells cells;
+    for (const auto& [k, v] : object.items()) cells.emplace_back(k, v);
+    Add(cells, line);
   }
 
   // Shared final checks: video present and found, span ordered, no duplicate.
@@ -315,8 +340,7 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
   if (!in) throw Error("bad_list", "cannot open list", {.file = path.string()});
   RowBuilder builder(path, options, out);
   std::string text;
-  long line = 0;
-  Cells cells;
+  long line = 0, objects = 0;
   while (std::getline(in, text)) {
     ++line;
     if (Trim(text).empty()) {
@@ -338,10 +362,62 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
       builder.Bad(line, "", "not a JSON object");
       continue;
     }
-    cells.clear();
-    for (const auto& [k, v] : obj.items()) cells.emplace_back(k, v);
-    builder.Add(cells, line);
+    ++objects;
+    builder.AddObject(obj, line);
   }
+  if (objects == 0) NotAList(path, "no line is a JSON object");
+}
+
+// One JSON document: an array of clip objects, or an object mapping video
+// ids to metadata objects. Returns false when the text is not one JSON
+// document (then it may be JSON Lines).
+bool ReadJsonDocument(const fs::path& path, const ListOptions& options, ListReadResult& out) {
+  Json doc;
+  try {
+    doc = Json::parse(ReadAll(path));
+  } catch (const nlohmann::json::parse_error&) {
+    return false;
+  }
+  RowBuilder builder(path, options, out);
+  Cells cells;
+  if (doc.is_array()) {
+    out.format = "json";
+    long index = 0, objects = 0;
+    for (const Json& item : doc) {
+      ++index;
+      if (!item.is_object()) {
+        builder.Bad(index, "", "array item is not a JSON object");
+        continue;
+      }
+      ++objects;
+      builder.AddObject(item, index);
+    }
+    if (objects == 0) NotAList(path, "a JSON array without clip objects");
+    return true;
+  }
+  if (doc.is_object() && std::any_of(kVideoColumns.begin(), kVideoColumns.end(),
+                                     [&doc](const std::string& k) { return doc.contains(k); })) {
+    return false;  // a one-line JSON Lines file: one clip
+  }
+  if (!doc.is_object() || doc.empty()) NotAList(path, "a JSON document that is not an id map");
+  for (const auto& [id, fields] : doc.items()) {
+    if (!fields.is_object()) {
+      NotAList(path, "a JSON object whose value at \"" + id + "\" is not an object");
+    }
+  }
+  out.format = "idmap";
+  const std::string url_template =
+      options.video_url_template.empty() ? kYoutubeUrlTemplate : options.video_url_template;
+  long index = 0;
+  for (const auto& [id, fields] : doc.items()) {
+    ++index;
+    cells.clear();
+    cells.emplace_back("video", VideoUrl(url_template, id));
+    cells.emplace_back("id", id);
+    for (const auto& [k, v] : fields.items()) cells.emplace_back(k, v);
+    builder.Add(cells, index);
+  }
+  return true;
 }
 
 // Reads a CSV into header-named rows (for EPIC's two files).
@@ -465,6 +541,9 @@ void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::p
     ListRow row;
     row.line = group.first_index;
     row.video = (video_dir / (video + ".mp4")).string();
+    if (!options.video_url_template.empty() && !fs::exists(row.video)) {
+      row.video = VideoUrl(options.video_url_template, video);
+    }
     row.clip.external_id = group.genre.empty() ? video : group.genre + "_v_" + video;
     row.clip.source_list = list.string();
     row.clip.source_line = group.first_index;
@@ -582,6 +661,7 @@ void ReadFrameNames(const fs::path& path, const ListOptions& options, ListReadRe
     group.genre = name->genre;
     group.frames[static_cast<std::int64_t>(std::llround(name->frame * options.voc_frame_scale))];
   }
+  if (groups.empty()) NotAList(path, "no line is a 100DOH frame name");
   const fs::path video_dir =
       options.voc_video_dir.empty() ? path.parent_path() / "videos" : options.voc_video_dir;
   AddFrameGroups(groups, path, video_dir, options, out);
@@ -707,6 +787,7 @@ ListReadResult ReadClipList(const fs::path& given, const ListOptions& options) {
     return out;
   }
   const std::string ext = Lower(path.extension().string());
+  if (ext == ".json" && ReadJsonDocument(path, options, out)) return out;
   if (ext == ".jsonl" || ext == ".json" || ext == ".ndjson") {
     out.format = "jsonl";
     ReadJsonLines(path, options, out);

@@ -22,6 +22,20 @@
 //    clip spanning them, boxes and contact states become detections.
 //  - Plain text lists of 100DOH-family frame names (one per line): frames are
 //    grouped per video into clips like VOC folders, without boxes.
+//  - VOC folders and frame-name lists whose videos are absent name them by
+//    id through ListOptions::video_url_template ("...watch?v={id}"): a
+//    video missing from the video folder becomes that URL, for the
+//    download stage to fetch.
+//  - .json files holding one JSON document: an array of clip objects (as
+//    JSONL lines), or an object mapping video ids to objects of metadata
+//    (WiLoR's "whim" layout: {"<youtubeId>": {"resolution": ..., "fps": ...}})
+//    read as one whole-video clip per id, video = the URL template applied
+//    to the id (default https://www.youtube.com/watch?v={id}), the id as
+//    external id and the object's fields as metadata.
+//  A file that is not a clip list at all (a JSON scalar or an object of
+//  scalars, a JSON/JSONL file none of whose lines is an object, a text file
+//  none of whose lines is a frame name) is refused whole with an Error
+//  saying what was expected, never read as one bad row.
 #pragma once
 
 #include <filesystem>
@@ -49,7 +63,7 @@ struct RowError {
 };
 
 struct ListReadResult {
-  std::string format;  // "csv", "tsv", "jsonl", "epic", "voc", "framenames"
+  std::string format;  // "csv", "tsv", "jsonl", "json", "idmap", "epic", "voc", "framenames"
   std::vector<ListRow> rows;
   std::vector<RowError> errors;
 };
@@ -66,7 +80,14 @@ struct ListOptions {
   // to video frame numbers (e.g. the sampling stride).
   std::filesystem::path voc_video_dir;
   double voc_frame_scale = 1.0;
+  // VOC, frame names and JSON id maps: the URL of a video id, "{id}"
+  // replaced (e.g. "https://www.youtube.com/watch?v={id}"). VOC and frame
+  // names use it for ids without a file in the video folder.
+  std::string video_url_template;
 };
+
+// The URL template JSON id maps use when ListOptions gives none.
+inline constexpr const char* kYoutubeUrlTemplate = "https://www.youtube.com/watch?v={id}";
 
 // Reads any supported list, choosing the reader from the path (a folder is
 // VOC; .jsonl/.json lines; .tsv; .txt frame names; .csv, EPIC by header).

@@ -4,12 +4,18 @@
 
 #include <opencv2/videoio.hpp>
 
-#include "core/error.h"
+#include "core/permanent_error.h"
 
 namespace doasido::ingest {
 
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
   const ErrorSite site{.file = path.string()};
+  if (path.string().find("://") != std::string::npos) {
+    throw PermanentError("video_not_downloaded",
+                         "the video is a URL that was not downloaded (put the `download` stage "
+                         "before probe in the pipeline)",
+                         site);
+  }
   if (!std::filesystem::exists(path)) throw Error("video_missing", "no such file", site);
   cv::VideoCapture cap(path.string(), cv::CAP_FFMPEG);
   if (!cap.isOpened()) {
@@ -70,6 +76,7 @@ StageResult ProbeStage::Run(const ClipContext& context) {
     ErrorSite site = e.site();
     site.clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                  : context.clip.external_id;
+    if (dynamic_cast<const PermanentError*>(&e)) throw PermanentError(e.code(), e.message(), site);
     throw Error(e.code(), e.message(), site);
   }
   StageResult result;

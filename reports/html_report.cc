@@ -240,6 +240,13 @@ void RunsSection(const ReportData& d, std::string& h) {
          N(s.failed_attempts) + "</td><td class=\"reasons\">" + workers + "</td></tr>";
   }
   h += "</table>";
+  const DownloadStats& dl = d.downloads;
+  if (dl.clips + dl.failed > 0) {
+    h += "<p id=\"downloads\"><b>Downloads</b>: " + N(dl.fetched) + " fetched (" + N(dl.bytes) +
+         " bytes in " + Secs(dl.seconds) + " s, " + Secs(dl.bytes_per_s / 1e6) + " MB/s), " +
+         N(dl.reused) + " reused, " + N(dl.local) + " local, " + N(dl.failed) + " failed " +
+         ReasonList(dl.failures_by_reason) + "</p>";
+  }
   bool any = false;
   for (const auto& s : d.runs) {
     if (s.failures.empty() && s.errors.empty()) continue;

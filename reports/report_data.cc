@@ -21,6 +21,7 @@ ReportData CollectReport(Database& db, const ReportOptions& options) {
   const auto order = FunnelOrder(data.pipeline, runs);
   data.runs = ComputeRunStats(order, runs, db.CountEvents(), db.ListEvents({"retry", "failed"}, 0),
                               options.max_failures);
+  data.downloads = ComputeDownloadStats(db, runs);
 
   ScoreCollector collector;
   for (const auto& stage : order) {

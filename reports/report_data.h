@@ -11,6 +11,7 @@
 
 #include "core/config.h"
 #include "db/database.h"
+#include "reports/download_stats.h"
 #include "reports/funnel.h"
 #include "reports/run_stats.h"
 #include "reports/score_histogram.h"
@@ -45,6 +46,7 @@ struct ReportData {
   std::vector<StageScores> scores;  // one per funnel stage, in funnel order
   std::vector<SourceBreakdown> sources;
   std::vector<StageRunStats> runs;
+  DownloadStats downloads;
   std::map<ClipId, ClipOutcome> outcomes;
   std::vector<ClipRecord> clips;
   std::map<ClipId, std::string> videos;  // clip -> video path

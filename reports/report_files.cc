@@ -187,6 +187,7 @@ Json ReportToJson(const ReportData& d) {
           {"scores", scores},
           {"sources", sources},
           {"runs", runs},
+          {"downloads", d.downloads.ToJson()},
           {"thumbnails", thumbs},
           {"notes", d.notes}};
 }

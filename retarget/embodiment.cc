@@ -1,5 +1,6 @@
 #include "retarget/embodiment.h"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -9,6 +10,7 @@
 #include <tinyxml2.h>
 
 #include "core/error.h"
+#include "retarget/urdf_import.h"
 
 #ifndef DOASIDO_RETARGET_MODELS
 #define DOASIDO_RETARGET_MODELS "retarget/models"
@@ -135,7 +137,8 @@ std::string Merge(const std::string& xml, const std::string& scene, const std::s
   return Print(doc);
 }
 
-std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e) {
+std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e,
+                                      const std::string& hint = {}) {
   std::vector<ModelPoint> out;
   for (size_t i = 0; i < e.points.size(); ++i) {
     const EmbodimentPoint& p = e.points[i];
@@ -153,7 +156,9 @@ std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e) {
     } else {
       mp.body = NameToId(m, mjOBJ_BODY, p.body);
       if (mp.body < 0) {
-        throw Error("bad_embodiment", "model has no body '" + p.body + "'",
+        throw Error("bad_embodiment", "model has no body '" + p.body + "'" + hint +
+                    "; or name an existing body in the description (`doasido hand check` lists "
+                    "the model's chains)",
                     {.file = e.model_path.string(), .field = "points[" + std::to_string(i) + "]"});
       }
     }
@@ -164,10 +169,10 @@ std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e) {
 
 // The mount rotation taking the robot's palm points at qpos0 onto the
 // canonical human palm; identity when fewer than three palm points map.
-Mat3 CanonicalMount(const mjModel* m, const Embodiment& e) {
+Mat3 CanonicalMount(const mjModel* m, const Embodiment& e, const std::string& hint) {
   DataPtr d = MakeData(m);
   mj_kinematics(m, d.get());
-  const std::vector<ModelPoint> points = ResolvePoints(m, e);
+  const std::vector<ModelPoint> points = ResolvePoints(m, e, hint);
   std::vector<Vec3> robot, human;
   for (const ModelPoint& p : points) {
     auto it = kCanonicalPalm.find(p.keypoint);
@@ -179,6 +184,26 @@ Mat3 CanonicalMount(const mjModel* m, const Embodiment& e) {
   }
   if (robot.size() < 3) return Mat3::Identity();
   return FitRigid(robot, human).R();
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// A robot model (URDF or MJCF) where a hand description is expected: the
+// refusal says which command makes the description.
+[[noreturn]] void RefuseRobotModel(const std::filesystem::path& model, ErrorSite site) {
+  const bool urdf = Lower(model.extension().string()) == ".urdf";
+  const std::string command = urdf ? UrdfImportCommand(model) : MjcfImportCommand(model);
+  std::string message = "'" + model.string() + "' is " + (urdf ? "a URDF" : "an MJCF") +
+                        " robot model, not a hand description; run `" + command + "` once";
+  message += site.field == "model"
+                 ? " and use the description it writes, " + ImportedDescriptionPath(model).string() +
+                       " (or point \"model\" at the .xml it writes)"
+                 : " and use the description it writes: --hand " + ImportedDescriptionPath(model).string();
+  if (site.file.empty()) site.file = model.string();
+  throw Error("bad_embodiment", message, site);
 }
 
 std::filesystem::path FindModelFile(const std::string& model, const std::filesystem::path& desc_dir,
@@ -195,6 +220,23 @@ std::filesystem::path FindModelFile(const std::string& model, const std::filesys
 }  // namespace
 
 std::filesystem::path BuiltinModelsDir() { return DOASIDO_RETARGET_MODELS; }
+
+std::string MissingBodyHint(const std::string& xml) {
+  XMLDocument doc;
+  if (doc.Parse(xml.c_str()) == tinyxml2::XML_SUCCESS && doc.RootElement()) {
+    for (const XMLElement* c = doc.RootElement()->FirstChildElement("compiler"); c;
+         c = c->NextSiblingElement("compiler")) {
+      if (c->Attribute("fusestatic") && std::string(c->Attribute("fusestatic")) == "true") {
+        return "; the model's <compiler fusestatic=\"true\"> merges bodies without joints (palms, "
+               "fingertip links) into their parents: set fusestatic=\"false\" in its <compiler>";
+      }
+    }
+  }
+  return "; if the model was converted from URDF with MuJoCo's default <compiler "
+         "fusestatic=\"true\">, bodies without joints (palms, fingertip links) were merged into "
+         "their parents: convert it again with fusestatic=\"false\" (`doasido hand import --urdf` does)";
+}
+
 
 Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
                           const std::filesystem::path& robots_dir) {
@@ -230,6 +272,10 @@ Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
   }
   if (tips == 0) throw Error("bad_embodiment", "no fingertip point", {.file = file, .field = "points"});
   e.model_path = FindModelFile(e.model, json_path.parent_path(), robots_dir);
+  if (Lower(std::filesystem::path(e.model).extension().string()) == ".urdf") {
+    RefuseRobotModel(e.model_path.empty() ? std::filesystem::path(e.model) : e.model_path,
+                     {.file = file, .field = "model"});
+  }
   if (e.model_path.empty()) {
     throw Error("bad_embodiment", "model file '" + e.model + "' not found beside the description, in "
                 "the robots folder or in the built-in models", {.file = file, .field = "model"});
@@ -238,9 +284,9 @@ Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
 }
 
 Embodiment FindEmbodiment(const std::string& name_or_path, const std::filesystem::path& robots_dir) {
-  if (name_or_path.size() > 5 && name_or_path.substr(name_or_path.size() - 5) == ".json") {
-    return LoadEmbodiment(name_or_path, robots_dir);
-  }
+  const std::string ext = Lower(std::filesystem::path(name_or_path).extension().string());
+  if (ext == ".json") return LoadEmbodiment(name_or_path, robots_dir);
+  if (ext == ".urdf" || ext == ".xml") RefuseRobotModel(name_or_path, {.field = "hand"});
   std::string name = name_or_path;
   if (name == "shadow" || name == "allegro" || name == "sharpa") name += "_right";
   for (const auto& dir : {robots_dir, BuiltinModelsDir()}) {
@@ -248,8 +294,10 @@ Embodiment FindEmbodiment(const std::string& name_or_path, const std::filesystem
       return LoadEmbodiment(dir / (name + ".json"), robots_dir);
     }
   }
-  throw Error("bad_embodiment", "unknown hand '" + name_or_path + "' (no " + name +
-              ".json in the robots folder or built-in models)", {.field = "hand"});
+  throw Error("bad_embodiment", "unknown hand '" + name_or_path + "': give a built-in name (sharpa_right, "
+              "sharpa_left, shadow, allegro), a description .json, or import a robot model first with "
+              "`doasido hand import --urdf HAND.urdf --out DIR` (or --mjcf HAND.xml) and pass "
+              "DIR/HAND.json", {.field = "hand"});
 }
 
 HandModel BuildHandModel(const Embodiment& embodiment, const std::string& scene_xml,
@@ -262,7 +310,7 @@ HandModel BuildHandModel(const Embodiment& embodiment, const std::string& scene_
   std::string xml = prepared.xml;
   if (embodiment.floating_base) {
     ModelPtr probe = CompileMjcfText(AddFloatingBase(xml, Mat3::Identity(), {}, label), label);
-    hand.mount = CanonicalMount(probe.get(), embodiment);
+    hand.mount = CanonicalMount(probe.get(), embodiment, MissingBodyHint(xml));
     double inertia[6];
     for (int i = 0; i < 6; ++i) {
       const int j = NameToId(probe.get(), mjOBJ_JOINT, kWristJoints[i]);
@@ -277,7 +325,7 @@ HandModel BuildHandModel(const Embodiment& embodiment, const std::string& scene_
   hand.xml = xml;
   hand.model = CompileMjcfText(xml, label);
   const mjModel* m = hand.model.get();
-  hand.points = ResolvePoints(m, embodiment);
+  hand.points = ResolvePoints(m, embodiment, MissingBodyHint(xml));
   for (int j = 0; j < m->njnt; ++j) {
     const int type = m->jnt_type[j];
     if (type != mjJNT_HINGE && type != mjJNT_SLIDE) continue;

@@ -104,6 +104,13 @@ struct HandModel {
 HandModel BuildHandModel(const Embodiment& embodiment, const std::string& scene_xml = {},
                          const std::filesystem::path& scene_dir = {});
 
+// Why a body named in a description can be missing from `mjcf_xml`'s
+// model, as a clause to append to the refusal: <compiler fusestatic="true">
+// (set in the model, or MuJoCo's URDF default when the model was converted
+// from URDF) merges joint-less bodies such as palms and fingertip links into
+// their parents; the clause names the option to change.
+std::string MissingBodyHint(const std::string& mjcf_xml);
+
 // World position of a model point for the kinematics in `d`.
 Vec3 PointPosition(const mjModel* m, const mjData* d, const ModelPoint& point);
 

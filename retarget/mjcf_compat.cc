@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "retarget/mj_model.h"
+#include "retarget/urdf_import.h"
 
 namespace doasido::retarget {
 namespace {
@@ -417,6 +418,13 @@ PreparedMjcf PrepareMjcfText(const std::string& xml, const std::filesystem::path
     throw Error("bad_mjcf", std::string("malformed XML: ") + Str(doc.ErrorStr()), {.file = label});
   }
   XMLElement* root = doc.RootElement();
+  if (root && std::string(root->Name()) == "robot") {
+    throw Error("bad_mjcf",
+                "root element is <robot>: this is a URDF; MuJoCo 2.2.2 reads URDF only with the "
+                "compiler options doasido sets on import: run `" + UrdfImportCommand(label) +
+                    "` and use the MJCF and description it writes",
+                {.file = label});
+  }
   if (!root || std::string(root->Name()) != "mujoco") {
     throw Error("bad_mjcf", "root element is not <mujoco>", {.file = label});
   }

@@ -117,9 +117,9 @@ TEST_F(ShardTest, APartlyDoneShardMergesItsDonePart) {
   const auto parent = Ingested("parent");
   const auto shards = Shard(parent, 1);
   ASSERT_EQ(shards.size(), 1u);
-  {  // A worker on probe alone, stopped once every probe run is done.
+  {  // A worker on the first stages alone, stopped once every probe run is done.
     const std::string command = "exec '" + testing::DoasidoBin().string() + "' worker --db '" +
-                                shards[0].string() + "' --stages probe --poll 0.05";
+                                shards[0].string() + "' --stages download,probe --poll 0.05";
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {

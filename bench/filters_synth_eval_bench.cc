@@ -37,7 +37,9 @@
 #include <string>
 #include <vector>
 
+#include "core/config_check.h"
 #include "filters/analyze_stage.h"
+#include "filters/kept_shot.h"
 #include "synth/generator.h"
 
 namespace doasido::filters {
@@ -128,27 +130,27 @@ int main(int argc, char** argv) {
            : std::filesystem::temp_directory_path() / "doasido_filters_synth_eval";
   std::filesystem::create_directories(dir);
 
-  const std::vector<Filter> filters = {{"shot_boundary", {"cut", "fade", "black"}},
-                                       {"camera_motion", {"pan", "shake", "zoom"}},
-                                       {"out_of_frame", {"out_of_frame", "object_out"}},
-                                       {"activity", {"static"}},
-                                       {"interaction", {"no_contact"}}};
+  const std::vector<Filter> filters = {{kShotBoundaryStageName, {"cut", "fade", "black"}},
+                                       {kCameraMotionStageName, {"pan", "shake", "zoom"}},
+                                       {kOutOfFrameStageName, {"out_of_frame", "object_out"}},
+                                       {kActivityStageName, {"static"}},
+                                       {kInteractionStageName, {"no_contact"}}};
   const Json config = argc > 5 ? LoadConfigFile(argv[5]) : Json::object();
   auto section = [&config]<typename T>(const char* name, T value) {
-    ReadSection(config, name, value);
+    ReadCheckedSection(config, name, value);
     return value;
   };
-  const AnalyzeConfig analyze = section("filters_analyze", AnalyzeConfig{});
-  ShotBoundaryStage shots(section("shot_boundary", ShotBoundaryConfig{}));
-  CameraMotionStage camera(section("camera_motion", CameraMotionConfig{}));
-  OutOfFrameStage out(section("out_of_frame", OutOfFrameConfig{}));
-  ActivityStage activity(section("activity", ActivityConfig{}));
-  InteractionStage interaction(section("interaction", InteractionConfig{}));
-  const std::map<std::string, const Stage*> stages = {{"shot_boundary", &shots},
-                                                      {"camera_motion", &camera},
-                                                      {"out_of_frame", &out},
-                                                      {"activity", &activity},
-                                                      {"interaction", &interaction}};
+  const AnalyzeConfig analyze = section(kAnalyzeStageName, AnalyzeConfig{});
+  ShotBoundaryStage shots(section(kShotBoundaryStageName, ShotBoundaryConfig{}));
+  CameraMotionStage camera(section(kCameraMotionStageName, CameraMotionConfig{}));
+  OutOfFrameStage out(section(kOutOfFrameStageName, OutOfFrameConfig{}));
+  ActivityStage activity(section(kActivityStageName, ActivityConfig{}));
+  InteractionStage interaction(section(kInteractionStageName, InteractionConfig{}));
+  const std::map<std::string, const Stage*> stages = {{kShotBoundaryStageName, &shots},
+                                                      {kCameraMotionStageName, &camera},
+                                                      {kOutOfFrameStageName, &out},
+                                                      {kActivityStageName, &activity},
+                                                      {kInteractionStageName, &interaction}};
 
   const auto kinds = synth::AssignDefects(synth::ParseMix(cfg.mix), cfg.clips, cfg.seed);
   // predicted[filter][kind] = clips of that kind the filter caught; total[kind].
@@ -196,33 +198,27 @@ int main(int argc, char** argv) {
       Json input = {{"clip", m.at("clip")}, {"signals", m.at(f.name)}};
       if (!shot.is_null()) input["shot"] = shot;
       const StageResult r = *stages.at(f.name)->Redecide(input);
-      if (f.name == "shot_boundary") {
-        const Json& summary = r.measurements.at("summary");
-        shot = {{"boundaries", summary.at("boundaries")}};
-        if (summary.contains("trim")) {
-          shot["trim"] = summary.at("trim");
-        } else if (!summary.at("boundaries").empty()) {
-          shot["trim"] = summary.at("longest_segment");  // as filters/stage_support.cc does
-        }
+      if (f.name == kShotBoundaryStageName) {
+        shot = ToJson(KeptShotFromSummary(r.measurements.at("summary")));
       }
-      if (f.name == "interaction" && kind == "static") continue;  // no contact by construction
+      if (f.name == kInteractionStageName && kind == "static") continue;  // no contact by construction
       bool caught = r.verdict == Verdict::kReject;
-      if (f.name == "shot_boundary")
+      if (f.name == kShotBoundaryStageName)
         caught = !r.measurements.at("summary").at("boundaries").empty();
       if (caught) ++predicted[f.name][kind];
       if (r.verdict == Verdict::kFlag) ++flagged[f.name][kind];
       const bool positive = f.positives.count(kind) > 0;
       if (std::getenv("DOASIDO_EVAL_VERBOSE") != nullptr) {
         Json summary = r.measurements.at("summary");
-        if (f.name == "shot_boundary") {
+        if (f.name == kShotBoundaryStageName) {
           const auto lc =
-              m.at("shot_boundary").at("changed_fraction_long").get<std::vector<double>>();
+              m.at(kShotBoundaryStageName).at("changed_fraction_long").get<std::vector<double>>();
           summary["max_changed_long"] = *std::max_element(lc.begin(), lc.end());
         }
         std::printf("ALL %s %s %s %d %s %s\n", clip_id.c_str(), kind.c_str(), f.name.c_str(),
                     caught ? 1 : 0, r.reason.c_str(), summary.dump().c_str());
       }
-      if (caught != positive && !(f.name == "interaction" && kind == "static")) {
+      if (caught != positive && !(f.name == kInteractionStageName && kind == "static")) {
         misses.push_back(clip_id + " (" + kind + "): " + f.name + " " +
                          (caught ? "false alarm " : "missed ") + r.reason + " " +
                          r.measurements.at("summary").dump());
@@ -241,7 +237,7 @@ int main(int argc, char** argv) {
     int tp = 0, fp = 0, fn = 0, flag_pos = 0, flag_neg = 0;
     std::string names;
     for (const auto& [kind, n] : total) {
-      if (f.name == "interaction" && kind == "static") continue;
+      if (f.name == kInteractionStageName && kind == "static") continue;
       const int caught = predicted[f.name][kind];
       if (f.positives.count(kind)) {
         tp += caught;

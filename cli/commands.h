@@ -3,7 +3,7 @@
 // function creates its subcommand on `app`, with a description and an
 // example in the footer, and sets the callback that runs it. Callbacks
 // report failure by throwing doasido::Error; main turns that into a message
-// and exit code 1.
+// and exit code 1 (2 for a refused configuration, Error("bad_config")).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -22,7 +22,10 @@ struct DbOptions {
   std::string config;  // optional TOML/JSON file with one table per stage
 };
 void AddDbOptions(CLI::App& cmd, DbOptions& options);
-// The parsed --config file, or an empty object.
+// The parsed --config file, or an empty object. Throws Error("bad_config")
+// naming the file, section.key, the value and the allowed range for a file
+// that does not parse, has an unknown section or key, a value of the wrong
+// type or out of range.
 Json LoadConfig(const DbOptions& options);
 
 // The stage x state x verdict table of `doasido status`.
@@ -40,6 +43,7 @@ void AddRethresholdCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
 void AddHandCommand(CLI::App& app);
+void AddDeployCommand(CLI::App& app);
 // shard, merge and slurm (cli/shard_command.cc).
 void AddShardCommands(CLI::App& app);
 // Per-shard progress under the status table; nothing without shards.

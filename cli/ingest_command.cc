@@ -2,7 +2,7 @@
 
 #include "cli/commands.h"
 #include "cli/ingest_options.h"
-#include "cli/stage_registry.h"
+#include "pipeline/stage_registry.h"
 #include "db/database.h"
 #include "ingest/ingest.h"
 
@@ -33,7 +33,7 @@ void AddIngestOptions(CLI::App& cmd, IngestOptions& opt) {
 }
 
 bool IngestLists(Database& db, const IngestOptions& opt) {
-  if (db.Pipeline().empty()) db.SetPipeline(DefaultPipeline());
+  if (db.Pipeline().empty()) db.SetPipeline(pipeline::DefaultPipeline());
   Json all = Json::array();
   bool ok = true;
   for (const auto& list : opt.lists) {

@@ -1,7 +1,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
-#include "cli/stage_registry.h"
+#include "pipeline/stage_registry.h"
 #include "db/database.h"
 
 namespace doasido::cli {
@@ -15,7 +15,7 @@ void AddInitCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("init", "Create a database (or upgrade one) and set its pipeline");
   AddDbOptions(*cmd, opt->db);
   std::string stages;
-  for (const auto& entry : StageTable()) {
+  for (const auto& entry : pipeline::StageTable()) {
     stages += "\n  " + entry.name + std::string(14 - std::min<size_t>(13, entry.name.size()), ' ') +
               entry.summary;
   }
@@ -26,11 +26,12 @@ void AddInitCommand(CLI::App& app) {
               "\n\nExample:\n  doasido init --db work/doasido.db\n"
               "  doasido init --db work/queue-test.db --pipeline noop");
   cmd->callback([opt] {
+    LoadConfig(opt->db);  // a bad --config is refused before the database is touched
     std::filesystem::create_directories(
         std::filesystem::absolute(opt->db.db).parent_path());
     Database db(opt->db.db);
-    auto pipeline = opt->pipeline.empty() ? DefaultPipeline() : opt->pipeline;
-    for (const auto& name : pipeline) MakeStage(name, Json::object());  // validates names
+    auto pipeline = opt->pipeline.empty() ? pipeline::DefaultPipeline() : opt->pipeline;
+    for (const auto& name : pipeline) pipeline::MakeStage(name, Json::object());  // known names
     if (opt->pipeline.empty() && !db.Pipeline().empty()) {
       pipeline = db.Pipeline();  // re-running init keeps an existing pipeline
     }

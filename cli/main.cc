@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
                          AddReportCommand, AddReviewCommand, AddHandCommand,
+                         AddDeployCommand,
                          AddShardCommands};
   for (auto add : commands) add(app);
 
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const doasido::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
+    return e.code() == "bad_config" ? 2 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -37,7 +37,7 @@ void AddQueueCommand(CLI::App& app) {
       Json out = Json::array();
       for (const auto& r : rows) {
         out.push_back({{"run", r.run_id}, {"clip", r.clip_id}, {"external_id", r.external_id},
-                       {"stage", r.stage}, {"state", r.state}, {"attempts", r.attempts},
+                       {"stage", r.stage}, {"state", ToString(r.state)}, {"attempts", r.attempts},
                        {"verdict", r.verdict}, {"reason", r.reason}, {"error", r.error},
                        {"lease_owner", r.lease_owner}, {"seconds", r.duration_s}});
       }
@@ -48,7 +48,7 @@ void AddQueueCommand(CLI::App& app) {
                 "try", "verdict", "reason / error");
     for (const auto& r : rows) {
       std::printf("%8lld %-24.24s %-16s %-8s %3d %-7s %s\n", static_cast<long long>(r.clip_id),
-                  r.external_id.c_str(), r.stage.c_str(), r.state.c_str(), r.attempts,
+                  r.external_id.c_str(), r.stage.c_str(), ToString(r.state), r.attempts,
                   r.verdict.c_str(), (r.error.empty() ? r.reason : r.error).c_str());
     }
   });

@@ -1,6 +1,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "core/config_check.h"
 #include "db/database.h"
 #include "reports/report.h"
 
@@ -38,7 +39,7 @@ void AddReportCommand(CLI::App& app) {
     }
     Database db(opt->db.db);
     reports::ReportOptions options;
-    ReadSection(LoadConfig(opt->db), "report", options);
+    ReadCheckedSection(LoadConfig(opt->db), reports::kReportSection, options);
     // Given on the command line, it wins over the config file.
     if (cmd->count("--max-thumbnails") > 0) {
       options.thumbnail.max_per_reason = opt->max_thumbnails;

@@ -1,7 +1,5 @@
 // doasido retarget-kinematic: offline kinematic retargeting of a keypoint
 // CSV (21 OpenPose keypoints x xyz per row, metres) onto a robot hand.
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -43,7 +41,8 @@ void AddRetargetCommand(CLI::App& app) {
   cmd->add_option("--out", opt->out, "Output folder (created)")->required();
   cmd->add_option("--robots-dir", opt->robots_dir,
                   "Folder of robot models the descriptions refer to (default: "
-                  "../shared/data/robots beside the source tree)");
+                  "$DOASIDO_ROBOTS_DIR, else share/doasido/robots beside the executable's "
+                  "folder)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->capture_default_str();
   cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")
       ->capture_default_str();
@@ -66,38 +65,16 @@ void AddRetargetCommand(CLI::App& app) {
         retarget::BuildHandModel(retarget::FindEmbodiment(opt->hand, robots));
     retarget::KinematicRetargeter solver(hand, opt->kinematic);
     Progress progress("retarget", frames.size());
-    // Solve frame by frame (as Solve does) to report progress.
-    std::vector<retarget::Keypoints21> all(frames.begin(), frames.end());
-    solver.AdaptScale(all);
-    retarget::KinematicConfig fixed = opt->kinematic;
-    fixed.scale = solver.scale();
-    retarget::KinematicRetargeter run(hand, fixed);
-    retarget::HandTrajectory t;
-    t.embodiment = hand.embodiment.name;
-    t.fps = opt->fps;
-    t.scale = fixed.scale;
-    t.qpos_names = run.VariableNames();
-    Eigen::VectorXd previous;
-    for (size_t i = 0; i < frames.size(); ++i) {
-      const retarget::FrameSolution s = run.SolveFrame(frames[i], i ? &previous : nullptr);
-      previous = s.qpos;
-      t.qpos.push_back(s.qpos);
-      t.valid.push_back(true);
-      t.fingertip_error.push_back(s.fingertip_mean);
-      progress.Set(i + 1);
-    }
+    const retarget::HandTrajectory t =
+        solver.Solve(frames, {}, opt->fps, [&progress](std::size_t done) { progress.Set(done); });
     progress.Finish();
     std::filesystem::create_directories(opt->out);
     retarget::WriteTrajectoryJson(t, std::filesystem::path(opt->out) / "trajectory.json");
     retarget::WriteTrajectoryCsv(t, std::filesystem::path(opt->out) / "trajectory.csv");
-    std::vector<double> e = t.fingertip_error;
-    std::sort(e.begin(), e.end());
-    double mean = 0;
-    for (double x : e) mean += x;
-    mean /= e.size();
-    std::printf("%s: %zu frames, scale %.3f, fingertip error mean %.1f mm, p95 %.1f mm -> %s\n",
-                t.embodiment.c_str(), e.size(), t.scale, 1000 * mean,
-                1000 * e[static_cast<size_t>(0.95 * (e.size() - 1))], opt->out.c_str());
+    const retarget::FingertipErrorStats e = retarget::SummarizeFingertipError(t.fingertip_error);
+    std::printf("%s: %d frames, scale %.3f, fingertip error mean %.1f mm, p95 %.1f mm -> %s\n",
+                t.embodiment.c_str(), e.frames, t.scale, 1000 * e.mean, 1000 * e.p95,
+                opt->out.c_str());
   });
 }
 

@@ -20,6 +20,9 @@ void AddRunCommand(CLI::App& app) {
               "stopped.\n\nExample:\n"
               "  doasido run --db work/doasido.db clips.csv --jobs 2");
   cmd->callback([opt] {
+    auto worker = opt->worker;
+    worker.until_empty = true;
+    worker = FinishWorkerOptions(worker, opt->db);  // refuses a bad --config before any work
     std::filesystem::create_directories(std::filesystem::absolute(opt->db.db).parent_path());
     {
       Database db(opt->db.db);
@@ -31,9 +34,7 @@ void AddRunCommand(CLI::App& app) {
                     {.file = opt->db.db});
       }
     }
-    auto worker = opt->worker;
-    worker.until_empty = true;
-    RunWorkers(FinishWorkerOptions(worker, opt->db));
+    pipeline::RunWorkers(worker);
     Database db(opt->db.db);
     std::printf("\n");
     PrintStatusTable(db);

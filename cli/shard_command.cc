@@ -6,7 +6,7 @@
 #include <iterator>
 
 #include "cli/commands.h"
-#include "cli/stage_registry.h"
+#include "pipeline/stage_registry.h"
 #include "core/error.h"
 #include "db/database.h"
 #include "pipeline/shard.h"
@@ -36,7 +36,7 @@ void AddShardOptions(CLI::App& cmd, ShardCliOptions& o) {
 // The parameter hash each pipeline stage runs with under the config.
 Json StageHashes(Database& db, const Json& config) {
   Json hashes = Json::object();
-  for (const auto& stage : db.Pipeline()) hashes[stage] = ParamHash(MakeStage(stage, config)->Params());
+  for (const auto& stage : db.Pipeline()) hashes[stage] = ParamHash(pipeline::MakeStage(stage, config)->Params());
   return hashes;
 }
 

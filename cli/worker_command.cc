@@ -22,7 +22,7 @@ void AddWorkerCommand(CLI::App& app) {
       "  doasido worker --db work/doasido.db --jobs 4 --until-empty\n"
       "  doasido worker --db work/doasido.db --stages probe --config params.toml");
   cmd->callback([opt] {
-    const int code = RunWorkers(FinishWorkerOptions(opt->worker, opt->db));
+    const int code = pipeline::RunWorkers(FinishWorkerOptions(opt->worker, opt->db));
     if (code != 0) throw Error("worker", "workers stopped with errors");
   });
 }

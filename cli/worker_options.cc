@@ -1,5 +1,7 @@
 #include "cli/worker_options.h"
 
+#include <memory>
+
 #include "core/progress.h"
 
 namespace doasido::cli {
@@ -21,7 +23,18 @@ void AddWorkerOptions(CLI::App& cmd, WorkerOptions& opt) {
 WorkerOptions FinishWorkerOptions(WorkerOptions opt, const DbOptions& db) {
   opt.db = db.db;
   opt.config = LoadConfig(db);
-  opt.progress = Progress::Interactive() || opt.jobs > 1;
+  if (Progress::Interactive() || opt.jobs > 1) {
+    // Created on first use, in the supervising process only.
+    auto bar = std::make_shared<std::unique_ptr<Progress>>();
+    opt.progress = [bar](std::int64_t finished, std::int64_t total) {
+      if (!*bar) *bar = std::make_unique<Progress>("work", 0);
+      (*bar)->SetTotal(static_cast<std::uint64_t>(total));
+      (*bar)->Set(static_cast<std::uint64_t>(finished));
+    };
+    opt.progress_done = [bar] {
+      if (*bar) (*bar)->Finish();
+    };
+  }
   return opt;
 }
 

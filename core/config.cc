@@ -1,6 +1,7 @@
 #include "core/config.h"
 #include "core/config_check.h"
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -55,6 +56,49 @@ void RequireInRange(const std::string& section, const std::string& key, double v
   std::ostringstream message;
   message << "value " << value << " is out of range [" << lo << ", " << hi << "]";
   throw Error("bad_config", message.str(), {.field = section + "." + key});
+}
+
+void RequireOneOf(const std::string& section, const std::string& key, const std::string& value,
+                  const std::vector<std::string>& choices) {
+  std::string list;
+  for (const auto& choice : choices) {
+    if (choice == value) return;
+    list += (list.empty() ? "\"" : ", \"") + choice + "\"";
+  }
+  throw Error("bad_config", "value \"" + value + "\" is not one of " + list,
+              {.field = section + "." + key});
+}
+
+void RequireSameShape(const std::string& section, const Json& defaults, const Json& given) {
+  if (!defaults.is_object() || !given.is_object()) return;  // ReadSection names these
+  for (const auto& [key, value] : given.items()) {
+    const std::string field = section + "." + key;
+    if (!defaults.contains(key)) throw Error("bad_config", "unknown key", {.field = field});
+    const Json& def = defaults.at(key);
+    auto refuse = [&](const std::string& expected) {
+      throw Error("bad_config", "expects " + expected + ", got " + value.dump(),
+                  {.field = field});
+    };
+    if (def.is_object()) {
+      if (!value.is_object()) refuse("a table");
+      RequireSameShape(field, def, value);
+    } else if (def.is_boolean() && !value.is_boolean()) {
+      refuse("true or false");
+    } else if (def.is_string() && !value.is_string()) {
+      refuse("a string");
+    } else if (def.is_array() && !value.is_array()) {
+      refuse("an array");
+    } else if (def.is_number()) {
+      if (!value.is_number()) refuse("a number");
+      if (def.is_number_integer() && value.is_number_float()) {
+        const double v = value.get<double>();
+        if (!std::isfinite(v) || std::trunc(v) != v) refuse("an integer");
+      }
+      if (def.is_number_unsigned() && value.is_number_integer() && value.get<long long>() < 0) {
+        refuse("a non-negative integer");
+      }
+    }
+  }
 }
 
 std::string ParamHash(const Json& params) {

@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "db/records.h"
@@ -33,6 +34,14 @@ class Statement;
 
 enum class RunState { kPending, kRunning, kDone, kFailed };
 const char* ToString(RunState s);
+// Inverse of ToString; throws Error("database") for any other text.
+RunState ParseRunState(std::string_view text);
+// A state equals its stored name ("pending", "running", "done", "failed").
+inline bool operator==(RunState state, std::string_view text) { return text == ToString(state); }
+
+// The verdict-history source of a person's decision (the others are "stage"
+// and "rethreshold").
+inline constexpr const char* kHumanVerdictSource = "human";
 
 // A stage run handed to a worker.
 struct Claim {
@@ -47,7 +56,7 @@ struct StageRunRow {
   ClipId clip_id = 0;
   std::string external_id;
   std::string stage;
-  std::string state;
+  RunState state = RunState::kPending;
   int attempts = 0;
   std::string verdict;  // empty until decided
   std::string reason;
@@ -412,6 +421,28 @@ class Database {
   // database no live worker holds, e.g. a shard whose task was killed: its
   // leases would otherwise block the next task until they expire.
   std::int64_t ReleaseLeases();
+
+  // ---- Trajectory verification ----------------------------------------------
+  // (db/database_verify.cc) Robot trajectories waiting for a person to
+  // verify them in the review app (docs/review.md). "Verified" is the
+  // trajectory stage's verdict pass set by a person (source "human"), which
+  // `dataset create --select verified` selects.
+  struct TrajectoryRun {
+    ClipId clip_id = 0;
+    std::string external_id;
+    std::string stage;
+    std::string verdict;  // pass | flag
+    std::string reason;
+  };
+  // Done runs of `stages` with verdict pass or flag whose latest verdict was
+  // not set by a person, in clip order.
+  std::vector<TrajectoryRun> ListTrajectoriesToVerify(const std::vector<std::string>& stages);
+  // A person's verification, in one transaction: a `reviews` row, the human
+  // verdict (accept -> pass with reason "", reject -> reject with `reason`)
+  // and a "review" event. Throws Error("not_verifiable") and writes nothing
+  // unless the run is done with verdict pass or flag.
+  void RecordVerification(ClipId clip, const std::string& stage, const std::string& reviewer,
+                          bool accept, const std::string& reason);
 
  private:
   db::Statement& Prepare(const std::string& sql);

@@ -45,7 +45,7 @@ void Database::RecordReview(ClipId clip, const std::string& stage, const std::st
       .Bind(5, reason)
       .Bind(6, Now())
       .Run();
-  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, reason, "human");
+  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, reason, kHumanVerdictSource);
   LogEvent(clip, stage, "review", reviewer, std::string(decision) + " " + reason);
   tx.Commit();
 }

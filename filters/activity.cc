@@ -87,7 +87,7 @@ double ActiveFraction(const ActivitySignals& s, double min_moving, std::int64_t 
 namespace {
 
 StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
-  RequireAnalysis(measurements, "activity");
+  RequireAnalysis(measurements, kActivityStageName);
   const ActivitySignals s = ActivitySignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.energy.size()));
   const double active = ActiveFraction(s, c.min_moving_fraction, span.first, span.last);
@@ -107,8 +107,7 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
                                      {ScoreEntry("active_fraction", active, false,
                                                  c.min_active_fraction)}}};
   if (active < c.min_active_fraction) {
-    result.verdict = Verdict::kReject;
-    result.reason = "no_activity";
+    SetVerdict(result, Verdict::kReject, "no_activity");
   }
   return result;
 }
@@ -116,6 +115,6 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
 }  // namespace
 
 ActivityStage::ActivityStage(ActivityConfig config)
-    : MeasuredVerdictStage("activity", std::move(config), DecideActivity) {}
+    : MeasuredVerdictStage(kActivityStageName, std::move(config), DecideActivity) {}
 
 }  // namespace doasido::filters

@@ -29,11 +29,17 @@
 
 namespace doasido::filters {
 
+// The stage's name: also its config section and its section of the
+// analysis stage's measurements.
+inline constexpr const char* kActivityStageName = "activity";
+
 struct ActivitySignalConfig {
   double box_margin = 0.25;  // grow hand boxes by this fraction per side
   int pixel_threshold = 15;  // gray levels
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ActivitySignalConfig, box_margin, pixel_threshold)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const ActivitySignalConfig& c, const std::string& section);
 
 struct ActivitySignals {
   std::vector<double> energy;
@@ -61,6 +67,8 @@ struct ActivityConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ActivityConfig, min_moving_fraction,
                                                 min_active_fraction)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const ActivityConfig& c, const std::string& section);
 
 // Fraction of the frames first..last (inclusive positions; frame 0, which
 // has no predecessor, never counts) whose moving fraction is >= `min_moving`.

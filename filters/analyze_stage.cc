@@ -45,11 +45,11 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
         {"full_height", g.full_height},
         {"downscale", g.downscale},
         {"detection_source", builtin ? "builtin" : (detections.empty() ? "none" : "clip")}}},
-      {"shot_boundary", ToJson(shots.signals())},
-      {"activity", ToJson(activity.signals())},
-      {"camera_motion", ToJson(camera.signals())},
-      {"out_of_frame", ToJson(out_of_frame.signals())},
-      {"interaction", ToJson(interaction.signals())}};
+      {kShotBoundaryStageName, ToJson(shots.signals())},
+      {kActivityStageName, ToJson(activity.signals())},
+      {kCameraMotionStageName, ToJson(camera.signals())},
+      {kOutOfFrameStageName, ToJson(out_of_frame.signals())},
+      {kInteractionStageName, ToJson(interaction.signals())}};
   if (builtin) out.builtin_detections = detector.detections();
   return out;
 }

@@ -18,7 +18,7 @@
 // The clip span is ClipRecord start_frame/end_frame (inclusive), else
 // start_s/end_s converted at the stream's frame rate, else the whole file.
 // A missing, unreadable or truncated file throws Error naming the clip, the
-// file and the frame (ingest/video_decoder.h).
+// file and the frame (video/video_decoder.h).
 #pragma once
 
 #include <string>
@@ -37,7 +37,7 @@ struct AnalyzeConfig {
   int analysis_size = 256;  // longer side, PySceneDetect's default
   // "exact": PySceneDetect's pixels (deblocked decode, full-size BGR,
   // cv::resize), so shot scores equal its published ones. "fast": no
-  // deblocking, YUV scaled straight to analysis size (ingest/video_decoder.h);
+  // deblocking, YUV scaled straight to analysis size (video/video_decoder.h);
   // scores move by a few per cent, which can move cuts whose score sits at
   // a threshold (testvideo: 211 and 691).
   std::string decode = "exact";
@@ -53,6 +53,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, de
                                                 use_builtin_detector,
                                                 frame_count_tolerance, shot, activity,
                                                 camera_motion, out_of_frame, detector)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const AnalyzeConfig& c, const std::string& section);
 
 // Everything one analysis pass produced (for callers outside the queue,
 // such as benchmarks and tests).
@@ -71,7 +73,7 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
 class AnalyzeStage : public Stage {
  public:
   explicit AnalyzeStage(AnalyzeConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "filters_analyze"; }
+  std::string Name() const override { return kAnalyzeStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 

@@ -208,7 +208,7 @@ CameraMotionSummary SummarizeCameraMotion(const CameraMotionSignals& s, const Sh
 namespace {
 
 StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfig& c) {
-  RequireAnalysis(measurements, "camera_motion");
+  RequireAnalysis(measurements, kCameraMotionStageName);
   const CameraMotionSignals s = CameraMotionSignalsFromJson(measurements.at("signals"));
   const std::int64_t frames =
       static_cast<std::int64_t>(NumberOr(measurements.at("clip"), "frames", 0));
@@ -253,14 +253,11 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
   const bool flag = m.translation_rate >= c.flag_translation_rate ||
                     m.rotation_rate >= c.flag_rotation_rate || m.scale_rate >= c.flag_scale_rate;
   if (reject) {
-    result.verdict = Verdict::kReject;
-    result.reason = "camera_motion";
+    SetVerdict(result, Verdict::kReject, "camera_motion");
   } else if (m.pairs > 0 && m.valid_fraction < c.min_valid_fraction) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "camera_motion_unknown";
+    SetVerdict(result, Verdict::kFlag, "camera_motion_unknown");
   } else if (flag) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "camera_motion";
+    SetVerdict(result, Verdict::kFlag, "camera_motion");
   }
   return result;
 }
@@ -268,6 +265,6 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
 }  // namespace
 
 CameraMotionStage::CameraMotionStage(CameraMotionConfig config)
-    : MeasuredVerdictStage("camera_motion", std::move(config), DecideCameraMotion) {}
+    : MeasuredVerdictStage(kCameraMotionStageName, std::move(config), DecideCameraMotion) {}
 
 }  // namespace doasido::filters

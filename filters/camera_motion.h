@@ -43,6 +43,10 @@
 
 namespace doasido::filters {
 
+// The stage's name: also its config section and its section of the
+// analysis stage's measurements.
+inline constexpr const char* kCameraMotionStageName = "camera_motion";
+
 struct CameraMotionSignalConfig {
   double sample_fps = 10.0;
   int max_corners = 200;
@@ -63,6 +67,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CameraMotionSignalConfig, sample
                                                 quality_level, min_distance, lk_window, lk_levels,
                                                 ransac_threshold, model, box_margin, min_points,
                                                 min_background_points)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const CameraMotionSignalConfig& c, const std::string& section);
 
 struct CameraMotionSignals {
   int step = 1;                     // frames between samples
@@ -113,6 +119,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CameraMotionConfig, reject_trans
                                                 flag_scale_rate, reject_peak_translation_rate,
                                                 reject_peak_rotation_rate, reject_peak_scale_rate,
                                                 min_valid_fraction)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const CameraMotionConfig& c, const std::string& section);
 
 // Summary numbers of a clip's camera motion (see the file comment).
 struct CameraMotionSummary {

@@ -1,6 +1,6 @@
 // The single decode pass that feeds every filter.
 //
-// AnalyzeFrames decodes a clip once (ingest/video_decoder.h) and hands each
+// AnalyzeFrames decodes a clip once (video/video_decoder.h) and hands each
 // analysis-resolution frame, with the work every consumer shares (the gray
 // image and the hand/object boxes of that frame), to a list of consumers in
 // order. Consumers keep their own per-frame signals; they never decode.
@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "db/records.h"
-#include "ingest/video_decoder.h"
+#include "video/video_decoder.h"
 
 namespace doasido::filters {
 

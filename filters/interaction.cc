@@ -16,13 +16,6 @@
 namespace doasido::filters {
 namespace {
 
-std::vector<int> IntArray(const Json& j, const char* key) {
-  if (!j.contains(key) || !j.at(key).is_array()) {
-    throw Error("bad_measurements", "missing per-frame array", {.field = key});
-  }
-  return j.at(key).get<std::vector<int>>();
-}
-
 // Gap between two boxes in pixels (0 when they overlap).
 double BoxGap(const cv::Rect2d& a, const cv::Rect2d& b) {
   const double dx = std::max({0.0, b.x - (a.x + a.width), a.x - (b.x + b.width)});
@@ -234,7 +227,7 @@ double InteractionFraction(const InteractionSignals& s, const std::vector<int>& 
 namespace {
 
 StageResult DecideInteraction(const Json& measurements, const InteractionConfig& c) {
-  RequireAnalysis(measurements, "interaction");
+  RequireAnalysis(measurements, kInteractionStageName);
   const InteractionSignals s = InteractionSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
   size_t covered = 0, with_hands = 0;
@@ -255,11 +248,9 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
        {ScoreEntry("interaction_fraction", fraction, false, c.min_interaction_fraction),
         ScoreEntry("covered_fraction", covered_fraction, false, c.min_covered_fraction)}}};
   if (covered_fraction < c.min_covered_fraction) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "no_detections";
+    SetVerdict(result, Verdict::kFlag, "no_detections");
   } else if (fraction < c.min_interaction_fraction) {
-    result.verdict = Verdict::kReject;
-    result.reason = "no_interaction";
+    SetVerdict(result, Verdict::kReject, "no_interaction");
   }
   return result;
 }
@@ -267,7 +258,7 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
 }  // namespace
 
 InteractionStage::InteractionStage(InteractionConfig config)
-    : MeasuredVerdictStage("interaction", std::move(config), DecideInteraction) {}
+    : MeasuredVerdictStage(kInteractionStageName, std::move(config), DecideInteraction) {}
 
 std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, double min_score,
                                           const std::string& source) {

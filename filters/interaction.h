@@ -61,6 +61,10 @@
 
 namespace doasido::filters {
 
+// The stage's name: also its config section and its section of the
+// analysis stage's measurements.
+inline constexpr const char* kInteractionStageName = "interaction";
+
 struct BuiltinDetectorConfig {
   // Skin in YCrCb (8-bit), a common range for many skin tones.
   int y_min = 40;
@@ -84,6 +88,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BuiltinDetectorConfig, y_min, cr
                                                 min_object_area, contact_distance, max_hands,
                                                 hold_frames, compensate_camera,
                                                 global_motion_fraction)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const BuiltinDetectorConfig& c, const std::string& section);
 
 // The built-in classical detector (see the file comment). Writes each
 // frame's boxes into FrameContext::boxes (so later consumers use them) and
@@ -127,6 +133,8 @@ struct InteractionConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(InteractionConfig, contact_states,
                                                 min_interaction_fraction, min_covered_fraction)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const InteractionConfig& c, const std::string& section);
 
 // Fraction of the covered frames among positions first..last (inclusive)
 // with a hand in one of `contact_states`.
@@ -140,11 +148,15 @@ class InteractionStage : public MeasuredVerdictStage<InteractionConfig> {
   explicit InteractionStage(InteractionConfig config = {});
 };
 
+inline constexpr const char* kExternalDetectorStageName = "hand_object_detector";
+
 struct ExternalDetectorConfig {
   std::string command;  // empty: the stage passes without running anything
   double min_score = 0.5;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExternalDetectorConfig, command, min_score)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const ExternalDetectorConfig& c, const std::string& section);
 
 // Reads an external detector's JSON Lines output (format in the file
 // comment). Throws Error("bad_detections") naming the file and line.
@@ -167,7 +179,7 @@ std::vector<Detection> RunExternalDetector(const ExternalDetectorConfig& config,
 class ExternalDetectorStage : public Stage {
  public:
   explicit ExternalDetectorStage(ExternalDetectorConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return "hand_object_detector"; }
+  std::string Name() const override { return kExternalDetectorStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 

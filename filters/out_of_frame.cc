@@ -9,16 +9,6 @@
 #include "filters/stage_support.h"
 
 namespace doasido::filters {
-namespace {
-
-std::vector<int> IntArray(const Json& j, const char* key) {
-  if (!j.contains(key) || !j.at(key).is_array()) {
-    throw Error("bad_measurements", "missing per-frame array", {.field = key});
-  }
-  return j.at(key).get<std::vector<int>>();
-}
-
-}  // namespace
 
 Json ToJson(const OutOfFrameSignals& s) {
   return Json{{"covered", s.covered},
@@ -144,7 +134,7 @@ OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t f
 namespace {
 
 StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c) {
-  RequireAnalysis(measurements, "out_of_frame");
+  RequireAnalysis(measurements, kOutOfFrameStageName);
   const OutOfFrameSignals s = OutOfFrameSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
   const OutOfFrameSummary m = SummarizeOutOfFrame(s, span.first, span.last);
@@ -166,16 +156,13 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
                                       ScoreEntry("cut_fraction", m.cut_fraction, true,
                                                  c.reject_cut_fraction, c.flag_cut_fraction)}}};
   if (m.covered_fraction < c.min_covered_fraction) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "no_detections";
+    SetVerdict(result, Verdict::kFlag, "no_detections");
   } else if (m.missing_fraction >= c.reject_missing_fraction ||
              m.cut_fraction >= c.reject_cut_fraction) {
-    result.verdict = Verdict::kReject;
-    result.reason = "out_of_frame";
+    SetVerdict(result, Verdict::kReject, "out_of_frame");
   } else if (m.missing_fraction >= c.flag_missing_fraction ||
              m.cut_fraction >= c.flag_cut_fraction) {
-    result.verdict = Verdict::kFlag;
-    result.reason = "out_of_frame";
+    SetVerdict(result, Verdict::kFlag, "out_of_frame");
   }
   return result;
 }
@@ -183,6 +170,6 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
 }  // namespace
 
 OutOfFrameStage::OutOfFrameStage(OutOfFrameConfig config)
-    : MeasuredVerdictStage("out_of_frame", std::move(config), DecideOutOfFrame) {}
+    : MeasuredVerdictStage(kOutOfFrameStageName, std::move(config), DecideOutOfFrame) {}
 
 }  // namespace doasido::filters

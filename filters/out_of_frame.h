@@ -45,10 +45,16 @@
 
 namespace doasido::filters {
 
+// The stage's name: also its config section and its section of the
+// analysis stage's measurements.
+inline constexpr const char* kOutOfFrameStageName = "out_of_frame";
+
 struct OutOfFrameSignalConfig {
   double border_margin = 0.005;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OutOfFrameSignalConfig, border_margin)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const OutOfFrameSignalConfig& c, const std::string& section);
 
 struct OutOfFrameSignals {
   std::vector<int> covered, hands, hand_cut, object_needed, object_missing, object_cut;
@@ -84,6 +90,8 @@ struct OutOfFrameConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OutOfFrameConfig, reject_missing_fraction,
                                                 flag_missing_fraction, reject_cut_fraction,
                                                 flag_cut_fraction, min_covered_fraction)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const OutOfFrameConfig& c, const std::string& section);
 
 struct OutOfFrameSummary {
   double covered_fraction = 0;

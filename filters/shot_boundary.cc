@@ -430,7 +430,7 @@ std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
 namespace {
 
 StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& config) {
-  RequireAnalysis(measurements, "shot_boundary");
+  RequireAnalysis(measurements, kShotBoundaryStageName);
   const ShotSignals signals = ShotSignalsFromJson(measurements.at("signals"));
   const Json& clip = measurements.at("clip");
   const auto first = static_cast<std::int64_t>(NumberOr(clip, "first_frame", 0));
@@ -510,6 +510,6 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
 }  // namespace
 
 ShotBoundaryStage::ShotBoundaryStage(ShotBoundaryConfig config)
-    : MeasuredVerdictStage("shot_boundary", std::move(config), DecideShots) {}
+    : MeasuredVerdictStage(kShotBoundaryStageName, std::move(config), DecideShots) {}
 
 }  // namespace doasido::filters

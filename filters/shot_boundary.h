@@ -1,7 +1,7 @@
 // Shot boundaries and fades, scored as PySceneDetect scores them.
 //
 // Per-frame signals (computed once, in the analysis pass, on frames
-// downscaled as PySceneDetect downscales them; see ingest/video_decoder.h):
+// downscaled as PySceneDetect downscales them; see video/video_decoder.h):
 //   - delta_hue/sat/lum: mean |difference| of each HSV channel (OpenCV 8-bit
 //     HSV, hue 0..179) against the previous frame (ContentDetector).
 //   - hash_distance: Hamming distance / size^2 between perceptual hashes of
@@ -92,6 +92,10 @@
 
 namespace doasido::filters {
 
+// The stage's name: also its config section and its section of the
+// analysis stage's measurements.
+inline constexpr const char* kShotBoundaryStageName = "shot_boundary";
+
 struct ShotBoundaryConfig {
   // ContentDetector (PySceneDetect defaults; edges are not computed, so
   // their weight is always 0).
@@ -129,6 +133,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotBoundaryConfig, content_thre
                                                 fade_bias, dissolve_threshold, dissolve_steady,
                                                 blend_min_changed, blend_max_unexplained,
                                                 blend_min_run, boundary_detectors, min_segment_s)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const ShotBoundaryConfig& c, const std::string& section);
 
 // Analysis-pass parameters of the shot signals.
 struct ShotSignalConfig {
@@ -144,6 +150,8 @@ struct ShotSignalConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotSignalConfig, hash_size, hash_lowpass,
                                                 histogram_bins, long_window_s, blend_step,
                                                 blend_change_level, blend_tolerance)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const ShotSignalConfig& c, const std::string& section);
 
 struct ShotSignals {
   std::vector<double> delta_hue, delta_sat, delta_lum;

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "filters/kept_shot.h"
+#include "filters/shot_boundary.h"
 
 namespace doasido::filters {
 
@@ -22,15 +24,9 @@ Json CopyAnalysis(const ClipContext& context, const std::string& section) {
     throw Error("missing_measurements", "the analysis measurements lack this section", site);
   }
   Json out{{"clip", analysis.at("clip")}, {"signals", analysis.at(section)}};
-  auto shot = context.measurements.find("shot_boundary");
-  if (shot != context.measurements.end() && shot->second.contains("summary")) {
-    const Json& summary = shot->second.at("summary");
-    out["shot"] = {{"boundaries", summary.value("boundaries", Json::array())}};
-    if (summary.contains("trim")) {
-      out["shot"]["trim"] = summary.at("trim");
-    } else if (!out["shot"]["boundaries"].empty() && summary.contains("longest_segment")) {
-      out["shot"]["trim"] = summary.at("longest_segment");  // rejected: judge its best shot
-    }
+  auto shot = context.measurements.find(kShotBoundaryStageName);
+  if (shot != context.measurements.end()) {
+    if (const auto kept = ReadKeptShot(shot->second)) out["shot"] = ToJson(*kept);
   }
   return out;
 }
@@ -40,15 +36,12 @@ ShotSpan SpanOf(const Json& measurements, std::int64_t frames) {
   span.last = frames - 1;
   if (!measurements.contains("shot")) return span;
   const auto first = static_cast<std::int64_t>(NumberOr(measurements.at("clip"), "first_frame", 0));
-  const Json& shot = measurements.at("shot");
-  if (shot.contains("trim")) {
-    span.first =
-        std::max<std::int64_t>(0, shot.at("trim").at("start_frame").get<std::int64_t>() - first);
-    span.last = std::min(frames - 1, shot.at("trim").at("end_frame").get<std::int64_t>() - first);
+  const KeptShot shot = KeptShotFromJson(measurements.at("shot"));
+  if (shot.trim) {
+    span.first = std::max<std::int64_t>(0, shot.trim->start_frame - first);
+    span.last = std::min(frames - 1, shot.trim->end_frame - first);
   }
-  for (const Json& b : shot.value("boundaries", Json::array())) {
-    span.boundaries.push_back(b.get<std::int64_t>() - first);
-  }
+  for (std::int64_t b : shot.boundaries) span.boundaries.push_back(b - first);
   return span;
 }
 
@@ -69,6 +62,13 @@ Json ScoreEntry(const std::string& name, double value, bool rejects_above, doubl
                 {"reject", reject}};
   if (!std::isnan(flag)) entry["flag"] = flag;
   return entry;
+}
+
+std::vector<int> IntArray(const Json& j, const char* key) {
+  if (!j.contains(key) || !j.at(key).is_array()) {
+    throw Error("bad_measurements", "missing per-frame array", {.field = key});
+  }
+  return j.at(key).get<std::vector<int>>();
 }
 
 double NumberOr(const Json& object, const std::string& key, double fallback) {

@@ -78,6 +78,16 @@ class MeasuredVerdictStage : public Stage {
   Rule rule_;
 };
 
+// A verdict other than pass, with its reason code.
+inline void SetVerdict(StageResult& result, Verdict verdict, std::string reason) {
+  result.verdict = verdict;
+  result.reason = std::move(reason);
+}
+
+// The per-frame integer array `key` of stored signals. Throws
+// Error("bad_measurements") naming the key when it is missing.
+std::vector<int> IntArray(const Json& signals, const char* key);
+
 // Number read from a JSON object with a default.
 double NumberOr(const Json& object, const std::string& key, double fallback);
 

@@ -58,7 +58,7 @@ Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
     } else if (r.state != "done" || r.verdict.empty()) {
       ++s.pending;
     } else {
-      if (r.verdict_source == "human") ++s.human_by_verdict[r.verdict];
+      if (r.verdict_source == kHumanVerdictSource) ++s.human_by_verdict[r.verdict];
       if (r.verdict == "pass") {
         ++s.passed;
         if (!r.reason.empty()) ++s.passed_by_reason[r.reason];
@@ -91,7 +91,7 @@ std::map<ClipId, ClipOutcome> ComputeOutcomes(const std::vector<std::string>& pi
   std::map<ClipId, ClipOutcome> out;
   for (const auto& [clip, r] : furthest) {
     ClipOutcome o{.clip = clip, .stage = r->stage};
-    o.human = r->verdict_source == "human";
+    o.human = r->verdict_source == kHumanVerdictSource;
     if (r->state == "failed") {
       o.outcome = Outcome::kFailed;
       o.reason = r->error;

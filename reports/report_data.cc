@@ -1,6 +1,7 @@
 #include "reports/report_data.h"
 
 #include "core/progress.h"
+#include "filters/shot_boundary.h"
 
 namespace doasido::reports {
 
@@ -68,7 +69,7 @@ void AddThumbnails(Database& db, ReportData& data, const ReportOptions& options)
       request.detections = db.GetDetections(ids[i]);
       request.stage = key.first;
       request.reason = key.second;
-      if (auto m = db.GetMeasurements(ids[i], "shot_boundary")) {
+      if (auto m = db.GetMeasurements(ids[i], filters::kShotBoundaryStageName)) {
         request.shot_summary = m->value("summary", Json());
       }
       Thumbnail t = MakeThumbnail(request, options.thumbnail);

@@ -20,6 +20,9 @@
 
 namespace doasido::reports {
 
+// The config table `doasido report` reads its options from.
+inline constexpr const char* kReportSection = "report";
+
 struct ReportOptions {
   bool thumbnails = true;
   int histogram_bins = 20;
@@ -28,6 +31,8 @@ struct ReportOptions {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ReportOptions, thumbnails, histogram_bins,
                                                 max_failures, thumbnail)
+// Valid ranges (reports/report_options.cc); throws Error("bad_config").
+void CheckConfig(const ReportOptions& c, const std::string& section);
 
 // Example clips of one (stage, verdict, reason).
 struct ThumbnailStrip {

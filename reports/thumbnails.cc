@@ -10,7 +10,8 @@
 #include <set>
 
 #include "core/error.h"
-#include "ingest/video_decoder.h"
+#include "filters/kept_shot.h"
+#include "video/video_decoder.h"
 
 namespace doasido::reports {
 namespace {
@@ -177,13 +178,226 @@ std::string Base64(const std::vector<unsigned char>& bytes) {
   return out;
 }
 
+namespace {
+
+// The panels of a strip and how to draw them.
+struct PanelPlan {
+  std::vector<Panel> panels;
+  std::vector<bool> cut_after;  // a cut mark after panel i
+  int highlight_panel = -1;     // the panel whose border_box touches the border
+  Detection border_box;
+  std::string caption;
+};
+
+// The clip's frames [first, last] in the file, and its middle.
+struct ClipSpan {
+  std::int64_t first = 0, last = 0, mid = 0;
+};
+
+ClipSpan SpanOf(const ClipRecord& c, const VideoDecoder& decoder) {
+  const VideoGeometry& g = decoder.geometry();
+  ClipSpan s;
+  s.first = decoder.first_frame();
+  s.last = -1;
+  if (c.end_frame) s.last = *c.end_frame;
+  else if (c.end_s && g.fps > 0) s.last = static_cast<std::int64_t>(std::lround(*c.end_s * g.fps));
+  else if (g.declared_frames > 0) s.last = g.declared_frames - 1;
+  if (s.last < s.first) s.last = s.first + std::max<std::int64_t>(1, std::llround(g.fps));
+  s.mid = s.first + (s.last - s.first) / 2;
+  return s;
+}
+
+// The frames either side of the first two cuts the shot filter found.
+void PlanCuts(const ThumbnailRequest& request, const ClipSpan& span, PanelPlan& plan) {
+  std::vector<std::int64_t> cuts;
+  for (std::int64_t b : filters::KeptShotFromSummary(request.shot_summary).boundaries) {
+    if (b > span.first) cuts.push_back(b);
+  }
+  for (size_t i = 0; i < cuts.size() && i < 2; ++i) {
+    plan.panels.push_back({cuts[i] - 1, "f" + std::to_string(cuts[i] - 1)});
+    plan.panels.push_back({cuts[i], "cut f" + std::to_string(cuts[i])});
+    plan.cut_after.push_back(true);
+    plan.cut_after.push_back(false);
+  }
+  const std::string shown = std::to_string(std::min<size_t>(cuts.size(), 2));
+  plan.caption = cuts.empty() ? "middle frame (no boundary recorded)"
+                              : "frames either side of " + shown + " of " +
+                                    std::to_string(cuts.size()) + " cut(s)";
+}
+
+// Two frames half a second apart around the middle, for motion vectors.
+void PlanMotion(const VideoGeometry& g, const ClipSpan& span, PanelPlan& plan) {
+  const std::int64_t step = std::max<std::int64_t>(1, std::llround(g.fps > 0 ? g.fps / 2 : 15));
+  const std::int64_t a = std::max(span.first, span.mid - step);
+  const std::int64_t b = std::min(std::max(a + 1, span.mid), span.last);
+  plan.panels.push_back({a, "f" + std::to_string(a)});
+  plan.panels.push_back({b, "f" + std::to_string(b) + " motion"});
+  plan.cut_after = {false, false};
+  plan.caption = "camera motion from frame " + std::to_string(a) + " to " + std::to_string(b) +
+                 " (Lucas-Kanade tracks)";
+}
+
+// The first frame where a box (hands first) touches the border.
+void PlanBorder(const ThumbnailRequest& request, const VideoGeometry& g, const ClipSpan& span,
+                PanelPlan& plan) {
+  std::vector<Detection> sorted = request.detections;
+  std::stable_sort(sorted.begin(), sorted.end(), [](const Detection& x, const Detection& y) {
+    return std::make_pair(x.frame, x.kind != "hand") < std::make_pair(y.frame, y.kind != "hand");
+  });
+  bool found = false;
+  for (const auto& det : sorted) {
+    if (det.frame < span.first || det.frame > span.last) continue;
+    if (TouchesBorder(det, g.full_width, g.full_height)) {
+      plan.border_box = det;
+      found = true;
+      break;
+    }
+  }
+  const std::int64_t f = found ? plan.border_box.frame : span.mid;
+  plan.panels.push_back({f, "f" + std::to_string(f)});
+  plan.cut_after = {false};
+  if (found) plan.highlight_panel = 0;
+  plan.caption = found ? "first frame where a " + plan.border_box.kind + " box touches the border"
+                       : "middle frame; no box touches the border (hand or object missing)";
+}
+
+PanelPlan PlanPanels(const ThumbnailRequest& request, const std::string& kind,
+                     const VideoGeometry& g, const ClipSpan& span) {
+  PanelPlan plan;
+  if (kind == "cut") {
+    PlanCuts(request, span, plan);
+  } else if (kind == "motion") {
+    PlanMotion(g, span, plan);
+  } else if (kind == "border") {
+    PlanBorder(request, g, span, plan);
+  } else if (kind == "activity") {
+    plan.panels.push_back({span.first, "first f" + std::to_string(span.first)});
+    plan.panels.push_back({span.mid, "f" + std::to_string(span.mid)});
+    plan.panels.push_back({span.last, "last f" + std::to_string(span.last)});
+    plan.cut_after = {false, false, false};
+    plan.caption = "first, middle and last frame of the clip";
+  }
+  if (plan.panels.empty()) {
+    plan.panels.push_back({span.mid, "f" + std::to_string(span.mid)});
+    plan.cut_after = {false};
+    if (plan.caption.empty()) plan.caption = "middle frame with hand and object boxes";
+  }
+  return plan;
+}
+
+// One sequential pass collects every frame the panels need; a panel past
+// the decodable end shows the last decoded frame (a file that ends early
+// still shows what could be decoded, and the caption says so).
+void DecodePanels(VideoDecoder& decoder, PanelPlan& plan) {
+  std::set<std::int64_t> wanted;
+  for (const auto& p : plan.panels) wanted.insert(p.frame);
+  std::map<std::int64_t, cv::Mat> frames;
+  AnalysisFrame frame;
+  std::int64_t last_index = -1;
+  cv::Mat last_decoded;
+  try {
+    while (frames.size() < wanted.size() && decoder.Next(&frame)) {
+      if (wanted.count(frame.index)) frames[frame.index] = frame.bgr.clone();
+      if (frame.index >= *wanted.rbegin()) break;
+      frame.bgr.copyTo(last_decoded);
+      last_index = frame.index;
+    }
+  } catch (const Error& e) {
+    if (frames.empty() && last_decoded.empty()) throw;
+    plan.caption += " (video ends early: " + e.message() + ")";
+  }
+  for (auto& p : plan.panels) {
+    auto it = frames.find(p.frame);
+    if (it == frames.end()) {
+      if (last_decoded.empty()) throw Error("video_read_failed", "no frame could be decoded");
+      it = frames.emplace(last_index, last_decoded).first;
+      p.frame = last_index;
+    }
+    p.image = it->second.clone();
+  }
+}
+
+// Marks the border box on `p` (and the border edges it touches); returns its
+// index among `boxes`, or -1.
+int HighlightBorder(Panel& p, const std::vector<Detection>& boxes, const Detection& box,
+                    const VideoGeometry& g) {
+  int highlight = -1;
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    if (boxes[k].kind == box.kind && boxes[k].x1 == box.x1 && boxes[k].y1 == box.y1 &&
+        boxes[k].x2 == box.x2 && boxes[k].y2 == box.y2) {
+      highlight = static_cast<int>(k);
+    }
+  }
+  const int w = p.image.cols - 1, h = p.image.rows - 1;
+  const double m = 2.0;
+  if (box.x1 <= m) cv::line(p.image, {0, 0}, {0, h}, kHighlight, 3);
+  if (box.y1 <= m) cv::line(p.image, {0, 0}, {w, 0}, kHighlight, 3);
+  if (box.x2 >= g.full_width - m) cv::line(p.image, {w, 0}, {w, h}, kHighlight, 3);
+  if (box.y2 >= g.full_height - m) cv::line(p.image, {0, h}, {w, h}, kHighlight, 3);
+  return highlight;
+}
+
+// Boxes on every panel, the border highlight, and motion vectors on the
+// second panel of a motion strip.
+void DrawPanels(const ThumbnailRequest& request, const ThumbnailOptions& options,
+                const std::string& kind, const VideoGeometry& g, PanelPlan& plan) {
+  const double scale = 1.0 / g.downscale;
+  std::vector<MotionVector> vectors;
+  if (kind == "motion" && plan.panels.size() == 2) {
+    vectors = TrackMotion(plan.panels[0].image, plan.panels[1].image);
+  }
+  for (size_t i = 0; i < plan.panels.size(); ++i) {
+    Panel& p = plan.panels[i];
+    std::int64_t from = -1;
+    auto boxes = BoxesNear(request.detections, p.frame, options.box_search_frames, &from);
+    const int highlight = static_cast<int>(i) == plan.highlight_panel
+                              ? HighlightBorder(p, boxes, plan.border_box, g)
+                              : -1;
+    DrawDetections(p.image, boxes, scale, highlight);
+    if (kind == "motion" && i == 1) {
+      for (const auto& v : vectors) {
+        cv::arrowedLine(p.image, v.from, v.to, kArrowColour, 1, cv::LINE_AA, 0, 0.3);
+        cv::circle(p.image, v.from, 1, kArrowColour, cv::FILLED);
+      }
+    }
+  }
+  if (kind == "motion") plan.caption += ", " + std::to_string(vectors.size()) + " tracks";
+}
+
+// Decodes, draws and encodes the strip into `t`. Throws Error or
+// cv::Exception for an unreadable video.
+void RenderStrip(const ThumbnailRequest& request, const ThumbnailOptions& options,
+                 Thumbnail& t) {
+  DecoderOptions d;
+  d.analysis_size = options.analysis_size;
+  d.clip = t.label;
+  const ClipRecord& c = request.clip;
+  if (c.start_frame) d.first_frame = *c.start_frame;
+  else if (c.start_s) d.first_s = *c.start_s;
+  VideoDecoder decoder(request.video_path, d);
+  const VideoGeometry& g = decoder.geometry();
+  const std::string kind = OverlayKind(request.stage, request.reason);
+  PanelPlan plan = PlanPanels(request, kind, g, SpanOf(c, decoder));
+  t.caption = plan.caption;  // kept when decoding fails
+  DecodePanels(decoder, plan);
+  DrawPanels(request, options, kind, g, plan);
+  t.caption = plan.caption;
+  const cv::Mat strip = Compose(plan.panels, options.panel_height, plan.cut_after);
+  std::vector<unsigned char> jpeg;
+  cv::imencode(".jpg", strip, jpeg, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality});
+  t.jpeg_base64 = Base64(jpeg);
+  t.width = strip.cols;
+  t.height = strip.rows;
+}
+
+}  // namespace
+
 Thumbnail MakeThumbnail(const ThumbnailRequest& request, const ThumbnailOptions& options) {
   Thumbnail t;
   t.clip = request.clip.id;
   t.label = ClipLabel(request.clip);
   const std::string& path = request.video_path;
-  const bool url = path.find("://") != std::string::npos;
-  if (url) {
+  if (path.find("://") != std::string::npos) {
     t.note = "clip " + t.label + ": video " + path + " is a URL; the report reads local files only";
     return t;
   }
@@ -192,158 +406,7 @@ Thumbnail MakeThumbnail(const ThumbnailRequest& request, const ThumbnailOptions&
     return t;
   }
   try {
-    DecoderOptions d;
-    d.analysis_size = options.analysis_size;
-    d.clip = t.label;
-    const ClipRecord& c = request.clip;
-    if (c.start_frame) d.first_frame = *c.start_frame;
-    else if (c.start_s) d.first_s = *c.start_s;
-    VideoDecoder decoder(path, d);
-    const VideoGeometry& g = decoder.geometry();
-    const std::int64_t first = decoder.first_frame();
-    std::int64_t last = -1;
-    if (c.end_frame) last = *c.end_frame;
-    else if (c.end_s && g.fps > 0) last = static_cast<std::int64_t>(std::lround(*c.end_s * g.fps));
-    else if (g.declared_frames > 0) last = g.declared_frames - 1;
-    if (last < first) last = first + std::max<std::int64_t>(1, std::llround(g.fps));
-    const std::int64_t mid = first + (last - first) / 2;
-
-    const std::string kind = OverlayKind(request.stage, request.reason);
-    std::vector<Panel> panels;
-    std::vector<bool> cut_after;
-    int highlight_panel = -1;
-    Detection border_box;
-    if (kind == "cut") {
-      std::vector<std::int64_t> cuts;
-      if (request.shot_summary.is_object() && request.shot_summary.contains("boundaries")) {
-        for (const Json& b : request.shot_summary["boundaries"]) {
-          if (b.is_number_integer() && b.get<std::int64_t>() > first) cuts.push_back(b);
-        }
-      }
-      for (size_t i = 0; i < cuts.size() && i < 2; ++i) {
-        panels.push_back({cuts[i] - 1, "f" + std::to_string(cuts[i] - 1)});
-        panels.push_back({cuts[i], "cut f" + std::to_string(cuts[i])});
-        cut_after.push_back(true);
-        cut_after.push_back(false);
-      }
-      const std::string shown = std::to_string(std::min<size_t>(cuts.size(), 2));
-      t.caption = cuts.empty() ? "middle frame (no boundary recorded)"
-                               : "frames either side of " + shown + " of " +
-                                     std::to_string(cuts.size()) + " cut(s)";
-    } else if (kind == "motion") {
-      const std::int64_t step = std::max<std::int64_t>(1, std::llround(g.fps > 0 ? g.fps / 2 : 15));
-      const std::int64_t a = std::max(first, mid - step);
-      const std::int64_t b = std::min(std::max(a + 1, mid), last);
-      panels.push_back({a, "f" + std::to_string(a)});
-      panels.push_back({b, "f" + std::to_string(b) + " motion"});
-      cut_after = {false, false};
-      t.caption = "camera motion from frame " + std::to_string(a) + " to " + std::to_string(b) +
-                  " (Lucas-Kanade tracks)";
-    } else if (kind == "border") {
-      std::vector<Detection> sorted = request.detections;
-      std::stable_sort(sorted.begin(), sorted.end(), [](const Detection& x, const Detection& y) {
-        // Hands first within a frame.
-        return std::make_pair(x.frame, x.kind != "hand") <
-               std::make_pair(y.frame, y.kind != "hand");
-      });
-      bool found = false;
-      for (const auto& det : sorted) {
-        if (det.frame < first || det.frame > last) continue;
-        if (TouchesBorder(det, g.full_width, g.full_height)) {
-          border_box = det;
-          found = true;
-          break;
-        }
-      }
-      const std::int64_t f = found ? border_box.frame : mid;
-      panels.push_back({f, "f" + std::to_string(f)});
-      cut_after = {false};
-      if (found) highlight_panel = 0;
-      t.caption = found ? "first frame where a " + border_box.kind + " box touches the border"
-                        : "middle frame; no box touches the border (hand or object missing)";
-    } else if (kind == "activity") {
-      panels.push_back({first, "first f" + std::to_string(first)});
-      panels.push_back({mid, "f" + std::to_string(mid)});
-      panels.push_back({last, "last f" + std::to_string(last)});
-      cut_after = {false, false, false};
-      t.caption = "first, middle and last frame of the clip";
-    }
-    if (panels.empty()) {
-      panels.push_back({mid, "f" + std::to_string(mid)});
-      cut_after = {false};
-      if (t.caption.empty()) t.caption = "middle frame with hand and object boxes";
-    }
-
-    // One sequential pass collects every frame the panels need.
-    std::set<std::int64_t> wanted;
-    for (const auto& p : panels) wanted.insert(p.frame);
-    std::map<std::int64_t, cv::Mat> frames;
-    AnalysisFrame frame;
-    std::int64_t last_index = -1;
-    cv::Mat last_decoded;
-    try {
-      while (frames.size() < wanted.size() && decoder.Next(&frame)) {
-        if (wanted.count(frame.index)) frames[frame.index] = frame.bgr.clone();
-        if (frame.index >= *wanted.rbegin()) break;
-        frame.bgr.copyTo(last_decoded);
-        last_index = frame.index;
-      }
-    } catch (const Error& e) {
-      // A file that ends early still shows what could be decoded.
-      if (frames.empty() && last_decoded.empty()) throw;
-      t.caption += " (video ends early: " + e.message() + ")";
-    }
-    for (auto& p : panels) {
-      auto it = frames.find(p.frame);
-      if (it == frames.end()) {
-        // Past the decodable end: fall back to the last decoded frame.
-        if (last_decoded.empty()) throw Error("video_read_failed", "no frame could be decoded");
-        it = frames.emplace(last_index, last_decoded).first;
-        p.frame = last_index;
-      }
-      p.image = it->second.clone();
-    }
-    const double scale = 1.0 / g.downscale;
-    std::vector<MotionVector> vectors;
-    if (kind == "motion" && panels.size() == 2) {
-      vectors = TrackMotion(panels[0].image, panels[1].image);
-    }
-    for (size_t i = 0; i < panels.size(); ++i) {
-      Panel& p = panels[i];
-      std::int64_t from = -1;
-      auto boxes = BoxesNear(request.detections, p.frame, options.box_search_frames, &from);
-      int highlight = -1;
-      if (static_cast<int>(i) == highlight_panel) {
-        for (size_t k = 0; k < boxes.size(); ++k) {
-          if (boxes[k].kind == border_box.kind && boxes[k].x1 == border_box.x1 &&
-              boxes[k].y1 == border_box.y1 && boxes[k].x2 == border_box.x2 &&
-              boxes[k].y2 == border_box.y2) {
-            highlight = static_cast<int>(k);
-          }
-        }
-        // The border edges the box touches.
-        const int w = p.image.cols - 1, h = p.image.rows - 1;
-        const double m = 2.0;
-        if (border_box.x1 <= m) cv::line(p.image, {0, 0}, {0, h}, kHighlight, 3);
-        if (border_box.y1 <= m) cv::line(p.image, {0, 0}, {w, 0}, kHighlight, 3);
-        if (border_box.x2 >= g.full_width - m) cv::line(p.image, {w, 0}, {w, h}, kHighlight, 3);
-        if (border_box.y2 >= g.full_height - m) cv::line(p.image, {0, h}, {w, h}, kHighlight, 3);
-      }
-      DrawDetections(p.image, boxes, scale, highlight);
-      if (kind == "motion" && i == 1) {
-        for (const auto& v : vectors) {
-          cv::arrowedLine(p.image, v.from, v.to, kArrowColour, 1, cv::LINE_AA, 0, 0.3);
-          cv::circle(p.image, v.from, 1, kArrowColour, cv::FILLED);
-        }
-      }
-    }
-    if (kind == "motion") t.caption += ", " + std::to_string(vectors.size()) + " tracks";
-    const cv::Mat strip = Compose(panels, options.panel_height, cut_after);
-    std::vector<unsigned char> jpeg;
-    cv::imencode(".jpg", strip, jpeg, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality});
-    t.jpeg_base64 = Base64(jpeg);
-    t.width = strip.cols;
-    t.height = strip.rows;
+    RenderStrip(request, options, t);
   } catch (const Error& e) {
     t.note = "clip " + t.label + ": cannot read video " + path + ": " + e.what();
   } catch (const cv::Exception& e) {

@@ -33,6 +33,8 @@ struct ThumbnailOptions {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ThumbnailOptions, max_per_reason, panel_height,
                                                 jpeg_quality, analysis_size, box_search_frames)
+// Valid ranges (reports/report_options.cc); throws Error("bad_config").
+void CheckConfig(const ThumbnailOptions& c, const std::string& section);
 
 struct ThumbnailRequest {
   ClipRecord clip;

@@ -9,12 +9,9 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
+#include "core/data_dirs.h"
 #include "core/error.h"
 #include "retarget/urdf_import.h"
-
-#ifndef DOASIDO_RETARGET_MODELS
-#define DOASIDO_RETARGET_MODELS "retarget/models"
-#endif
 
 namespace doasido::retarget {
 namespace {
@@ -219,7 +216,7 @@ std::filesystem::path FindModelFile(const std::string& model, const std::filesys
 
 }  // namespace
 
-std::filesystem::path BuiltinModelsDir() { return DOASIDO_RETARGET_MODELS; }
+std::filesystem::path BuiltinModelsDir() { return DataDir("models", "DOASIDO_MODELS_DIR"); }
 
 std::string MissingBodyHint(const std::string& xml) {
   XMLDocument doc;

@@ -60,7 +60,9 @@ struct Embodiment {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Embodiment, name, side, model, floating_base, scale,
                                                 points)
 
-// The folder holding doasido's own hand models and their descriptions.
+// The folder holding doasido's own hand models and their descriptions (the
+// build copies retarget/models there): $DOASIDO_MODELS_DIR, else
+// share/doasido/models beside the executable's folder (core/data_dirs.h).
 std::filesystem::path BuiltinModelsDir();
 
 // Reads and checks a description (keypoints in 0..20, each point naming one

@@ -296,7 +296,8 @@ FrameSolution KinematicRetargeter::SolveFrame(const Keypoints21& human,
 }
 
 HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
-                                          const std::vector<bool>& valid, double fps) {
+                                          const std::vector<bool>& valid, double fps,
+                                          const std::function<void(std::size_t)>& progress) {
   auto is_valid = [&](size_t t) { return valid.empty() || valid[t]; };
   if (config_.scale <= 0 && hand_.embodiment.scale <= 0) {
     std::vector<Keypoints21> seen;
@@ -315,6 +316,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
   out.fingertip_error.assign(human.size(), std::nan(""));
   std::optional<Eigen::VectorXd> previous;
   for (size_t t = 0; t < human.size(); ++t) {
+    if (progress && t > 0) progress(t);
     out.valid[t] = is_valid(t);
     if (!out.valid[t]) {
       if (previous) out.qpos[t] = *previous;
@@ -331,7 +333,27 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
   if (!previous) {
     throw Error("bad_keypoints", "no frame with a valid hand", {.field = "valid"});
   }
+  if (progress) progress(human.size());
   return out;
+}
+
+FingertipErrorStats SummarizeFingertipError(const std::vector<double>& error) {
+  std::vector<double> v;
+  for (double e : error) {
+    if (std::isfinite(e)) v.push_back(e);
+  }
+  FingertipErrorStats stats;
+  stats.frames = static_cast<int>(v.size());
+  if (v.empty()) {
+    stats.p95 = std::nan("");
+    return stats;
+  }
+  double sum = 0;
+  for (double e : v) sum += e;
+  stats.mean = sum / static_cast<double>(v.size());
+  std::sort(v.begin(), v.end());
+  stats.p95 = v[std::min(v.size() - 1, static_cast<size_t>(0.95 * (v.size() - 1) + 0.5))];
+  return stats;
 }
 
 void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path) {

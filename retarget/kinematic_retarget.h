@@ -22,6 +22,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -75,6 +76,16 @@ HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path);
 // numbers (metres) per frame. Throws Error("bad_keypoints") naming file and line.
 std::vector<Keypoints21> ReadKeypointCsv(const std::filesystem::path& path);
 
+// Mean and 95th percentile (nearest rank) of the finite entries of a
+// trajectory's fingertip_error, m; `frames` counts them (0: mean 0, p95 NaN).
+// The one definition behind the stage's measurements and the CLI's printout.
+struct FingertipErrorStats {
+  int frames = 0;
+  double mean = 0;
+  double p95 = 0;
+};
+FingertipErrorStats SummarizeFingertipError(const std::vector<double>& error);
+
 struct FrameSolution {
   Eigen::VectorXd qpos;
   double objective = 0;        // the minimised objective
@@ -102,8 +113,10 @@ class KinematicRetargeter {
 
   // Solves a sequence (scale adapted first unless fixed). Frames with
   // valid[t] false hold the previous pose. `valid` may be empty (all valid).
+  // `progress` (may be empty) is called with the number of frames done
+  // after each frame.
   HandTrajectory Solve(const std::vector<Keypoints21>& human, const std::vector<bool>& valid,
-                       double fps);
+                       double fps, const std::function<void(std::size_t)>& progress = {});
 
   // Names of the variables, the order of FrameSolution::qpos.
   std::vector<std::string> VariableNames() const;

@@ -2,18 +2,14 @@
 // (and object) become the reference robot trajectory and the simulation
 // scene the dynamics-aware optimiser starts from (seed section 3.2).
 //
-// Input: the clip bundle (recon/bundle.h, ReadBundle). Its folder is the
-// clip metadata's "bundle" entry when present (absolute, or relative to the
-// folder of the list the clip was ingested from), else
-// <artifact_dir>/../bundle, i.e. the "bundle" folder beside this stage's
-// folder in the clip's artifact directory. Used: hands.npz right hand
-// (joints (T,21,3), valid), object/poses.npz, object/mesh.obj, gravity.npz,
-// meta.json fps.
-//
-// World frame: camera axes rotated so that up (mean of gravity.npz, else
-// the camera's -y) is +z, shifted so the floor z = 0 touches the object's
-// lowest point in the first frame (or lies 5 cm below the lowest hand
-// keypoint when there is no object).
+// Input: the `recon` stage's artifact <artifacts>/<clip>/recon/
+// (recon/reconstruction.h: metric, gravity-aligned right hand and object;
+// frames without an object pose hold the previous one) when it exists, else
+// the clip bundle (recon/bundle_location.h BundleDir) as before: hands.npz
+// right hand, object/poses.npz, object/mesh.obj, gravity.npz, meta.json fps,
+// put in a world frame whose +z is up (mean of gravity.npz, else the
+// camera's -y) with the floor z = 0 touching the object's lowest point in
+// the first frame (or 5 cm below the lowest hand keypoint without object).
 //
 // Output in artifact_dir: trajectory.json and trajectory.csv
 // (kinematic_retarget.h HandTrajectory: robot qpos per frame, object poses
@@ -27,6 +23,7 @@
 
 #include "core/config.h"
 #include "db/stage.h"
+#include "retarget/config_checks.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/scene_builder.h"
 
@@ -44,8 +41,12 @@ struct KinematicStageConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, robots_dir,
                                                 flag_fingertip_error, kinematic, scene)
+// Also checks the nested kinematic and scene tables (retarget/config_checks.h).
+void CheckConfig(const KinematicStageConfig& c, const std::string& section);
 
-// ../shared/data/robots beside the source checkout when it exists, else "".
+// The folder of third-party robot models and descriptions: $DOASIDO_ROBOTS_DIR,
+// else share/doasido/robots beside the executable's folder (the build links
+// it to ../shared/data/robots when that exists), when it exists; else "".
 std::string DefaultRobotsDir();
 
 class KinematicStage : public Stage {

@@ -14,9 +14,12 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "db/database.h"
+#include "filters/kept_shot.h"
+#include "filters/shot_boundary.h"
 #include "review/http_range.h"
 #include "review/pages.h"
 #include "review/study.h"
+#include "review/verify_routes.h"
 
 namespace doasido::review {
 namespace {
@@ -81,6 +84,86 @@ bool ValidName(const std::string& s) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' ||
            c == ' ' || c == '@';
   });
+}
+
+// The shot the filters judged for `clip`: the block a verdict stage copied
+// into its measurements `m` (the span it judged), else the shot-boundary
+// stage's own decision.
+filters::KeptShot KeptShotOf(Database& db, ClipId clip, const std::optional<Json>& m) {
+  if (auto judged = filters::ReadJudgedShot(m)) return *judged;
+  return filters::ReadKeptShot(db.GetMeasurements(clip, filters::kShotBoundaryStageName))
+      .value_or(filters::KeptShot{});
+}
+
+// What the review page shows of clip `id` for `stage`: video facts, span,
+// verdict, boxes, the stage's summary, the shot the filters judged and the
+// verdict history.
+// Video size and rate, and the clip's span in seconds and frames.
+void AddVideoAndSpan(const ClipRecord& clip, const VideoRecord& video, Json& out) {
+  const double fps = video.info ? video.info->fps : 0.0;
+  out["fps"] = fps;
+  out["width"] = video.info ? video.info->width : 0;
+  out["height"] = video.info ? video.info->height : 0;
+  out["frame_count"] = video.info ? video.info->frame_count : 0;
+  double start_s = 0;
+  if (clip.start_s) {
+    start_s = *clip.start_s;
+  } else if (clip.start_frame && fps > 0) {
+    start_s = static_cast<double>(*clip.start_frame) / fps;
+  }
+  out["start_s"] = start_s;
+  out["end_s"] = nullptr;
+  if (clip.end_s) {
+    out["end_s"] = *clip.end_s;
+  } else if (clip.end_frame && fps > 0) {
+    out["end_s"] = static_cast<double>(*clip.end_frame + 1) / fps;
+  }
+  out["start_frame"] = clip.start_frame ? Json(*clip.start_frame) : Json(nullptr);
+  out["end_frame"] = clip.end_frame ? Json(*clip.end_frame) : Json(nullptr);
+}
+
+Json DetectionsJson(const std::vector<Detection>& detections) {
+  Json out = Json::array();
+  for (const auto& det : detections) {
+    out.push_back({{"frame", det.frame}, {"kind", det.kind}, {"x1", det.x1}, {"y1", det.y1},
+                   {"x2", det.x2}, {"y2", det.y2}, {"score", det.score},
+                   {"contact_state", det.contact_state}, {"hand_side", det.hand_side},
+                   {"dx", det.dx}, {"dy", det.dy}, {"magnitude", det.magnitude}});
+  }
+  return out;
+}
+
+Json ClipJson(Database& d, ClipId id, const std::string& stage) {
+  const ClipRecord clip = d.GetClip(id);
+  Json out = {{"clip_id", id}, {"external_id", clip.external_id}, {"stage", stage},
+              {"video_url", "/video/" + std::to_string(id)}, {"metadata", clip.metadata}};
+  AddVideoAndSpan(clip, d.GetVideo(clip.video_id), out);
+  std::string reason, verdict;
+  for (const auto& run : d.ListRuns({.stage = stage, .clip = id})) {
+    reason = run.reason;
+    verdict = run.verdict;
+  }
+  out["reason"] = reason;
+  out["verdict"] = verdict;
+  out["detections"] = DetectionsJson(d.GetDetections(id));
+  // The stage's own summary, and cut positions / trim from the shot
+  // stage (copied into later stages' "shot" block, or its summary).
+  const auto m = stage.empty() ? std::nullopt : d.GetMeasurements(id, stage);
+  out["summary"] = m && m->contains("summary") ? m->at("summary") : Json(nullptr);
+  const filters::KeptShot shot = KeptShotOf(d, id, m);
+  out["cuts"] = shot.boundaries;
+  out["trim"] = nullptr;
+  if (shot.trim) {
+    out["trim"] = {{"start_frame", shot.trim->start_frame},
+                   {"end_frame", shot.trim->end_frame}};
+  }
+  Json history = Json::array();
+  for (const auto& v : d.VerdictHistory(id, stage)) {
+    history.push_back({{"verdict", v.verdict}, {"reason", v.reason}, {"source", v.source},
+                       {"at", v.created_at}});
+  }
+  out["history"] = history;
+  return out;
 }
 
 }  // namespace
@@ -218,6 +301,34 @@ struct ReviewServer::Impl {
   }
 
   void Routes();
+  void GuardRoutes();
+  void ReviewRoutes();
+  void StudyPages();
+  void StudyApi();
+
+  // A person's decision on a flagged run (POST /api/decision).
+  void Decide(Database& d, const Json& body, httplib::Response& res) {
+    const ClipId clip = body.at("clip_id").get<ClipId>();
+    const std::string stage = body.at("stage").get<std::string>();
+    const std::string decision = body.at("decision").get<std::string>();
+    const std::string reviewer = body.value("reviewer", std::string());
+    const std::string code = body.value("reason_code", std::string());
+    const std::string text = body.value("reason_text", std::string());
+    if (decision != "accept" && decision != "reject") {
+      return SendError(res, 400, "decision must be accept or reject");
+    }
+    if (reviewer.empty() || reviewer.size() > 64) {
+      return SendError(res, 400, "a reviewer name (1-64 characters) is required");
+    }
+    if (decision == "reject" && code.empty()) {
+      return SendError(res, 400, "a rejection needs a reason code");
+    }
+    std::string reason = code;
+    if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
+    if (reason.empty()) reason = "accepted on review";
+    d.RecordReview(clip, stage, reviewer, decision == "accept", reason);
+    SendJson(res, 200, {{"ok", true}, {"remaining", d.CountFlagged()}});
+  }
 };
 
 void ReviewServer::Impl::Routes() {
@@ -226,7 +337,16 @@ void ReviewServer::Impl::Routes() {
   http.set_tcp_nodelay(true);
   http.set_keep_alive_timeout(2);
   http.set_payload_max_length(1 << 20);
+  GuardRoutes();
+  ReviewRoutes();
+  StudyPages();
+  StudyApi();
+}
 
+// Every request: no path traversal, the expected Host on loopback binds
+// (against DNS rebinding), the token and same origin for writes; every
+// response: no sniffing, framing or caching.
+void ReviewServer::Impl::GuardRoutes() {
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
     if (LooksLikeTraversal(req.target)) {
       SendError(res, 400, "path traversal is not allowed");
@@ -262,7 +382,10 @@ void ReviewServer::Impl::Routes() {
     }
     if (!res.has_header("Cache-Control")) res.set_header("Cache-Control", "no-store");
   });
+}
 
+// The flagged-clip review: page, queue, clip facts, video and decisions.
+void ReviewServer::Impl::ReviewRoutes() {
   http.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     const std::string nonce = RandomHex(16);
     SendPage(res, nonce, ReviewPage(nonce, {{"token", token}, {"reviewer", options.reviewer}}));
@@ -283,70 +406,7 @@ void ReviewServer::Impl::Routes() {
 
   http.Get(R"(/api/clip/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
     WithDb(res, [&](Database& d) {
-      const ClipId id = std::stoll(req.matches[1].str());
-      const std::string stage = req.get_param_value("stage");
-      const ClipRecord clip = d.GetClip(id);
-      const VideoRecord video = d.GetVideo(clip.video_id);
-      Json out = {{"clip_id", id}, {"external_id", clip.external_id}, {"stage", stage},
-                  {"video_url", "/video/" + std::to_string(id)}, {"metadata", clip.metadata}};
-      const double fps = video.info ? video.info->fps : 0.0;
-      out["fps"] = fps;
-      out["width"] = video.info ? video.info->width : 0;
-      out["height"] = video.info ? video.info->height : 0;
-      out["frame_count"] = video.info ? video.info->frame_count : 0;
-      double start_s = 0;
-      if (clip.start_s) {
-        start_s = *clip.start_s;
-      } else if (clip.start_frame && fps > 0) {
-        start_s = static_cast<double>(*clip.start_frame) / fps;
-      }
-      out["start_s"] = start_s;
-      out["end_s"] = nullptr;
-      if (clip.end_s) {
-        out["end_s"] = *clip.end_s;
-      } else if (clip.end_frame && fps > 0) {
-        out["end_s"] = static_cast<double>(*clip.end_frame + 1) / fps;
-      }
-      out["start_frame"] = clip.start_frame ? Json(*clip.start_frame) : Json(nullptr);
-      out["end_frame"] = clip.end_frame ? Json(*clip.end_frame) : Json(nullptr);
-      std::string reason, verdict;
-      for (const auto& run : d.ListRuns({.stage = stage, .clip = id})) {
-        reason = run.reason;
-        verdict = run.verdict;
-      }
-      out["reason"] = reason;
-      out["verdict"] = verdict;
-      Json detections = Json::array();
-      for (const auto& det : d.GetDetections(id)) {
-        detections.push_back({{"frame", det.frame}, {"kind", det.kind}, {"x1", det.x1},
-                              {"y1", det.y1}, {"x2", det.x2}, {"y2", det.y2},
-                              {"score", det.score}, {"contact_state", det.contact_state},
-                              {"hand_side", det.hand_side}, {"dx", det.dx}, {"dy", det.dy},
-                              {"magnitude", det.magnitude}});
-      }
-      out["detections"] = detections;
-      // The stage's own summary, and cut positions / trim from the shot
-      // stage (copied into later stages' "shot" block, or its summary).
-      const auto m = stage.empty() ? std::nullopt : d.GetMeasurements(id, stage);
-      out["summary"] = m && m->contains("summary") ? m->at("summary") : Json(nullptr);
-      Json shot = m && m->contains("shot") ? m->at("shot") : Json::object();
-      if (!shot.contains("boundaries")) {
-        const auto sb = d.GetMeasurements(id, "shot_boundary");
-        if (sb && sb->contains("summary")) {
-          const Json& s = sb->at("summary");
-          shot["boundaries"] = s.value("boundaries", Json::array());
-          if (s.contains("trim")) shot["trim"] = s.at("trim");
-        }
-      }
-      out["cuts"] = shot.value("boundaries", Json::array());
-      out["trim"] = shot.contains("trim") ? shot.at("trim") : Json(nullptr);
-      Json history = Json::array();
-      for (const auto& v : d.VerdictHistory(id, stage)) {
-        history.push_back({{"verdict", v.verdict}, {"reason", v.reason}, {"source", v.source},
-                           {"at", v.created_at}});
-      }
-      out["history"] = history;
-      SendJson(res, 200, out);
+      SendJson(res, 200, ClipJson(d, std::stoll(req.matches[1].str()), req.get_param_value("stage")));
     });
   });
 
@@ -363,32 +423,12 @@ void ReviewServer::Impl::Routes() {
   });
 
   http.Post("/api/decision", [this](const httplib::Request& req, httplib::Response& res) {
-    WithDb(res, [&](Database& d) {
-      const Json body = Json::parse(req.body);
-      const ClipId clip = body.at("clip_id").get<ClipId>();
-      const std::string stage = body.at("stage").get<std::string>();
-      const std::string decision = body.at("decision").get<std::string>();
-      const std::string reviewer = body.value("reviewer", std::string());
-      const std::string code = body.value("reason_code", std::string());
-      const std::string text = body.value("reason_text", std::string());
-      if (decision != "accept" && decision != "reject") {
-        return SendError(res, 400, "decision must be accept or reject");
-      }
-      if (reviewer.empty() || reviewer.size() > 64) {
-        return SendError(res, 400, "a reviewer name (1-64 characters) is required");
-      }
-      if (decision == "reject" && code.empty()) {
-        return SendError(res, 400, "a rejection needs a reason code");
-      }
-      std::string reason = code;
-      if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
-      if (reason.empty()) reason = "accepted on review";
-      d.RecordReview(clip, stage, reviewer, decision == "accept", reason);
-      SendJson(res, 200, {{"ok", true}, {"remaining", d.CountFlagged()}});
-    });
+    WithDb(res, [&](Database& d) { Decide(d, Json::parse(req.body), res); });
   });
+}
 
-  // ---- Preference studies ----
+// Preference studies: the rating page and the summary page.
+void ReviewServer::Impl::StudyPages() {
   http.Get(R"(/study/([A-Za-z0-9_.\-]+))", [this](const httplib::Request& req,
                                                   httplib::Response& res) {
     const std::string name = req.matches[1].str();
@@ -413,6 +453,11 @@ void ReviewServer::Impl::Routes() {
     });
   });
 
+}
+
+// Preference studies: summary, the next trial of a rater, answers and the
+// trial's videos (sides resolved here).
+void ReviewServer::Impl::StudyApi() {
   http.Get(R"(/api/study/([A-Za-z0-9_.\-]+)/summary)",
            [this](const httplib::Request& req, httplib::Response& res) {
              WithDb(res, [&](Database& d) {
@@ -485,6 +530,12 @@ void ReviewServer::Impl::Routes() {
     });
     if (!path.empty()) ServeFile(req, res, path);
   });
+
+  AddVerifyRoutes(http, {.with_db = [this](httplib::Response& res,
+                                           const std::function<void(Database&)>& fn) { WithDb(res, fn); },
+                         .make_nonce = [] { return RandomHex(16); },
+                         .token = token,
+                         .reviewer = options.reviewer});
 }
 
 ReviewServer::ReviewServer(const std::filesystem::path& db_path, const ServeOptions& options)

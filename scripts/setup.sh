@@ -21,8 +21,24 @@ PACKAGES=(
   libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium chromium-driver
+  nodejs
   slurm-wlm munge
 )
+
+# npm packages (pinned) for the review app's 3D view, into a cache folder
+# outside the repository that the server reads (review/vendor.h); nothing
+# is fetched at build or run time.
+install_npm() {
+  local dir=${DOASIDO_NPM_DIR:-$HOME/.cache/doasido/npm}
+  if [ -f "$dir/node_modules/three/package.json" ] &&
+     grep -q '"version": "0.160.0"' "$dir/node_modules/three/package.json"; then
+    return
+  fi
+  command -v npm >/dev/null || { echo "setup: npm missing (install Node.js and npm)" >&2; return 1; }
+  mkdir -p "$dir"
+  (cd "$dir" && npm install --no-audit --no-fund --save-exact three@0.160.0 >/dev/null)
+  echo "setup: three.js 0.160.0 in $dir"
+}
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -33,6 +49,7 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#PACKAGES[@]} packages present"
+  install_npm
   exit 0
 fi
 
@@ -46,3 +63,4 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "setup: done"
+install_npm

@@ -275,6 +275,374 @@ std::vector<DefectKind> AssignDefects(const std::map<DefectKind, double>& mix, i
   return out;
 }
 
+namespace {
+
+// The scenes of one clip: one, or two across a cut or cross-fade.
+struct ClipScenes {
+  ObjectChoice object;
+  std::vector<ScenePlan> plans;
+  std::vector<Episode> episodes;
+  std::vector<CameraTrack> tracks;
+  std::vector<BackgroundCache> caches;
+};
+
+ClipScenes PlanClip(const SynthConfig& cfg, DefectKind kind, std::mt19937_64& rng) {
+  ClipScenes c;
+  c.object = ChooseObject(cfg, rng);
+  const bool two_scenes = kind == DefectKind::kCut || kind == DefectKind::kCrossFade;
+  c.plans = {PlanScene(cfg, c.object, kind, rng)};
+  if (two_scenes) c.plans.push_back(PlanScene(cfg, c.object, DefectKind::kClean, rng));
+  c.caches.resize(c.plans.size());
+  for (const ScenePlan& p : c.plans) {
+    c.episodes.push_back(ScriptEpisode(p.spec, c.object.mesh));
+    c.tracks.push_back(StaticCamera(p.camera, p.camera_from_world, cfg.frames));
+  }
+  return c;
+}
+
+struct DefectTiming {
+  int cut = -1;         // first frame of scene B
+  int fade_start = -1;  // first frame of the cross-fade
+};
+
+// Draws when the scripted defect happens, moves scene A's camera for the
+// camera defects and records each defect.
+DefectTiming TimeDefects(DefectKind kind, int T, std::mt19937_64& rng,
+                         std::vector<CameraTrack>& tracks, std::vector<DefectRecord>& defects) {
+  DefectTiming timing;
+  switch (kind) {
+    case DefectKind::kCut: {
+      const int cut = T / 3 + std::uniform_int_distribution<int>(0, T / 3)(rng);
+      timing.cut = cut;
+      defects.push_back({"cut", cut, cut, {{"from_scene", 0}, {"to_scene", 1}}});
+      break;
+    }
+    case DefectKind::kCrossFade: {
+      const int start = T / 3 + std::uniform_int_distribution<int>(0, T / 3 - kFadeFrames)(rng);
+      timing.fade_start = start;
+      defects.push_back({"fade",
+                         start,
+                         start + kFadeFrames - 1,
+                         {{"from_scene", 0}, {"to_scene", 1}, {"frames", kFadeFrames}}});
+      break;
+    }
+    case DefectKind::kFadeBlack:
+      defects.push_back({"black", 0, kFadeInFrames - 1, {{"direction", "in"}}});
+      defects.push_back({"black", T - kFadeFrames, T - 1, {{"direction", "out"}}});
+      break;
+    case DefectKind::kPan: {
+      const int s = T / 4, e = s + T / 2;
+      const double rate = (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.005, 0.008);
+      ApplyPan(tracks[0], s, e, rate);
+      defects.push_back({"pan", s, e, {{"rad_per_frame", rate}}});
+      break;
+    }
+    case DefectKind::kShake: {
+      const int s = T / 4, e = 3 * T / 4;
+      const double amp = Uniform(rng, 0.003, 0.006);
+      ApplyShake(tracks[0], s, e, amp, rng);
+      defects.push_back({"shake", s, e, {{"amplitude_rad", amp}}});
+      break;
+    }
+    case DefectKind::kZoom: {
+      const int s = T / 4, e = 3 * T / 4;
+      const double factor =
+          Uniform(rng, 0, 1) < 0.5 ? Uniform(rng, 1.25, 1.45) : Uniform(rng, 0.7, 0.8);
+      ApplyZoom(tracks[0], s, e, factor);
+      defects.push_back({"zoom", s, e, {{"factor", factor}}});
+      break;
+    }
+    default:
+      break;
+  }
+  return timing;
+}
+
+// Which scene frame t shows, how far into a cross-fade and how dimmed.
+struct FrameMix {
+  int scene = 0;
+  double blend = 0;  // > 0 inside a cross-fade from scene 0 to 1
+  double gain = 1;   // < 1 while fading from or to black
+};
+
+FrameMix MixOf(int t, int T, DefectKind kind, const DefectTiming& timing) {
+  FrameMix m;
+  if (timing.cut >= 0 && t >= timing.cut) m.scene = 1;
+  if (timing.fade_start >= 0) {
+    if (t >= timing.fade_start + kFadeFrames) {
+      m.scene = 1;
+    } else if (t >= timing.fade_start) {
+      m.blend = double(t - timing.fade_start + 1) / (kFadeFrames + 1);
+      m.scene = m.blend >= 0.5 ? 1 : 0;
+    }
+  }
+  if (kind == DefectKind::kFadeBlack) {
+    if (t < kFadeInFrames) m.gain = double(t) / kFadeInFrames;
+    if (t >= T - kFadeFrames) m.gain = double(T - 1 - t) / kFadeFrames;
+  }
+  return m;
+}
+
+// Renders frame t as written to the video (`bgr`, before sensor noise) and
+// returns the ground truth of its dominant scene.
+SceneFrame ComposeFrame(ClipScenes& c, const FrameMix& mix, int t, cv::Mat& bgr) {
+  const int main_scene = mix.blend > 0 ? 0 : mix.scene;
+  SceneFrame a = RenderScene(c.plans[main_scene], c.episodes[main_scene], c.tracks[main_scene],
+                             c.object.mesh, t, c.caches[main_scene]);
+  bgr = a.render.bgr;
+  if (mix.blend <= 0) {
+    if (mix.gain < 1) bgr = Dim(bgr, mix.gain);
+    return a;
+  }
+  SceneFrame other = RenderScene(c.plans[1], c.episodes[1], c.tracks[1], c.object.mesh, t,
+                                 c.caches[1]);
+  bgr = CrossFade(a.render.bgr, other.render.bgr, mix.blend);
+  if (mix.gain < 1) bgr = Dim(bgr, mix.gain);
+  return mix.scene == 1 ? other : a;
+}
+
+// What the generator gathers over a clip's frames besides the bundle.
+struct ClipTruth {
+  explicit ClipTruth(int T, int track_points)
+      : first_seen(track_points, -1),
+        hand_in({std::vector<double>(T, 0.0), std::vector<double>(T, 0.0)}),
+        object_in(T, 0.0), scene_of(T, 0), phase_of(T) {
+    tracks.x.resize(track_points, T);
+    tracks.y.resize(track_points, T);
+    tracks.visible.resize(track_points, T);
+    tracks.query.resize(track_points, 3);
+  }
+  std::array<recon::HandTrack, 2> hands;
+  std::array<bool, 2> hand_seen{false, false};
+  std::vector<Vec3> track_pts;  // object frame
+  recon::PointTracks tracks;
+  std::vector<int> first_seen;
+  Json frames_json = Json::array();
+  std::array<std::vector<double>, 2> hand_in;  // fraction of the hand in frame
+  std::vector<double> object_in;
+  std::vector<int> scene_of;
+  std::vector<std::string> phase_of;
+  double min_gap = std::numeric_limits<double>::infinity();  // hover: hand to object, m
+  bool k_varies = false;
+};
+
+// Camera, depth, masks and object pose of frame t into the bundle.
+void RecordScene(const SynthConfig& cfg, const ClipScenes& c, const SceneFrame& gt, int t,
+                 recon::ClipBundle& b, ClipTruth& truth) {
+  const Camera& cam = gt.state.camera;
+  const Pose& cw = gt.state.camera_from_world;
+  if (t > 0 && (cam.fx != b.K.back()(0, 0) || cam.fy != b.K.back()(1, 1))) truth.k_varies = true;
+  b.K.push_back(cam.K());
+  b.depth.push_back(gt.render.raster.depth.clone());
+  if (cfg.point_maps) b.points.push_back(DepthToPoints(b.depth.back(), cam));
+  b.mask_object.push_back(SurfaceMask(gt.render.raster, kSurfaceObject));
+  b.mask_hand_left.push_back(SurfaceMask(gt.render.raster, kSurfaceHandLeft));
+  b.mask_hand_right.push_back(SurfaceMask(gt.render.raster, kSurfaceHandRight));
+  b.object_poses.push_back(cw * gt.state.object_pose);
+  b.gravity_up.push_back(cw.R() * Vec3::UnitZ());
+  truth.object_in[t] = InFrame(c.object.mesh.Transformed(gt.state.object_pose), cam, cw);
+  truth.phase_of[t] = gt.episode->phase;
+}
+
+// Both hands of frame t (joints and mesh in the camera frame), and the
+// hover gap of a no-contact clip.
+void RecordHands(DefectKind kind, const ClipScenes& c, const SceneFrame& gt, int t,
+                 ClipTruth& truth) {
+  const Camera& cam = gt.state.camera;
+  const Pose& cw = gt.state.camera_from_world;
+  const TriMesh obj_world = c.object.mesh.Transformed(gt.state.object_pose);
+  for (int s = 0; s < 2; ++s) {
+    recon::HandTrack& h = truth.hands[s];
+    const auto& posed = gt.state.hands[s];
+    if (!posed) {
+      h.valid.push_back(false);
+      h.joints.push_back(recon::Joints21::Zero());
+      h.verts.emplace_back(0, 3);
+      continue;
+    }
+    truth.hand_seen[s] = true;
+    h.valid.push_back(true);
+    recon::Joints21 j;
+    for (int k = 0; k < 21; ++k) j.row(k) = (cw * Vec3(posed->joints.row(k).transpose())).transpose();
+    h.joints.push_back(j);
+    h.verts.push_back(posed->mesh.Transformed(cw).vertices);
+    h.faces = posed->mesh.faces;
+    truth.hand_in[s][t] = InFrame(posed->mesh, cam, cw);
+    if (kind != DefectKind::kNoContact || gt.episode->phase != "hover" ||
+        s != static_cast<int>(c.plans[0].spec.active)) {
+      continue;
+    }
+    for (const Capsule& cap : posed->capsules) {
+      for (int k = 0; k <= 2; ++k) {
+        const Vec3 p = cap.a + (cap.b - cap.a) * (k / 2.0);
+        truth.min_gap = std::min(truth.min_gap, DistanceToMesh(obj_world, p) - cap.radius);
+      }
+    }
+  }
+}
+
+// Projects the object's tracked surface points into frame t with their
+// visibility (depth test against the rendered object).
+void TrackPoints(const SceneFrame& gt, const Pose& obj_cam, int t, ClipTruth& truth) {
+  const Camera& cam = gt.state.camera;
+  recon::PointTracks& pt = truth.tracks;
+  for (int i = 0; i < static_cast<int>(truth.track_pts.size()); ++i) {
+    const Vec3 p = obj_cam * truth.track_pts[i];
+    const Vec2 uv = p.z() > 0.01 ? cam.Project(p) : Vec2(-1e6, -1e6);
+    pt.x(i, t) = static_cast<float>(uv.x());
+    pt.y(i, t) = static_cast<float>(uv.y());
+    const int ui = static_cast<int>(std::lround(uv.x())),
+              vi = static_cast<int>(std::lround(uv.y()));
+    bool vis = false;
+    if (p.z() > 0.01 && ui >= 0 && vi >= 0 && ui < cam.width && vi < cam.height) {
+      const float z = gt.render.raster.depth.at<float>(vi, ui);
+      vis = gt.render.raster.surface.at<std::uint8_t>(vi, ui) == kSurfaceObject &&
+            std::abs(z - p.z()) < std::max(0.004, 0.02 * p.z());
+    }
+    pt.visible(i, t) = vis;
+    if (vis && truth.first_seen[i] < 0) {
+      truth.first_seen[i] = t;
+      pt.query.row(i) << float(t), pt.y(i, t), pt.x(i, t);
+    }
+  }
+}
+
+// 100DOH-style VOC boxes of frame t from the visible masks.
+VocFrame VocOf(const SynthConfig& cfg, const std::string& clip_id, const SceneFrame& gt, int t,
+               const recon::ClipBundle& b) {
+  VocFrame voc;
+  voc.genre = cfg.genre;
+  voc.video_id = clip_id;
+  voc.frame = t;
+  voc.width = cfg.width;
+  voc.height = cfg.height;
+  const PixelBox obox = MaskBox(b.mask_object.back());
+  const std::array<const cv::Mat*, 2> hmask = {&b.mask_hand_left.back(),
+                                               &b.mask_hand_right.back()};
+  for (int s = 0; s < 2; ++s) {
+    const PixelBox hb = MaskBox(*hmask[s]);
+    if (hb.empty()) continue;
+    VocHand vh;
+    vh.side = s;
+    vh.box = hb;
+    vh.contact_state = gt.episode->contact[s] ? 3 : 0;
+    if (gt.episode->contact[s] && !obox.empty()) vh.object_box = obox;
+    voc.hands.push_back(vh);
+  }
+  if (!obox.empty()) voc.objects.push_back({obox, gt.episode->contact[0], gt.episode->contact[1]});
+  return voc;
+}
+
+// The per-frame facts of the ground-truth JSON, with the background motion
+// from the previous frame of the same scene (camera defects only move scene
+// A's camera; across a cut there is no motion).
+Json FrameFacts(const ClipScenes& c, const FrameMix& mix, const SceneFrame& gt, int t,
+                const recon::ClipBundle& b, const ClipTruth& truth) {
+  const Camera& cam = gt.state.camera;
+  Json fj{{"t", t},
+          {"scene", mix.scene},
+          {"blend", mix.blend},
+          {"gain", mix.gain},
+          {"phase", gt.episode->phase},
+          {"K", {cam.fx, cam.fy, cam.cx, cam.cy}},
+          {"camera_from_world", PoseJson(gt.state.camera_from_world)},
+          {"object_in_frame", truth.object_in[t]},
+          {"object_pixels", cv::countNonZero(b.mask_object.back())},
+          {"contact", {gt.episode->contact[0], gt.episode->contact[1]}},
+          {"hand_present", {bool(gt.state.hands[0]), bool(gt.state.hands[1])}},
+          {"hand_in_frame", {truth.hand_in[0][t], truth.hand_in[1][t]}},
+          {"hand_pixels",
+           {cv::countNonZero(b.mask_hand_left.back()), cv::countNonZero(b.mask_hand_right.back())}}};
+  Mat3 H = Mat3::Identity();
+  if (t > 0 && truth.scene_of[t - 1] == mix.scene) {
+    const CameraTrack& tr = c.tracks[mix.scene];
+    H = ViewHomography(tr.camera[t - 1], tr.camera_from_world[t - 1], tr.camera[t],
+                       tr.camera_from_world[t]);
+  }
+  const Vec2 d = Displacement(H, cam.cx, cam.cy);
+  Mat3 Hr = H.transpose();
+  fj["H_prev"] = std::vector<double>(Hr.data(), Hr.data() + 9);  // row-major
+  fj["bg_dx"] = d.x();
+  fj["bg_dy"] = d.y();
+  return fj;
+}
+
+// Defects whose extent only the rendered geometry tells: how long the hand
+// or object was out of frame, when the hand hovered.
+void AddMeasuredDefects(DefectKind kind, int T, int active, const ClipTruth& truth,
+                        std::vector<DefectRecord>& defects) {
+  if (kind == DefectKind::kHandOut || kind == DefectKind::kObjectOut) {
+    const auto& series = kind == DefectKind::kHandOut ? truth.hand_in[active] : truth.object_in;
+    const auto run = LongestRun(series, 0.0);
+    if (run.first >= 0) {
+      defects.push_back({DefectName(kind),
+                         run.first,
+                         run.second,
+                         {{"subject", kind == DefectKind::kHandOut ? "hand" : "object"},
+                          {"side", active == 1 ? "right" : "left"}}});
+    }
+  }
+  if (kind == DefectKind::kNoContact) {
+    int s = -1, e = -1;
+    for (int t = 0; t < T; ++t) {
+      if (truth.phase_of[t] != "hover") continue;
+      if (s < 0) s = t;
+      e = t;
+    }
+    defects.push_back({"no_contact", s, e, {{"min_gap_m", truth.min_gap}}});
+  }
+  if (kind == DefectKind::kStatic) defects.push_back({"static", 0, T - 1, Json::object()});
+}
+
+// The per-clip ground-truth JSON (docs: synth/generator.h).
+Json ClipJson(const SynthConfig& cfg, int index, DefectKind kind, const RenderedClip& clip,
+              const ClipScenes& scenes, const ClipTruth& truth) {
+  Json defects = Json::array();
+  for (const auto& d : clip.defects) defects.push_back(ToJson(d));
+  Json plans = Json::array();
+  for (const auto& p : scenes.plans) plans.push_back(SceneJson(p, scenes.object));
+  return Json{{"clip", clip.id},
+              {"video", "videos/" + clip.id + ".mp4"},
+              {"index", index},
+              {"seed", cfg.seed},
+              {"frames", cfg.frames},
+              {"width", cfg.width},
+              {"height", cfg.height},
+              {"fps", cfg.fps},
+              {"kind", DefectName(kind)},
+              {"defects", defects},
+              {"scenes", plans},
+              {"per_frame", truth.frames_json}};
+}
+
+// Renders every frame into `clip` (video frames, bundle, VOC boxes) and
+// returns what was gathered on the way.
+ClipTruth RenderFrames(const SynthConfig& cfg, DefectKind kind, const DefectTiming& timing,
+                       std::uint64_t clip_seed, ClipScenes& scenes, std::mt19937_64& rng,
+                       RenderedClip& clip) {
+  const int T = cfg.frames;
+  ClipTruth truth(T, cfg.track_points);
+  truth.track_pts = SampleSurface(scenes.object.mesh, cfg.track_points, rng);
+  recon::ClipBundle& b = clip.bundle;
+  for (int t = 0; t < T; ++t) {
+    const FrameMix mix = MixOf(t, T, kind, timing);
+    cv::Mat bgr;
+    const SceneFrame gt = ComposeFrame(scenes, mix, t, bgr);
+    bgr = bgr.clone();
+    AddSensorNoise(bgr, cfg.sensor_noise, Hash(clip_seed, t, 77));
+    clip.bgr.push_back(bgr);
+    truth.scene_of[t] = mix.scene;
+    RecordScene(cfg, scenes, gt, t, b, truth);
+    RecordHands(kind, scenes, gt, t, truth);
+    TrackPoints(gt, b.object_poses.back(), t, truth);
+    clip.voc.push_back(VocOf(cfg, clip.id, gt, t, b));
+    truth.frames_json.push_back(FrameFacts(scenes, mix, gt, t, b, truth));
+  }
+  return truth;
+}
+
+}  // namespace
+
 RenderedClip RenderClip(const SynthConfig& cfg, int index, DefectKind kind) {
   if (cfg.frames < 24) {
     throw Error("bad_config", "frames per clip must be at least 24", {.field = "frames"});
@@ -285,70 +653,13 @@ RenderedClip RenderClip(const SynthConfig& cfg, int index, DefectKind kind) {
   const std::uint64_t clip_seed = Hash(cfg.seed, index, 0xc11b);
   std::mt19937_64 rng(clip_seed);
   RenderedClip clip;
-  clip.id = "s" + std::to_string(cfg.seed) + "c" + [&] {
-    char b[16];
-    std::snprintf(b, sizeof b, "%04d", index);
-    return std::string(b);
-  }();
+  char number[16];
+  std::snprintf(number, sizeof number, "%04d", index);
+  clip.id = "s" + std::to_string(cfg.seed) + "c" + number;
   const int T = cfg.frames;
-  const ObjectChoice object = ChooseObject(cfg, rng);
-  const bool two_scenes = kind == DefectKind::kCut || kind == DefectKind::kCrossFade;
-  std::vector<ScenePlan> plans = {PlanScene(cfg, object, kind, rng)};
-  if (two_scenes) plans.push_back(PlanScene(cfg, object, DefectKind::kClean, rng));
-  std::vector<Episode> episodes;
-  std::vector<CameraTrack> tracks;
-  std::vector<BackgroundCache> caches(plans.size());
-  for (const ScenePlan& p : plans) {
-    episodes.push_back(ScriptEpisode(p.spec, object.mesh));
-    tracks.push_back(StaticCamera(p.camera, p.camera_from_world, T));
-  }
+  ClipScenes scenes = PlanClip(cfg, kind, rng);
+  const DefectTiming timing = TimeDefects(kind, T, rng, scenes.tracks, clip.defects);
 
-  // Defect timing.
-  int cut = -1;  // first frame of scene B
-  int fade_start = -1;
-  switch (kind) {
-    case DefectKind::kCut:
-      cut = T / 3 + std::uniform_int_distribution<int>(0, T / 3)(rng);
-      clip.defects.push_back({"cut", cut, cut, {{"from_scene", 0}, {"to_scene", 1}}});
-      break;
-    case DefectKind::kCrossFade:
-      fade_start = T / 3 + std::uniform_int_distribution<int>(0, T / 3 - kFadeFrames)(rng);
-      clip.defects.push_back({"fade",
-                              fade_start,
-                              fade_start + kFadeFrames - 1,
-                              {{"from_scene", 0}, {"to_scene", 1}, {"frames", kFadeFrames}}});
-      break;
-    case DefectKind::kFadeBlack:
-      clip.defects.push_back({"black", 0, kFadeInFrames - 1, {{"direction", "in"}}});
-      clip.defects.push_back({"black", T - kFadeFrames, T - 1, {{"direction", "out"}}});
-      break;
-    case DefectKind::kPan: {
-      const int s = T / 4, e = s + T / 2;
-      const double rate = (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.005, 0.008);
-      ApplyPan(tracks[0], s, e, rate);
-      clip.defects.push_back({"pan", s, e, {{"rad_per_frame", rate}}});
-      break;
-    }
-    case DefectKind::kShake: {
-      const int s = T / 4, e = 3 * T / 4;
-      const double amp = Uniform(rng, 0.003, 0.006);
-      ApplyShake(tracks[0], s, e, amp, rng);
-      clip.defects.push_back({"shake", s, e, {{"amplitude_rad", amp}}});
-      break;
-    }
-    case DefectKind::kZoom: {
-      const int s = T / 4, e = 3 * T / 4;
-      const double factor =
-          Uniform(rng, 0, 1) < 0.5 ? Uniform(rng, 1.25, 1.45) : Uniform(rng, 0.7, 0.8);
-      ApplyZoom(tracks[0], s, e, factor);
-      clip.defects.push_back({"zoom", s, e, {{"factor", factor}}});
-      break;
-    }
-    default:
-      break;
-  }
-
-  // Bundle skeleton.
   recon::ClipBundle& b = clip.bundle;
   b.width = cfg.width;
   b.height = cfg.height;
@@ -356,231 +667,22 @@ RenderedClip RenderClip(const SynthConfig& cfg, int index, DefectKind kind) {
   b.fps = cfg.fps;
   b.producers = Json{{"all", "doasido synth (exact ground truth)"},
                      {"candidates", "doasido synth SAM 3D-like pose sampler"}};
-  b.object_mesh = object.mesh;
-  std::array<recon::HandTrack, 2> hands;
-  std::array<bool, 2> hand_seen{false, false};
-  const std::vector<Vec3> track_pts = SampleSurface(object.mesh, cfg.track_points, rng);
-  recon::PointTracks pt;
-  pt.x.resize(cfg.track_points, T);
-  pt.y.resize(cfg.track_points, T);
-  pt.visible.resize(cfg.track_points, T);
-  pt.query.resize(cfg.track_points, 3);
-  std::vector<int> first_seen(cfg.track_points, -1);
-
-  Json frames_json = Json::array();
-  std::array<std::vector<double>, 2> hand_in(
-      {std::vector<double>(T, 0.0), std::vector<double>(T, 0.0)});
-  std::vector<double> object_in(T, 0.0);
-  std::vector<int> scene_of(T, 0);
-  std::vector<std::string> phase_of(T);
-  double min_gap = std::numeric_limits<double>::infinity();
-  bool k_varies = false;
-
-  for (int t = 0; t < T; ++t) {
-    // Which scene(s) this frame shows.
-    int scene = 0;
-    double blend = 0, gain = 1;
-    if (cut >= 0 && t >= cut) scene = 1;
-    if (fade_start >= 0) {
-      if (t >= fade_start + kFadeFrames) {
-        scene = 1;
-      } else if (t >= fade_start) {
-        blend = double(t - fade_start + 1) / (kFadeFrames + 1);
-        scene = blend >= 0.5 ? 1 : 0;
-      }
-    }
-    if (kind == DefectKind::kFadeBlack) {
-      if (t < kFadeInFrames) gain = double(t) / kFadeInFrames;
-      if (t >= T - kFadeFrames) gain = double(T - 1 - t) / kFadeFrames;
-    }
-    const int main_scene = blend > 0 ? 0 : scene;
-    SceneFrame a = RenderScene(plans[main_scene], episodes[main_scene], tracks[main_scene],
-                               object.mesh, t, caches[main_scene]);
-    cv::Mat bgr = a.render.bgr;
-    SceneFrame other;
-    if (blend > 0) {
-      other = RenderScene(plans[1], episodes[1], tracks[1], object.mesh, t, caches[1]);
-      bgr = CrossFade(a.render.bgr, other.render.bgr, blend);
-    }
-    const SceneFrame& gt = (blend > 0 && scene == 1) ? other : a;
-    if (gain < 1) bgr = Dim(bgr, gain);
-    bgr = bgr.clone();
-    AddSensorNoise(bgr, cfg.sensor_noise, Hash(clip_seed, t, 77));
-    clip.bgr.push_back(bgr);
-    scene_of[t] = scene;
-
-    // Ground truth of the dominant scene.
-    const Camera& cam = gt.state.camera;
-    const Pose& cw = gt.state.camera_from_world;
-    if (t > 0 && (cam.fx != b.K.back()(0, 0) || cam.fy != b.K.back()(1, 1))) k_varies = true;
-    b.K.push_back(cam.K());
-    b.depth.push_back(gt.render.raster.depth.clone());
-    if (cfg.point_maps) b.points.push_back(DepthToPoints(b.depth.back(), cam));
-    b.mask_object.push_back(SurfaceMask(gt.render.raster, kSurfaceObject));
-    b.mask_hand_left.push_back(SurfaceMask(gt.render.raster, kSurfaceHandLeft));
-    b.mask_hand_right.push_back(SurfaceMask(gt.render.raster, kSurfaceHandRight));
-    const Pose obj_cam = cw * gt.state.object_pose;
-    b.object_poses.push_back(obj_cam);
-    b.gravity_up.push_back(cw.R() * Vec3::UnitZ());
-    const TriMesh obj_world = object.mesh.Transformed(gt.state.object_pose);
-    object_in[t] = InFrame(obj_world, cam, cw);
-    phase_of[t] = gt.episode->phase;
-    for (int s = 0; s < 2; ++s) {
-      recon::HandTrack& h = hands[s];
-      const auto& posed = gt.state.hands[s];
-      if (posed) {
-        hand_seen[s] = true;
-        h.valid.push_back(true);
-        recon::Joints21 j;
-        for (int k = 0; k < 21; ++k)
-          j.row(k) = (cw * Vec3(posed->joints.row(k).transpose())).transpose();
-        h.joints.push_back(j);
-        h.verts.push_back(posed->mesh.Transformed(cw).vertices);
-        h.faces = posed->mesh.faces;
-        hand_in[s][t] = InFrame(posed->mesh, cam, cw);
-        if (kind == DefectKind::kNoContact && gt.episode->phase == "hover" &&
-            s == static_cast<int>(plans[0].spec.active)) {
-          for (const Capsule& c : posed->capsules) {
-            for (int k = 0; k <= 2; ++k) {
-              const Vec3 p = c.a + (c.b - c.a) * (k / 2.0);
-              min_gap = std::min(min_gap, DistanceToMesh(obj_world, p) - c.radius);
-            }
-          }
-        }
-      } else {
-        h.valid.push_back(false);
-        h.joints.push_back(recon::Joints21::Zero());
-        h.verts.emplace_back(0, 3);
-      }
-    }
-    // Point tracks.
-    for (int i = 0; i < cfg.track_points; ++i) {
-      const Vec3 p = obj_cam * track_pts[i];
-      const Vec2 uv = p.z() > 0.01 ? cam.Project(p) : Vec2(-1e6, -1e6);
-      pt.x(i, t) = static_cast<float>(uv.x());
-      pt.y(i, t) = static_cast<float>(uv.y());
-      const int ui = static_cast<int>(std::lround(uv.x())),
-                vi = static_cast<int>(std::lround(uv.y()));
-      bool vis = false;
-      if (p.z() > 0.01 && ui >= 0 && vi >= 0 && ui < cam.width && vi < cam.height) {
-        const float z = gt.render.raster.depth.at<float>(vi, ui);
-        vis = gt.render.raster.surface.at<std::uint8_t>(vi, ui) == kSurfaceObject &&
-              std::abs(z - p.z()) < std::max(0.004, 0.02 * p.z());
-      }
-      pt.visible(i, t) = vis;
-      if (vis && first_seen[i] < 0) {
-        first_seen[i] = t;
-        pt.query.row(i) << float(t), pt.y(i, t), pt.x(i, t);
-      }
-    }
-    // VOC boxes from the visible masks.
-    VocFrame voc;
-    voc.genre = cfg.genre;
-    voc.video_id = clip.id;
-    voc.frame = t;
-    voc.width = cfg.width;
-    voc.height = cfg.height;
-    const PixelBox obox = MaskBox(b.mask_object.back());
-    const std::array<const cv::Mat*, 2> hmask = {&b.mask_hand_left.back(),
-                                                 &b.mask_hand_right.back()};
-    for (int s = 0; s < 2; ++s) {
-      const PixelBox hb = MaskBox(*hmask[s]);
-      if (hb.empty()) continue;
-      VocHand vh;
-      vh.side = s;
-      vh.box = hb;
-      vh.contact_state = gt.episode->contact[s] ? 3 : 0;
-      if (gt.episode->contact[s] && !obox.empty()) vh.object_box = obox;
-      voc.hands.push_back(vh);
-    }
-    if (!obox.empty()) {
-      voc.objects.push_back({obox, gt.episode->contact[0], gt.episode->contact[1]});
-    }
-    clip.voc.push_back(voc);
-
-    // Per-frame facts.
-    Json fj{
-        {"t", t},
-        {"scene", scene},
-        {"blend", blend},
-        {"gain", gain},
-        {"phase", gt.episode->phase},
-        {"K", {cam.fx, cam.fy, cam.cx, cam.cy}},
-        {"camera_from_world", PoseJson(cw)},
-        {"object_in_frame", object_in[t]},
-        {"object_pixels", cv::countNonZero(b.mask_object.back())},
-        {"contact", {gt.episode->contact[0], gt.episode->contact[1]}},
-        {"hand_present", {bool(gt.state.hands[0]), bool(gt.state.hands[1])}},
-        {"hand_in_frame", {hand_in[0][t], hand_in[1][t]}},
-        {"hand_pixels",
-         {cv::countNonZero(b.mask_hand_left.back()), cv::countNonZero(b.mask_hand_right.back())}}};
-    // Background motion from the previous frame of the same scene (camera
-    // defects only move scene A's camera; across a cut there is no motion).
-    Mat3 H = Mat3::Identity();
-    if (t > 0 && scene_of[t - 1] == scene) {
-      const CameraTrack& tr = tracks[scene];
-      H = ViewHomography(tr.camera[t - 1], tr.camera_from_world[t - 1], tr.camera[t],
-                         tr.camera_from_world[t]);
-    }
-    const Vec2 d = Displacement(H, cam.cx, cam.cy);
-    Mat3 Hr = H.transpose();
-    fj["H_prev"] = std::vector<double>(Hr.data(), Hr.data() + 9);  // row-major
-    fj["bg_dx"] = d.x();
-    fj["bg_dy"] = d.y();
-    frames_json.push_back(fj);
-  }
-  if (!k_varies) b.K.resize(1);
+  b.object_mesh = scenes.object.mesh;
+  ClipTruth truth = RenderFrames(cfg, kind, timing, clip_seed, scenes, rng, clip);
+  if (!truth.k_varies) b.K.resize(1);
   // Frames without the hand keep a (0,3) mesh, the bundle's "no mesh" value.
   for (int s = 0; s < 2; ++s) {
-    if (hand_seen[s]) (s == 0 ? b.hand_left : b.hand_right) = hands[s];
+    if (truth.hand_seen[s]) (s == 0 ? b.hand_left : b.hand_right) = truth.hands[s];
   }
+  recon::PointTracks& pt = truth.tracks;
   for (int i = 0; i < cfg.track_points; ++i) {
-    if (first_seen[i] < 0) pt.query.row(i) << 0.f, pt.y(i, 0), pt.x(i, 0);
+    if (truth.first_seen[i] < 0) pt.query.row(i) << 0.f, pt.y(i, 0), pt.x(i, 0);
   }
   b.tracks = pt;
-  const Vec3 centre(0, 0, 0.5 * object.mesh.Max().z());
+  const Vec3 centre(0, 0, 0.5 * scenes.object.mesh.Max().z());
   b.candidates = SamplePoseCandidates(b.object_poses, centre, cfg.candidates, rng);
-
-  // Defects measured from the geometry.
-  const int active = static_cast<int>(plans[0].spec.active);
-  if (kind == DefectKind::kHandOut || kind == DefectKind::kObjectOut) {
-    const auto& series = kind == DefectKind::kHandOut ? hand_in[active] : object_in;
-    const auto run = LongestRun(series, 0.0);
-    if (run.first >= 0) {
-      clip.defects.push_back({DefectName(kind),
-                              run.first,
-                              run.second,
-                              {{"subject", kind == DefectKind::kHandOut ? "hand" : "object"},
-                               {"side", active == 1 ? "right" : "left"}}});
-    }
-  }
-  if (kind == DefectKind::kNoContact) {
-    int s = -1, e = -1;
-    for (int t = 0; t < T; ++t) {
-      if (phase_of[t] != "hover") continue;
-      if (s < 0) s = t;
-      e = t;
-    }
-    clip.defects.push_back({"no_contact", s, e, {{"min_gap_m", min_gap}}});
-  }
-  if (kind == DefectKind::kStatic) clip.defects.push_back({"static", 0, T - 1, Json::object()});
-
-  Json defects = Json::array();
-  for (const auto& d : clip.defects) defects.push_back(ToJson(d));
-  Json scenes = Json::array();
-  for (const auto& p : plans) scenes.push_back(SceneJson(p, object));
-  clip.gt = Json{{"clip", clip.id},
-                 {"video", "videos/" + clip.id + ".mp4"},
-                 {"index", index},
-                 {"seed", cfg.seed},
-                 {"frames", T},
-                 {"width", cfg.width},
-                 {"height", cfg.height},
-                 {"fps", cfg.fps},
-                 {"kind", DefectName(kind)},
-                 {"defects", defects},
-                 {"scenes", scenes},
-                 {"per_frame", frames_json}};
+  AddMeasuredDefects(kind, T, static_cast<int>(scenes.plans[0].spec.active), truth, clip.defects);
+  clip.gt = ClipJson(cfg, index, kind, clip, scenes, truth);
   return clip;
 }
 

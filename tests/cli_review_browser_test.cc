@@ -9,7 +9,7 @@
 #include <map>
 #include <set>
 
-#include "cli/stage_registry.h"
+#include "pipeline/stage_registry.h"
 #include "db/database.h"
 #include "review/fleiss_kappa.h"
 #include "review/server.h"
@@ -55,7 +55,7 @@ class BrowserTest : public ::testing::Test {
 // The clips probed for real, then flagged by `interaction` with a score
 // summary and one hand box per frame, as a filter stage would leave them.
 std::vector<ClipId> FlagAll(Database& db) {
-  auto probe = cli::MakeStage("probe", Json::object());
+  auto probe = pipeline::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
     const StageResult result = probe->Run(db.LoadContext(claim->clip_id, "probe"));
     EXPECT_TRUE(db.Complete(*claim, "test", ParamHash(probe->Params()), result, 0.0));

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include "recon/bundle.h"
+#include "recon/gravity.h"
+#include "recon/reconstruction.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
@@ -95,6 +97,27 @@ TEST(KinematicStage, RetargetsASyntheticBundle) {
   EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "scene/scene.xml"));
   EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "robot_scene.xml"));
   EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "trajectory.csv"));
+
+  // Once the recon stage has written its artifact, that is what is read:
+  // the same hand, already in a world frame, and the box resting higher.
+  recon::Reconstruction rec;
+  rec.fps = 30;
+  const Mat3 to_world = recon::UpToZ(Vec3(0, -1, 0));
+  for (int f = 0; f < frames; ++f) {
+    rec.right_valid.push_back(true);
+    rec.right_joints.push_back((joints[f] * to_world.transpose()).eval());
+    rec.object_valid.push_back(true);
+    rec.object_poses.push_back({Quat::Identity(), Vec3(0.1, 0.2, 0.05)});
+  }
+  SaveObj(*bundle.object_mesh, root / "box.obj");
+  rec.object_mesh = root / "box.obj";
+  recon::WriteReconstruction(rec, root / "artifacts/7/recon");
+  const StageResult from_recon = stage.Run(context);
+  EXPECT_EQ(from_recon.measurements["bundle"], (root / "artifacts/7/recon").string());
+  EXPECT_LT(from_recon.measurements["fingertip_error_mean"].get<double>(), 0.002);
+  EXPECT_NEAR(ReadTrajectoryJson(context.artifact_dir / "trajectory.json").object_poses[0].t.z(),
+              0.05, 1e-9);
+  std::filesystem::remove_all(root / "artifacts/7/recon");
 
   // Re-thresholding flags the clip without running it again.
   KinematicStageConfig strict = config;

@@ -126,11 +126,13 @@ class ChromeDriver {
 // error.
 class WebDriverSession {
  public:
-  explicit WebDriverSession(const ChromeDriver& driver, int width = 1400, int height = 900)
+  // `extra_args` are added to Chromium's command line (e.g. software WebGL).
+  explicit WebDriverSession(const ChromeDriver& driver, int width = 1400, int height = 900,
+                            const std::vector<std::string>& extra_args = {})
       : client_("127.0.0.1", driver.port()) {
     client_.set_read_timeout(120, 0);
     client_.set_connection_timeout(10, 0);
-    const Json caps = {
+    Json caps = {
         {"capabilities",
          {{"alwaysMatch",
            {{"browserName", "chrome"},
@@ -140,6 +142,9 @@ class WebDriverSession {
                {"--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 "--autoplay-policy=no-user-gesture-required", "--mute-audio",
                 "--window-size=" + std::to_string(width) + "," + std::to_string(height)}}}}}}}}};
+    for (const auto& a : extra_args) {
+      caps["capabilities"]["alwaysMatch"]["goog:chromeOptions"]["args"].push_back(a);
+    }
     const Json value = Call("POST", "/session", caps);
     id_ = value.at("sessionId").get<std::string>();
   }

@@ -1,4 +1,4 @@
-#include "cli/worker.h"
+#include "pipeline/worker.h"
 
 #include <signal.h>
 #include <sys/wait.h>
@@ -13,13 +13,11 @@
 #include <mutex>
 #include <thread>
 
-#include "cli/stage_registry.h"
-#include "core/permanent_error.h"
 #include "core/log.h"
-#include "core/progress.h"
 #include "db/database.h"
+#include "pipeline/stage_registry.h"
 
-namespace doasido::cli {
+namespace doasido::pipeline {
 namespace {
 
 std::atomic<bool> g_stop{false};
@@ -75,11 +73,6 @@ class Heartbeat {
   std::thread thread_;
 };
 
-std::string ClipLabel(const ClipContext& context) {
-  return context.clip.external_id.empty() ? std::to_string(context.clip.id)
-                                          : context.clip.external_id;
-}
-
 }  // namespace
 
 WorkerStats RunWorkerLoop(const WorkerOptions& options) {
@@ -111,43 +104,16 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       continue;
     }
     heartbeat.Set(claim->run_id);
-    const auto start = std::chrono::steady_clock::now();
-    std::string error;
-    bool permanent = false;  // a retry cannot fix it: fail now
-    StageResult result;
-    std::string label = std::to_string(claim->clip_id);
-    try {
-      ClipContext context = db.LoadContext(claim->clip_id, claim->stage);
-      label = ClipLabel(context);
-      std::filesystem::create_directories(context.artifact_dir);
-      result = stages.at(claim->stage)->Run(context);
-    } catch (const PermanentError& e) {
-      error = e.what();
-      permanent = true;
-    } catch (const Error& e) {
-      error = e.what();
-    } catch (const std::exception& e) {
-      error = std::string("unexpected: ") + e.what();
+    const Claim current = *claim;
+    const StageRunReport report =
+        RunClaimedStage(db, *stages.at(current.stage), current, worker,
+                        hashes.at(current.stage), options.max_attempts,
+                        [&] { claim = claim_next(); });  // record and claim in one commit
+    switch (report.outcome) {
+      case RunOutcome::kDone: ++stats.done; break;
+      case RunOutcome::kFailed: ++stats.failed_attempts; break;
+      case RunOutcome::kLeaseLost: ++stats.lost_leases; break;
     }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    // Record this run and claim the next one in a single commit.
-    Database::Transaction tx(db);
-    if (!error.empty()) {
-      spdlog::warn("{} on clip {} (attempt {}): {}", claim->stage, label, claim->attempts, error);
-      db.Fail(*claim, worker, error, permanent ? claim->attempts : options.max_attempts);
-      ++stats.failed_attempts;
-    } else if (db.Complete(*claim, worker, hashes.at(claim->stage), result, seconds)) {
-      ++stats.done;
-      spdlog::debug("{} {} -> {} {}", claim->stage, label, ToString(result.verdict),
-                    result.reason);
-    } else {
-      ++stats.lost_leases;
-      spdlog::warn("{} on clip {}: lease lost before completion; result dropped", claim->stage,
-                   label);
-    }
-    claim = claim_next();
-    tx.Commit();
     heartbeat.Set(claim ? claim->run_id : 0);
   }
   return stats;
@@ -195,8 +161,6 @@ int RunWorkers(const WorkerOptions& options) {
     };
     for (int i = 0; i < std::max(1, options.jobs); ++i) spawn(i);
     Database db(options.db);
-    std::unique_ptr<Progress> progress;
-    if (options.progress) progress = std::make_unique<Progress>("work", 0);
     while (!children.empty()) {
       int status = 0;
       const pid_t pid = waitpid(-1, &status, WNOHANG);
@@ -214,14 +178,13 @@ int RunWorkers(const WorkerOptions& options) {
       if (g_stop) {
         for (const auto& [child, slot] : children) kill(child, SIGTERM);
       }
-      if (progress) {
+      if (options.progress) {
         const auto s = db.Summary();
-        progress->SetTotal(static_cast<std::uint64_t>(s.pending + s.running + s.done + s.failed));
-        progress->Set(static_cast<std::uint64_t>(s.done + s.failed));
+        options.progress(s.done + s.failed, s.pending + s.running + s.done + s.failed);
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
-    if (progress) progress->Finish();
+    if (options.progress_done) options.progress_done();
   }
   Database db(options.db);
   const auto s = db.Summary();
@@ -230,4 +193,4 @@ int RunWorkers(const WorkerOptions& options) {
   return 0;
 }
 
-}  // namespace doasido::cli
+}  // namespace doasido::pipeline

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "ingest/video_decoder.h"
+#include "video/video_decoder.h"
 #include "test_util.h"
 
 namespace doasido {

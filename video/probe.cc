@@ -1,12 +1,18 @@
-#include "ingest/probe.h"
+#include "video/probe.h"
 
 #include <cmath>
 
 #include <opencv2/videoio.hpp>
 
+#include "core/config_check.h"
 #include "core/permanent_error.h"
 
-namespace doasido::ingest {
+namespace doasido::video {
+
+void CheckConfig(const ProbeConfig& c, const std::string& section) {
+  RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
+  RequireInRange(section, "max_missing_fraction", c.max_missing_fraction, 0, 1);
+}
 
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
   const ErrorSite site{.file = path.string()};
@@ -103,4 +109,4 @@ StageResult ProbeStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::ingest
+}  // namespace doasido::video

@@ -1,11 +1,17 @@
-#include "db/noop_stage.h"
+#include "pipeline/noop_stage.h"
 
 #include <unistd.h>
 
 #include <chrono>
 #include <thread>
 
-namespace doasido {
+#include "core/config_check.h"
+
+namespace doasido::pipeline {
+
+void CheckConfig(const NoopConfig& c, const std::string& section) {
+  RequireInRange(section, "work_ms", c.work_ms, 0, 3600e3);
+}
 
 StageResult NoopStage::Run(const ClipContext& context) {
   if (config_.work_ms > 0) {
@@ -16,4 +22,4 @@ StageResult NoopStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido
+}  // namespace doasido::pipeline

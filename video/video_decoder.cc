@@ -1,4 +1,4 @@
-#include "ingest/video_decoder.h"
+#include "video/video_decoder.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <fstream>
 
-#include "ingest/probe.h"
+#include "video/probe.h"
 #include "tests/test_util.h"
 
-namespace doasido::ingest {
+namespace doasido::video {
 namespace {
 
 using doasido::testing::SharedData;
@@ -101,4 +101,4 @@ TEST(Probe, TruncatedAndGarbageFilesFailWithNamedErrors) {
 }
 
 }  // namespace
-}  // namespace doasido::ingest
+}  // namespace doasido::video

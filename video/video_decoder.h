@@ -110,7 +110,7 @@ class VideoDecoder {
   std::int64_t delivered() const { return delivered_; }
 
  private:
-  struct Codec;  // libav state (ingest/video_decoder.cc)
+  struct Codec;  // libav state (video/video_decoder.cc)
 
   [[noreturn]] void ThrowTruncated(std::int64_t frame, const std::string& why) const;
   // Decodes the next frame of the file into the codec's frame; false at the

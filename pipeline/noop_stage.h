@@ -3,19 +3,26 @@
 // It records which worker ran it and passes every clip.
 #pragma once
 
+#include <string>
+
 #include "db/stage.h"
 
-namespace doasido {
+namespace doasido::pipeline {
+
+inline constexpr const char* kNoopStageName = "noop";
 
 struct NoopConfig {
   double work_ms = 0;  // time each clip takes
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(NoopConfig, work_ms)
 
+// work_ms in [0, 1 hour].
+void CheckConfig(const NoopConfig& c, const std::string& section);
+
 class NoopStage : public Stage {
  public:
   explicit NoopStage(NoopConfig config = {}) : config_(config) {}
-  std::string Name() const override { return "noop"; }
+  std::string Name() const override { return kNoopStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 
@@ -23,4 +30,4 @@ class NoopStage : public Stage {
   NoopConfig config_;
 };
 
-}  // namespace doasido
+}  // namespace doasido::pipeline

@@ -8,7 +8,9 @@
 #include "db/records.h"
 #include "db/stage.h"
 
-namespace doasido::ingest {
+namespace doasido::video {
+
+inline constexpr const char* kProbeStageName = "probe";
 
 struct ProbeConfig {
   // Decode every frame to count them (exact, and catches truncated files)
@@ -23,6 +25,8 @@ struct ProbeConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProbeConfig, count_frames, vfr_tolerance,
                                                 max_missing_fraction)
+// Tolerances are fractions in [0, 1]; throws Error("bad_config").
+void CheckConfig(const ProbeConfig& c, const std::string& section);
 
 // Throws Error naming the file: "video_missing", "video_unreadable" (cannot
 // be opened or has no frames), "video_truncated" (decodes fewer frames than
@@ -34,7 +38,7 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
 class ProbeStage : public Stage {
  public:
   explicit ProbeStage(ProbeConfig config = {}) : config_(config) {}
-  std::string Name() const override { return "probe"; }
+  std::string Name() const override { return kProbeStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 
@@ -42,4 +46,4 @@ class ProbeStage : public Stage {
   ProbeConfig config_;
 };
 
-}  // namespace doasido::ingest
+}  // namespace doasido::video

@@ -2,12 +2,18 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/config.h"
+#include "pipeline/stage_run.h"
 
-namespace doasido::cli {
+namespace doasido::pipeline {
+
+// Progress of the queue while workers run: runs finished (done or failed)
+// out of all runs. The CLI turns it into its progress bar.
+using QueueProgress = std::function<void(std::int64_t finished, std::int64_t total)>;
 
 struct WorkerOptions {
   std::string db;
@@ -15,10 +21,14 @@ struct WorkerOptions {
   std::vector<std::string> stages;  // empty: every stage of the pipeline
   int jobs = 1;                     // worker processes
   bool until_empty = false;         // exit when nothing is left to do
-  double lease_s = 60;              // a dead worker's run is reclaimed after this
-  int max_attempts = 3;
+  double lease_s = kDefaultLeaseSeconds;  // a dead worker's run is reclaimed after this
+  int max_attempts = kDefaultMaxAttempts;
   double poll_s = 0.5;              // idle wait between claims
-  bool progress = true;
+  // Called about five times a second while workers run in child processes
+  // (jobs > 1, or when set); empty: run one worker in this process.
+  QueueProgress progress;
+  // Called once when the workers have stopped.
+  std::function<void()> progress_done;
 };
 
 struct WorkerStats {
@@ -38,4 +48,4 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options);
 // unless the workers themselves could not run.
 int RunWorkers(const WorkerOptions& options);
 
-}  // namespace doasido::cli
+}  // namespace doasido::pipeline

@@ -1,0 +1,181 @@
+// doasido deploy plan | stream: the digital twin (UR3e + hand, MuJoCo) and
+// the 50 Hz LCM command stream (deploy/plan.h, deploy/stream.h).
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "cli/commands.h"
+#include "core/error.h"
+#include "db/database.h"
+#include "deploy/plan.h"
+#include "deploy/stream.h"
+#include "deploy/trajectory_source.h"
+#include "retarget/embodiment.h"
+#include "retarget/kinematic_stage.h"
+
+namespace doasido::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void OnSigint(int) { g_stop = true; }
+
+struct PlanArgs {
+  DbOptions db;
+  long long clip = 0;
+  std::string trajectory;
+  std::string hand;
+  std::string robots_dir;
+  std::string out;
+  bool no_replay = false;
+  deploy::PlanConfig config;
+};
+
+void PrintIssues(const deploy::Plan& plan) {
+  for (const auto& u : plan.unreachable) {
+    std::printf("unreachable  frame %5d  t=%7.3f s  position error %.1f mm  rotation error %.3f rad\n",
+                u.frame, u.time, 1000 * u.value, u.limit);
+  }
+  for (const auto& f : plan.too_fast) {
+    std::printf("too fast     frame %5d  t=%7.3f s  %s %.2f rad/s > %.2f rad/s\n", f.frame, f.time,
+                plan.arm_joints.at(f.joint).c_str(), f.value, f.limit);
+  }
+}
+
+void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
+  deploy::PlanConfig config = a.config;
+  const Json file_config = LoadConfig(a.db);
+  ReadSection(file_config, "deploy", config);
+  // Options given on the command line win over the config file.
+  if (cmd.count("--rate")) config.rate_hz = a.config.rate_hz;
+  if (cmd.count("--yaw-steps")) config.workspace.yaw_steps = a.config.workspace.yaw_steps;
+  if (cmd.count("--offset-steps")) config.workspace.offset_steps = a.config.workspace.offset_steps;
+  deploy::CheckConfig(config, "deploy");
+  deploy::TrajectoryFiles files;
+  if (!a.trajectory.empty()) {
+    files = deploy::FilesBeside(a.trajectory);
+  } else {
+    Database db(a.db.db);
+    auto found = deploy::FindTrajectoryFiles(db, a.clip);
+    if (!found) {
+      throw Error("no_trajectory", "no trajectory.json from the retarget or retarget_kinematic stage",
+                  {.clip = std::to_string(a.clip)});
+    }
+    files = *found;
+  }
+  const retarget::HandTrajectory trajectory = retarget::ReadTrajectoryJson(files.trajectory);
+  const std::string robots = a.robots_dir.empty() ? retarget::DefaultRobotsDir() : a.robots_dir;
+  const retarget::Embodiment hand =
+      retarget::FindEmbodiment(a.hand.empty() ? trajectory.embodiment : a.hand, robots);
+  deploy::Plan plan = deploy::MakePlan(trajectory, hand, config);
+  plan.source = files.trajectory.string();
+  if (config.replay && !a.no_replay) {
+    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir);
+  }
+  deploy::WritePlanJson(plan, a.out);
+  const auto& p = plan.placement;
+  std::printf("%s: %zu commands at %.0f Hz (%.2f s), placement yaw %.1f deg at (%.3f, %.3f) m, "
+              "%d candidates\n", hand.name.c_str(), plan.times.size(), plan.rate_hz,
+              plan.times.back(), p.yaw * 180 / 3.14159265358979, p.x, p.y, p.candidates);
+  PrintIssues(plan);
+  if (plan.replay.ran) {
+    std::printf("replay: object error mean %.1f mm (max %.1f), rotation mean %.3f rad (max %.3f), %s\n",
+                1000 * plan.replay.object_position_error_mean, 1000 * plan.replay.object_position_error_max,
+                plan.replay.object_rotation_error_mean, plan.replay.object_rotation_error_max,
+                plan.replay.success ? "success" : "failure");
+  }
+  std::printf("%s: %zu unreachable, %zu too fast -> %s\n", plan.ok ? "ok" : "FAILED checks",
+              plan.unreachable.size(), plan.too_fast.size(), a.out.c_str());
+  if (!plan.ok) {
+    throw Error("plan_failed_checks", "the plan was written but fails its checks (see above); "
+                "`deploy stream` will refuse it", {.file = a.out});
+  }
+}
+
+void AddPlan(CLI::App& deploy) {
+  auto a = std::make_shared<PlanArgs>();
+  auto* cmd = deploy.add_subcommand(
+      "plan", "Place a robot hand trajectory in the UR3e's workspace, solve arm IK for every\n"
+              "command frame, check reach and joint speeds, replay in MuJoCo, write a plan");
+  AddDbOptions(*cmd, a->db);
+  cmd->add_option("--clip", a->clip, "Clip id whose retarget (else retarget_kinematic) trajectory to plan");
+  cmd->add_option("--trajectory", a->trajectory, "A trajectory.json instead of --db/--clip "
+                  "(scene/scene.xml beside it is the replay scene)");
+  cmd->add_option("--hand", a->hand, "Embodiment (default: the trajectory's)");
+  cmd->add_option("--robots-dir", a->robots_dir, "Folder of robot hand descriptions");
+  cmd->add_option("--out", a->out, "Plan file to write (JSON)")->required();
+  cmd->add_option("--rate", a->config.rate_hz, "Command rate, Hz")->capture_default_str();
+  cmd->add_option("--yaw-steps", a->config.workspace.yaw_steps, "Yaw candidates over a full turn")
+      ->capture_default_str();
+  cmd->add_option("--offset-steps", a->config.workspace.offset_steps,
+                  "Offset candidates per axis around the default table position")->capture_default_str();
+  cmd->add_flag("--no-replay", a->no_replay, "Skip the MuJoCo replay");
+  cmd->footer(
+      "The workspace (default table pose, search ranges) and IK tolerances are the\n"
+      "[deploy] section of --config (deploy/plan.h PlanConfig). Frames the arm cannot\n"
+      "reach, or only faster than its joint speed limits (180 deg/s base, shoulder,\n"
+      "elbow; 360 deg/s wrists), are listed with their times, and the command exits\n"
+      "non-zero; the plan file is written either way.\n\n"
+      "Examples:\n"
+      "  doasido deploy plan --db work/doasido.db --clip 12 --out work/plan12.json\n"
+      "  doasido deploy plan --trajectory work/allegro/trajectory.json --hand sharpa_right \\\n"
+      "      --out plan.json --yaw-steps 24");
+  cmd->callback([a, cmd] {
+    if (a->trajectory.empty() && a->clip <= 0) {
+      throw Error("bad_arguments", "give --trajectory, or --db and --clip", {.field = "--clip"});
+    }
+    RunPlan(*a, *cmd);
+  });
+}
+
+void AddStream(CLI::App& deploy) {
+  struct StreamArgs {
+    std::string plan;
+    std::string dry_run;
+    deploy::StreamOptions options;
+  };
+  auto a = std::make_shared<StreamArgs>();
+  auto* cmd = deploy.add_subcommand(
+      "stream", "Publish a plan's joint commands over LCM in real time (50 Hz by default)");
+  cmd->add_option("--plan", a->plan, "Plan file from `deploy plan`")->required();
+  cmd->add_option("--url", a->options.url, "LCM URL (ttl=0 keeps it on this machine)")
+      ->capture_default_str();
+  cmd->add_option("--channel", a->options.channel, "LCM channel")->capture_default_str();
+  cmd->add_option("--rate", a->options.rate_hz, "Command rate, Hz (0: the plan's)")
+      ->capture_default_str();
+  cmd->add_option("--dry-run", a->dry_run, "Write the messages to this LCM log file instead "
+                  "(no network, no waiting)");
+  cmd->footer(
+      "Messages are doasido_lcm.arm_hand_command (deploy/arm_hand_command.lcm):\n"
+      "timestamp_us, sequence, plan_time, arm_q[6], hand_q[num_hand]. A plan that failed\n"
+      "its checks is refused. Ctrl-C stops after the current message.\n\n"
+      "Examples:\n"
+      "  lcm-logger --lcm-url='udpm://239.255.76.67:7667?ttl=0' run.lcmlog &\n"
+      "  doasido deploy stream --plan work/plan12.json\n"
+      "  doasido deploy stream --plan work/plan12.json --dry-run work/plan12.lcmlog");
+  cmd->callback([a] {
+    const deploy::Plan plan = deploy::ReadPlanJson(a->plan);
+    deploy::StreamOptions options = a->options;
+    options.dry_run_log = a->dry_run;
+    g_stop = false;
+    auto previous = std::signal(SIGINT, OnSigint);
+    std::signal(SIGTERM, OnSigint);
+    const deploy::StreamResult r = deploy::StreamPlan(plan, options, g_stop);
+    std::signal(SIGINT, previous);
+    std::printf("%s %d of %zu commands on %s%s\n", r.stopped ? "stopped after" : "sent", r.sent,
+                plan.arm.size(), options.channel.c_str(),
+                a->dry_run.empty() ? (" (" + options.url + ")").c_str() : (" -> " + a->dry_run).c_str());
+  });
+}
+
+}  // namespace
+
+void AddDeployCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("deploy", "Digital twin and robot commands: arm IK plans and LCM streaming");
+  cmd->require_subcommand(1);
+  AddPlan(*cmd);
+  AddStream(*cmd);
+}
+
+}  // namespace doasido::cli

@@ -1,0 +1,57 @@
+// Database members of trajectory verification (database.h): the queue of
+// robot trajectories a person has not verified yet, and their decisions.
+#include <sqlite3.h>
+
+#include "db/database.h"
+#include "db/statement.h"
+
+namespace doasido {
+
+std::vector<Database::TrajectoryRun> Database::ListTrajectoriesToVerify(
+    const std::vector<std::string>& stages) {
+  auto& q = Prepare(
+      "SELECT r.clip_id, IFNULL(c.external_id, ''), r.stage, r.verdict, IFNULL(r.reason, '')"
+      " FROM stage_runs r JOIN clips c ON c.id = r.clip_id"
+      " WHERE r.stage = ? AND r.state = 'done' AND r.verdict IN ('pass', 'flag')"
+      " AND IFNULL((SELECT v.source FROM verdicts v WHERE v.clip_id = r.clip_id"
+      "             AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), '') <> 'human'"
+      " ORDER BY r.clip_id");
+  std::vector<TrajectoryRun> out;
+  for (const std::string& stage : stages) {
+    q.Bind(1, stage);
+    while (q.Step()) out.push_back({q.Int(0), q.Text(1), q.Text(2), q.Text(3), q.Text(4)});
+    q.Reset();
+  }
+  return out;
+}
+
+void Database::RecordVerification(ClipId clip, const std::string& stage,
+                                  const std::string& reviewer, bool accept,
+                                  const std::string& reason) {
+  Transaction tx(*this);
+  auto& check = Prepare(
+      "SELECT COUNT(*) FROM stage_runs WHERE clip_id = ? AND stage = ? AND state = 'done'"
+      " AND verdict IN ('pass', 'flag')");
+  check.Bind(1, clip).Bind(2, stage);
+  const bool open = check.Step() && check.Int(0) > 0;
+  check.Reset();
+  if (!open) {
+    throw Error("not_verifiable", "stage '" + stage + "' of this clip has no trajectory to verify",
+                {.clip = std::to_string(clip), .field = "stage"});
+  }
+  const char* decision = accept ? "accept" : "reject";
+  Prepare("INSERT INTO reviews (clip_id, stage, reviewer, decision, reason, created_at)"
+          " VALUES (?,?,?,?,?,?)")
+      .Bind(1, clip)
+      .Bind(2, stage)
+      .Bind(3, reviewer)
+      .Bind(4, decision)
+      .Bind(5, reason)
+      .Bind(6, Now())
+      .Run();
+  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, accept ? "" : reason, "human");
+  LogEvent(clip, stage, "review", reviewer, std::string("verify ") + decision + " " + reason);
+  tx.Commit();
+}
+
+}  // namespace doasido

@@ -1,0 +1,119 @@
+#include "deploy/stream.h"
+
+#include <chrono>
+#include <cstring>
+#include <ctime>
+
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include "core/error.h"
+#include "doasido_lcm/arm_hand_command.hpp"
+
+namespace doasido::deploy {
+namespace {
+
+int64_t WallMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+doasido_lcm::arm_hand_command Message(const Plan& plan, size_t k, int64_t timestamp_us) {
+  doasido_lcm::arm_hand_command msg;
+  msg.timestamp_us = timestamp_us;
+  msg.sequence = static_cast<int64_t>(k);
+  msg.plan_time = plan.times[k];
+  for (int i = 0; i < 6; ++i) msg.arm_q[i] = plan.arm[k][i];
+  msg.num_hand = static_cast<int32_t>(plan.hand[k].size());
+  msg.hand_q.assign(plan.hand[k].data(), plan.hand[k].data() + plan.hand[k].size());
+  return msg;
+}
+
+void SleepUntil(const timespec& start, double seconds) {
+  timespec at = start;
+  const long long ns = static_cast<long long>(seconds * 1e9 + 0.5);
+  at.tv_sec += ns / 1000000000LL;
+  at.tv_nsec += ns % 1000000000LL;
+  if (at.tv_nsec >= 1000000000L) {
+    at.tv_sec += 1;
+    at.tv_nsec -= 1000000000L;
+  }
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+  }
+}
+
+StreamResult WriteDryRun(const Plan& plan, const StreamOptions& options, double rate,
+                         const std::atomic<bool>& stop) {
+  lcm::LogFile log(options.dry_run_log.string(), "w");
+  if (!log.good()) throw Error("io", "cannot write LCM log", {.file = options.dry_run_log.string()});
+  StreamResult result;
+  const int64_t start = WallMicros();
+  for (size_t k = 0; k < plan.arm.size() && !stop; ++k) {
+    const int64_t t = start + static_cast<int64_t>(k * 1e6 / rate + 0.5);
+    const doasido_lcm::arm_hand_command msg = Message(plan, k, t);
+    std::vector<uint8_t> buffer(msg.getEncodedSize());
+    msg.encode(buffer.data(), 0, buffer.size());
+    lcm::LogEvent event{};
+    event.eventnum = static_cast<int64_t>(k);
+    event.timestamp = t;
+    event.channel = options.channel;
+    event.datalen = static_cast<int32_t>(buffer.size());
+    event.data = buffer.data();
+    if (log.writeEvent(&event) != 0) throw Error("io", "cannot write LCM log event", {.file = options.dry_run_log.string()});
+    ++result.sent;
+  }
+  result.stopped = result.sent < static_cast<int>(plan.arm.size());
+  return result;
+}
+
+}  // namespace
+
+StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const std::atomic<bool>& stop) {
+  if (!plan.ok) {
+    throw Error("plan_failed_checks",
+                "refusing to stream: the plan has " + std::to_string(plan.unreachable.size()) +
+                    " unreachable and " + std::to_string(plan.too_fast.size()) + " too-fast frames",
+                {.file = plan.source, .field = "ok"});
+  }
+  const double rate = options.rate_hz > 0 ? options.rate_hz : plan.rate_hz;
+  if (!options.dry_run_log.empty()) return WriteDryRun(plan, options, rate, stop);
+  lcm::LCM lcm(options.url);
+  if (!lcm.good()) throw Error("lcm", "cannot start LCM on " + options.url, {.field = "url"});
+  StreamResult result;
+  timespec start{};
+  clock_gettime(CLOCK_MONOTONIC, &start);
+  for (size_t k = 0; k < plan.arm.size() && !stop; ++k) {
+    SleepUntil(start, k / rate);
+    if (stop) break;
+    const doasido_lcm::arm_hand_command msg = Message(plan, k, WallMicros());
+    if (lcm.publish(options.channel, &msg) != 0) {
+      throw Error("lcm", "publish failed on " + options.url, {.field = options.channel});
+    }
+    ++result.sent;
+  }
+  result.stopped = result.sent < static_cast<int>(plan.arm.size());
+  return result;
+}
+
+std::vector<CommandRecord> ReadCommandLog(const std::filesystem::path& path, const std::string& channel) {
+  lcm::LogFile log(path.string(), "r");
+  if (!log.good()) throw Error("bad_log", "cannot read LCM log", {.file = path.string()});
+  std::vector<CommandRecord> out;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != channel) continue;
+    doasido_lcm::arm_hand_command msg;
+    if (msg.decode(e->data, 0, e->datalen) < 0) {
+      throw Error("bad_log", "event " + std::to_string(e->eventnum) + " is not an arm_hand_command",
+                  {.file = path.string(), .field = channel});
+    }
+    CommandRecord r{.log_time_us = e->timestamp, .timestamp_us = msg.timestamp_us,
+                    .sequence = msg.sequence, .plan_time = msg.plan_time};
+    for (int i = 0; i < 6; ++i) r.arm[i] = msg.arm_q[i];
+    r.hand = msg.hand_q;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace doasido::deploy

@@ -1,0 +1,41 @@
+#include "deploy/trajectory_source.h"
+
+#include <fstream>
+#include <iterator>
+
+#include "core/error.h"
+#include "retarget/kinematic_stage.h"
+
+namespace doasido::deploy {
+
+TrajectoryFiles FilesBeside(const std::filesystem::path& trajectory_json) {
+  TrajectoryFiles f;
+  f.trajectory = trajectory_json;
+  const std::filesystem::path scene = trajectory_json.parent_path() / "scene";
+  if (std::filesystem::exists(scene / "scene.xml")) f.scene_dir = scene;
+  return f;
+}
+
+std::optional<TrajectoryFiles> FindTrajectoryFiles(const Database& db, ClipId clip) {
+  const std::filesystem::path kinematic = db.ArtifactDir(clip, retarget::kKinematicStageName);
+  for (const char* stage : {kDynamicsStageName, retarget::kKinematicStageName}) {
+    const std::filesystem::path dir = db.ArtifactDir(clip, stage);
+    if (!std::filesystem::exists(dir / "trajectory.json")) continue;
+    TrajectoryFiles f = FilesBeside(dir / "trajectory.json");
+    f.stage = stage;
+    if (f.scene_dir.empty() && std::filesystem::exists(kinematic / "scene" / "scene.xml")) {
+      f.scene_dir = kinematic / "scene";
+    }
+    return f;
+  }
+  return std::nullopt;
+}
+
+std::string ReadSceneXml(const std::filesystem::path& scene_dir) {
+  if (scene_dir.empty()) return {};
+  std::ifstream in(scene_dir / "scene.xml");
+  if (!in) throw Error("io", "cannot read scene", {.file = (scene_dir / "scene.xml").string()});
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+}  // namespace doasido::deploy

@@ -1,0 +1,107 @@
+#include "pipeline/rethreshold.h"
+
+#include <algorithm>
+
+#include "pipeline/stage_registry.h"
+#include "pipeline/stage_run.h"
+
+namespace doasido::pipeline {
+namespace {
+
+// The measurements without the thresholds recorded beside each score: what
+// later stages may read.
+Json WithoutThresholds(Json measurements) {
+  if (measurements.contains("summary") && measurements["summary"].is_object()) {
+    measurements["summary"].erase("scores");
+  }
+  return measurements;
+}
+
+std::string Outcome(const std::string& verdict, const std::string& reason) {
+  return reason.empty() ? verdict : verdict + ":" + reason;
+}
+
+bool HumanVerdict(Database& db, ClipId clip, const std::string& stage) {
+  const auto history = db.VerdictHistory(clip, stage);
+  return !history.empty() && history.back().source == kHumanVerdictSource;
+}
+
+// Re-decides the finished runs of `stage` (in batches of one transaction).
+void RedecideFinished(Database& db, const Stage& stage, const std::string& hash, bool dry_run,
+                      RethresholdTally& tally) {
+  const std::string name = stage.Name();
+  const auto runs = db.ListRuns({.stage = name, .state = ToString(RunState::kDone)});
+  constexpr size_t kBatch = 500;
+  for (size_t begin = 0; begin < runs.size(); begin += kBatch) {
+    Database::Transaction tx(db);
+    for (size_t i = begin; i < std::min(runs.size(), begin + kBatch); ++i) {
+      const StageRunRow& run = runs[i];
+      const auto measurements = db.GetMeasurements(run.clip_id, name);
+      if (!measurements) continue;
+      const std::optional<StageResult> result = stage.Redecide(*measurements);
+      if (!result) continue;
+      const bool verdict_changed =
+          run.verdict != ToString(result->verdict) || run.reason != result->reason;
+      const bool changed = verdict_changed || WithoutThresholds(*measurements) !=
+                                                  WithoutThresholds(result->measurements);
+      const bool kept = dry_run ? HumanVerdict(db, run.clip_id, name)
+                                : !db.StoreRedecision(run.clip_id, name, hash, *result, changed);
+      if (kept) {
+        ++tally.human_kept;
+        continue;
+      }
+      ++tally.redecided;
+      if (verdict_changed) {
+        ++tally.transitions[Outcome(run.verdict, run.reason) + " -> " +
+                            Outcome(ToString(result->verdict), result->reason)];
+      } else {
+        ++tally.unchanged;
+      }
+    }
+    if (!dry_run) tx.Commit();
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> RethresholdStages(Database& db, const std::vector<std::string>& wanted) {
+  std::vector<std::string> names;
+  for (const auto& stage : db.Pipeline()) {
+    bool eligible = false;
+    for (const auto& entry : StageTable()) {
+      if (entry.name == stage) eligible = entry.decides_from_measurements;
+    }
+    const bool asked =
+        wanted.empty() || std::find(wanted.begin(), wanted.end(), stage) != wanted.end();
+    if (eligible && asked) names.push_back(stage);
+  }
+  for (const auto& name : wanted) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      throw Error("bad_stage",
+                  "'" + name + "' is not a pipeline stage that decides from measurements",
+                  {.file = db.path().string(), .field = "stages"});
+    }
+  }
+  return names;
+}
+
+RethresholdTally RethresholdStage(Database& db, const std::string& name, const Json& config,
+                                  bool dry_run) {
+  RethresholdTally tally;
+  const auto stage = MakeStage(name, config);
+  const std::string hash = ParamHash(stage->Params());
+  RedecideFinished(db, *stage, hash, dry_run, tally);
+  if (dry_run) return tally;
+  const std::string worker = "rethreshold";
+  while (auto claim = db.ClaimNext(worker, {name}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
+    const StageRunReport report =
+        RunClaimedStage(db, *stage, *claim, worker, hash, kDefaultMaxAttempts);
+    if (report.outcome != RunOutcome::kDone) continue;
+    ++tally.transitions["(queued) -> " +
+                        Outcome(ToString(report.result.verdict), report.result.reason)];
+    ++tally.rerun;
+  }
+  return tally;
+}
+
+}  // namespace doasido::pipeline

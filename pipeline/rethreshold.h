@@ -1,0 +1,32 @@
+// Re-thresholding: re-deciding the verdict stages from their stored
+// measurements under new parameters, without decoding anything.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/database.h"
+
+namespace doasido::pipeline {
+
+struct RethresholdTally {
+  std::int64_t redecided = 0, unchanged = 0, human_kept = 0, rerun = 0;
+  std::map<std::string, std::int64_t> transitions;  // "pass -> reject:no_activity"
+};
+
+// The stages of the database's pipeline that decide from stored
+// measurements, in pipeline order; only those in `wanted` when it is not
+// empty. Throws Error("bad_stage") for a wanted stage that is not one.
+std::vector<std::string> RethresholdStages(Database& db, const std::vector<std::string>& wanted);
+
+// Re-decides every finished run of `stage` under `config` and then runs, in
+// process, the runs of `stage` that are pending (clips a change upstream
+// sent on), each through RunClaimedStage. Verdicts given by a person are
+// kept. With `dry_run` nothing is written and pending runs are not judged.
+RethresholdTally RethresholdStage(Database& db, const std::string& stage, const Json& config,
+                                  bool dry_run);
+
+}  // namespace doasido::pipeline

@@ -1,0 +1,42 @@
+// The table of queue stages the worker can run, in pipeline order. A new
+// stage is one entry here; its module provides the Stage class, its name
+// constant and its config struct with CheckConfig (core/config_check.h).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/stage.h"
+
+namespace doasido::pipeline {
+
+struct StageEntry {
+  std::string name;  // the stage's name constant: also its config section
+  std::string summary;
+  bool in_default_pipeline;
+  // Builds the stage from the whole config (the stage reads and checks its
+  // section).
+  std::function<std::unique_ptr<Stage>(const Json& config)> make;
+  // Reads and range-checks the stage's section without building the stage.
+  std::function<void(const Json& config)> check;
+  // Run() only reads stored measurements (no decoding), so `doasido
+  // rethreshold` may re-decide and re-run it in process.
+  bool decides_from_measurements = false;
+};
+
+const std::vector<StageEntry>& StageTable();
+// Throws Error("unknown_stage") listing the known names.
+std::unique_ptr<Stage> MakeStage(const std::string& name, const Json& config);
+std::vector<std::string> DefaultPipeline();
+
+// Refuses a configuration before any clip runs: every section must name a
+// stage of the table or one of `other_sections` (tables read outside the
+// queue, e.g. "report"), and every stage's section must read with known
+// keys, values of the right type and values in range. Throws
+// Error("bad_config") naming section.key, the value and the allowed range.
+void CheckStageConfig(const Json& config, const std::vector<std::string>& other_sections);
+
+}  // namespace doasido::pipeline

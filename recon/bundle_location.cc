@@ -1,0 +1,31 @@
+#include "recon/bundle_location.h"
+
+namespace doasido::recon {
+
+bool ListNamesBundle(const ClipContext& context) {
+  const Json& meta = context.clip.metadata;
+  return meta.is_object() && meta.contains("bundle") && meta["bundle"].is_string() &&
+         !meta["bundle"].get<std::string>().empty();
+}
+
+std::filesystem::path BundleDir(const ClipContext& context) {
+  if (ListNamesBundle(context)) {
+    std::filesystem::path p = context.clip.metadata["bundle"].get<std::string>();
+    if (p.is_relative() && !context.clip.source_list.empty()) {
+      p = std::filesystem::path(context.clip.source_list).parent_path() / p;
+    }
+    return p;
+  }
+  return SiblingArtifactDir(context, kBundleStageName);
+}
+
+std::filesystem::path SiblingArtifactDir(const ClipContext& context, const std::string& stage) {
+  return context.artifact_dir.parent_path() / stage;
+}
+
+std::string ClipName(const ClipContext& context) {
+  return context.clip.external_id.empty() ? std::to_string(context.clip.id)
+                                          : context.clip.external_id;
+}
+
+}  // namespace doasido::recon

@@ -1,0 +1,57 @@
+// The `bundle` queue stage: the seam where foundation models (SAM 3, MoGe,
+// SAM 3D, HaWoR, BootsTAPIR, GeoCalib) hand a clip's outputs to doasido.
+// Contract (docs/clip_bundle.md):
+//   - A clip whose list row has a `bundle` column: that folder is validated
+//     with ReadBundle; no command runs.
+//   - Otherwise `command` is run by /bin/sh after replacing {video}
+//     (absolute path), {first_frame}, {last_frame} (inclusive file frame
+//     indices; -1 = to the end), {fps} (the probed rate, 0 if unknown),
+//     {clip} (the clip's id in its list) and {output} (this stage's artifact
+//     folder, <artifacts>/<clip>/bundle/, created and emptied first); each
+//     value single-quoted. The command must write the clip bundle into
+//     {output} and exit 0. Its stdout and stderr go to
+//     {output}/command.log (ignored by the bundle reader).
+//   - Errors (clip named): bundle_command_failed (non-zero exit or signal;
+//     the message holds the last log lines), bundle_timeout (killed with its
+//     whole process group after timeout_s), bad_bundle (ReadBundle's
+//     complaint naming file and field), no_bundle (no command configured and
+//     no bundle named). bad_bundle and no_bundle are PermanentErrors (the
+//     worker does not retry them); a failed or timed-out command may be
+//     transient (a busy GPU) and is retried.
+// Measurements: source ("list" or "command"), seconds, frames, parts found.
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "recon/bundle_location.h"
+
+namespace doasido::recon {
+
+struct BundleStageConfig {
+  std::string command;       // empty: only clips whose list names a bundle pass
+  double timeout_s = 3600;   // wall clock per clip
+  int log_tail_lines = 20;   // lines of output quoted in a failure
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BundleStageConfig, command, timeout_s,
+                                                log_tail_lines)
+void CheckConfig(const BundleStageConfig& c, const std::string& section);
+
+// Error codes of the stage.
+inline constexpr const char* kErrorBundleCommandFailed = "bundle_command_failed";
+inline constexpr const char* kErrorBundleTimeout = "bundle_timeout";
+inline constexpr const char* kErrorNoBundle = "no_bundle";
+
+class BundleStage : public Stage {
+ public:
+  explicit BundleStage(BundleStageConfig config = {});
+  std::string Name() const override { return kBundleStageName; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+
+ private:
+  BundleStageConfig config_;
+};
+
+}  // namespace doasido::recon

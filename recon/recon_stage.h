@@ -1,0 +1,108 @@
+// The `recon` queue stage: a clip bundle becomes the metric, gravity-aligned
+// hand-object trajectory of recon/reconstruction.h (seed §3.1).
+//
+// Input: the clip bundle (recon/bundle_location.h BundleDir). Object poses:
+// when <artifacts>/<clip>/track/object_poses.npz exists (written by the
+// object tracker stage, a later issue) its `poses` (T,7) f8, object->camera,
+// t xyz + quaternion wxyz, point-map units, NaN rows = no pose; else the
+// bundle's object/poses.npz.
+// Steps: hand-object alignment (hand_object_alignment.h) rescales each
+// frame's object translation to the hand's metric scale; gravity
+// (gravity.h) rotates camera coordinates so up is +z; the floor z = 0 is
+// put under the object's resting pose (the lowest point of the posed mesh in
+// the first frame where the object moves less than rest_speed, else in the
+// slowest frame). The right hand's joints are taken as metric (HaWoR).
+// Output in artifact_dir: reconstruction.npz, object.obj, reconstruction.json
+// (gravity source and inlier share, per-frame scales and how each frame was
+// filled, skipped frames with reasons, object pose source).
+// Measurements (keys below) and verdict: reject kReasonNoObject (no mesh,
+// no poses or no object mask), kReasonTooFewAlignedFrames (aligned share of
+// the frames with a pose below min_aligned_fraction, or fewer than
+// min_aligned_frames); flag kReasonScaleInconsistent when the robust spread
+// of log s over aligned frames exceeds max_scale_spread.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "recon/bundle.h"
+#include "recon/gravity.h"
+#include "recon/hand_object_alignment.h"
+#include "recon/reconstruction.h"
+
+namespace doasido::recon {
+
+inline constexpr const char* kReconStageName = "recon";
+
+// Reason codes.
+inline constexpr const char* kReasonNoObject = "no_object";
+inline constexpr const char* kReasonTooFewAlignedFrames = "too_few_aligned_frames";
+inline constexpr const char* kReasonScaleInconsistent = "scale_inconsistent";
+
+// Measurement keys.
+inline constexpr const char* kMeasureFrames = "frames";
+inline constexpr const char* kMeasurePosedFrames = "posed_frames";
+inline constexpr const char* kMeasureAlignedFrames = "aligned_frames";
+inline constexpr const char* kMeasureEvidenceShare = "evidence_share";  // aligned / posed
+inline constexpr const char* kMeasureScaleMedian = "scale_median";
+inline constexpr const char* kMeasureScaleSpread = "scale_spread";  // 1.4826 MAD of log s
+inline constexpr const char* kMeasureHandObjectDistance = "hand_object_distance_m";  // per frame
+inline constexpr const char* kMeasureHandObjectDistanceMedian = "hand_object_distance_median_m";
+inline constexpr const char* kMeasurePoseJitter = "pose_jitter_m";  // median |acceleration| per frame
+inline constexpr const char* kMeasureGravitySource = "gravity_source";
+inline constexpr const char* kMeasureGravityInlierShare = "gravity_inlier_share";
+inline constexpr const char* kMeasurePoseSource = "object_pose_source";  // "track" or "bundle"
+
+// The tracker's artifact this stage reads when present.
+inline constexpr const char* kTrackStageFolder = "track";
+inline constexpr const char* kTrackPosesFile = "object_poses.npz";
+
+struct ReconStageConfig {
+  HandObjectAlignmentConfig alignment;
+  GravityConfig gravity;
+  double min_aligned_fraction = 0.3;
+  int min_aligned_frames = 5;
+  double max_scale_spread = 0.25;
+  double rest_speed = 0.002;  // m per frame
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ReconStageConfig, alignment, gravity,
+                                                min_aligned_fraction, min_aligned_frames,
+                                                max_scale_spread, rest_speed)
+void CheckConfig(const ReconStageConfig& c, const std::string& section);
+
+struct ReconOutput {
+  Reconstruction reconstruction;  // object_mesh left empty (the caller writes the mesh)
+  HandObjectAlignment alignment;
+  GravityEstimate gravity;
+  Mat3 camera_to_world = Mat3::Identity();  // rotation; then z -= floor offset
+  double floor_offset = 0;
+  Json measurements = Json::object();
+};
+
+// Aligns and gravity-aligns one bundle. `poses` (T) object->camera in point
+// map units with `pose_valid`. Requires bundle.object_mesh.
+ReconOutput Reconstruct(const ClipBundle& bundle, const std::vector<Pose>& poses,
+                        const std::vector<bool>& pose_valid, const ReconStageConfig& config);
+
+// Reads a tracker's object_poses.npz (format in the file comment). Throws
+// Error("bad_track") naming the file and field.
+void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<Pose>& poses,
+                    std::vector<bool>& valid);
+
+class ReconStage : public Stage {
+ public:
+  explicit ReconStage(ReconStageConfig config = {});
+  std::string Name() const override { return kReconStageName; }
+  Json Params() const override { return config_; }
+  StageResult Run(const ClipContext& context) override;
+  std::optional<StageResult> Redecide(const Json& measurements) const override;
+
+ private:
+  ReconStageConfig config_;
+};
+
+}  // namespace doasido::recon

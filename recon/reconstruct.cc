@@ -1,0 +1,182 @@
+// Reconstruct (declared in recon/recon_stage.h): alignment, gravity, floor
+// and the quality measurements of one bundle.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "recon/recon_stage.h"
+
+namespace doasido::recon {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Median(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return kNaN;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// 1.4826 * median |log s - median log s| over aligned frames.
+double ScaleSpread(const HandObjectAlignment& a) {
+  std::vector<double> logs;
+  for (const FrameAlignment& f : a.frames) {
+    if (f.aligned) logs.push_back(std::log(f.scale));
+  }
+  const double m = Median(logs);
+  for (double& x : logs) x = std::abs(x - m);
+  return 1.4826 * Median(logs);
+}
+
+// The frame whose pose defines the floor: the first that moves less than
+// rest_speed to the next posed frame, else the slowest.
+int RestingFrame(const std::vector<Pose>& poses, const std::vector<bool>& valid, double rest_speed) {
+  int slowest = -1;
+  double slowest_speed = 1e30;
+  const int T = static_cast<int>(poses.size());
+  for (int t = 0; t < T; ++t) {
+    if (!valid[t]) continue;
+    if (slowest < 0) slowest = t;
+    if (t + 1 >= T || !valid[t + 1]) continue;
+    const double speed = (poses[t + 1].t - poses[t].t).norm();
+    if (speed < rest_speed) return t;
+    if (speed < slowest_speed) {
+      slowest_speed = speed;
+      slowest = t;
+    }
+  }
+  return slowest;
+}
+
+// Distance from the nearest right-hand joint to the nearest posed object point.
+double HandObjectDistance(const Joints21& joints, const std::vector<Vec3>& object_points,
+                          const Pose& pose) {
+  double best = 1e30;
+  for (const Vec3& x : object_points) {
+    const Vec3 p = pose * x;
+    for (int j = 0; j < 21; ++j) best = std::min(best, (joints.row(j).transpose() - p).norm());
+  }
+  return best;
+}
+
+std::vector<Vec3> SubsampledVertices(const TriMesh& mesh, int max_points) {
+  std::vector<Vec3> out;
+  const int n = mesh.num_vertices();
+  const int step = std::max(1, n / max_points);
+  for (int v = 0; v < n; v += step) out.push_back(mesh.vertices.row(v));
+  return out;
+}
+
+void AddQuality(ReconOutput& out, const TriMesh& mesh) {
+  const Reconstruction& r = out.reconstruction;
+  const std::vector<Vec3> points = SubsampledVertices(mesh, 400);
+  std::vector<double> distance(r.frames(), kNaN), jitter;
+  for (int t = 0; t < r.frames(); ++t) {
+    if (r.right_valid[t] && r.object_valid[t]) {
+      distance[t] = HandObjectDistance(r.right_joints[t], points, r.object_poses[t]);
+    }
+    if (t > 0 && t + 1 < r.frames() && r.object_valid[t - 1] && r.object_valid[t] &&
+        r.object_valid[t + 1]) {
+      jitter.push_back((r.object_poses[t + 1].t - 2 * r.object_poses[t].t + r.object_poses[t - 1].t).norm());
+    }
+  }
+  Json series = Json::array();
+  for (double d : distance) series.push_back(std::isfinite(d) ? Json(d) : Json(nullptr));
+  Json& m = out.measurements;
+  m[kMeasureHandObjectDistance] = series;
+  const double median_distance = Median(distance);
+  m[kMeasureHandObjectDistanceMedian] = std::isfinite(median_distance) ? Json(median_distance) : Json(nullptr);
+  const double median_jitter = Median(jitter);
+  m[kMeasurePoseJitter] = std::isfinite(median_jitter) ? Json(median_jitter) : Json(nullptr);
+}
+
+}  // namespace
+
+ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
+                        const std::vector<bool>& pose_valid, const ReconStageConfig& config) {
+  ReconOutput out;
+  out.alignment = AlignHandObject(b, poses, pose_valid, config.alignment);
+  out.gravity = EstimateGravity(b, config.gravity);
+  const Mat3 R = UpToZ(out.gravity.up);
+  out.camera_to_world = R;
+  const HandObjectAlignment& a = out.alignment;
+  const int T = b.frames;
+
+  Reconstruction& r = out.reconstruction;
+  r.fps = b.fps > 0 ? b.fps : 30.0;
+  r.object_valid.assign(T, false);
+  r.object_poses.assign(T, Pose::Identity());
+  for (int t = 0; t < T; ++t) {
+    if (!std::isfinite(a.scale[t])) continue;
+    r.object_valid[t] = true;
+    r.object_poses[t] = {Quat(R) * a.poses[t].q, R * a.poses[t].t};
+  }
+  const TriMesh& mesh = *b.object_mesh;
+  const int rest = RestingFrame(r.object_poses, r.object_valid, config.rest_speed);
+  double floor_h = 0;
+  if (rest >= 0) {
+    floor_h = 1e30;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      floor_h = std::min(floor_h, (r.object_poses[rest] * Vec3(mesh.vertices.row(v).transpose())).z());
+    }
+  }
+  out.floor_offset = floor_h;
+  for (Pose& p : r.object_poses) p.t.z() -= floor_h;
+  r.right_valid.assign(T, false);
+  r.right_joints.assign(T, Joints21::Zero());
+  if (b.hand_right) {
+    const HandTrack& h = *b.hand_right;
+    for (int t = 0; t < T && static_cast<size_t>(t) < h.joints.size(); ++t) {
+      r.right_valid[t] = static_cast<size_t>(t) < h.valid.size() ? static_cast<bool>(h.valid[t]) : true;
+      r.right_joints[t] = (h.joints[t] * R.transpose()).eval();
+      r.right_joints[t].col(2).array() -= floor_h;
+    }
+  }
+  r.floor_z = 0;
+
+  int posed = 0;
+  for (int t = 0; t < T; ++t) posed += static_cast<size_t>(t) < pose_valid.size() && pose_valid[t];
+  Json& m = out.measurements;
+  m[kMeasureFrames] = T;
+  m[kMeasurePosedFrames] = posed;
+  m[kMeasureAlignedFrames] = a.aligned_frames;
+  m[kMeasureEvidenceShare] = posed ? double(a.aligned_frames) / posed : 0.0;
+  std::vector<double> raw;
+  for (const FrameAlignment& f : a.frames) raw.push_back(f.aligned ? f.scale : kNaN);
+  const double median_scale = Median(raw);
+  m[kMeasureScaleMedian] = std::isfinite(median_scale) ? Json(median_scale) : Json(nullptr);
+  const double spread = ScaleSpread(a);
+  m[kMeasureScaleSpread] = std::isfinite(spread) ? Json(spread) : Json(nullptr);
+  m[kMeasureGravitySource] = out.gravity.source;
+  m[kMeasureGravityInlierShare] =
+      std::isfinite(out.gravity.inlier_share) ? Json(out.gravity.inlier_share) : Json(nullptr);
+  AddQuality(out, mesh);
+
+  Json frames = Json::array();
+  Json skipped = Json::object();
+  for (int t = 0; t < T; ++t) {
+    const FrameAlignment& f = a.frames[t];
+    frames.push_back({{"fill", a.fill[t]},
+                      {"scale", std::isfinite(a.scale[t]) ? Json(a.scale[t]) : Json(nullptr)},
+                      {"k", f.aligned ? Json(f.k) : Json(nullptr)},
+                      {"hand_hits", f.hand_hits},
+                      {"skipped", f.skipped}});
+    if (!f.aligned) skipped[f.skipped].push_back(t);
+  }
+  r.info = {{"units", "m"},
+            {"world", "gravity -z, floor z = 0 under the object's resting pose"},
+            {"gravity", {{"source", out.gravity.source},
+                         {"up_camera", {out.gravity.up.x(), out.gravity.up.y(), out.gravity.up.z()}},
+                         {"inlier_share", m[kMeasureGravityInlierShare]},
+                         {"fitted_frame", out.gravity.frame},
+                         {"spread_deg", out.gravity.spread_deg}}},
+            {"floor", {{"resting_frame", rest}, {"camera_frame_height", floor_h}}},
+            {"alignment", {{"config", config.alignment},
+                           {"aligned_frames", a.aligned_frames},
+                           {"skipped_frames", skipped},
+                           {"frames", frames}}}};
+  return out;
+}
+
+}  // namespace doasido::recon

@@ -1,0 +1,183 @@
+// `doasido deploy stream` and `deploy plan` through the built binary. The
+// stream is recorded by Debian's lcm-logger (an independent process) on a
+// loopback-only multicast URL (ttl=0) and read back with LCM's log reader.
+#include <cmath>
+#include <csignal>
+#include <thread>
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "deploy/plan.h"
+#include "deploy/stream.h"
+#include "deploy/ur3e.h"
+#include "test_util.h"
+
+namespace doasido {
+namespace {
+
+using testing::RunDoasido;
+using testing::TempDir;
+
+// A 10-s plan at 50 Hz with distinct values in every cell.
+deploy::Plan TenSecondPlan(bool ok) {
+  deploy::Plan p;
+  p.rate_hz = 50;
+  for (const char* n : deploy::Ur3eJointNames()) p.arm_joints.push_back(n);
+  for (int h = 0; h < 22; ++h) p.hand_joints.push_back("j" + std::to_string(h));
+  for (int k = 0; k < 500; ++k) {
+    p.times.push_back(k / 50.0);
+    deploy::ArmQ q;
+    for (int i = 0; i < 6; ++i) q[i] = 0.5 * std::sin(0.37 * k + i) + 1e-3 * i;
+    p.arm.push_back(q);
+    Eigen::VectorXd hand(22);
+    for (int h = 0; h < 22; ++h) hand[h] = 0.01 * k + 0.1 * h + 1.0 / 3.0;
+    p.hand.push_back(hand);
+    p.position_error.push_back(0);
+    p.rotation_error.push_back(0);
+  }
+  p.ok = ok;
+  if (!ok) p.unreachable.push_back({.frame = 3, .time = 0.06, .value = 0.2, .limit = 0.1});
+  return p;
+}
+
+// Starts `argv` with stdout and stderr to `log`; returns its pid.
+pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
+    dup2(fd, 2);
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+int Wait(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// A multicast port of our own so parallel runs do not hear each other.
+std::string Url() {
+  return "udpm://239.255.76.67:" + std::to_string(7700 + getpid() % 2000) + "?ttl=0";
+}
+
+void ExpectEqualsPlan(const std::vector<deploy::CommandRecord>& got, const deploy::Plan& plan) {
+  for (const deploy::CommandRecord& r : got) {
+    ASSERT_GE(r.sequence, 0);
+    ASSERT_LT(r.sequence, static_cast<int64_t>(plan.arm.size()));
+    const size_t k = static_cast<size_t>(r.sequence);
+    EXPECT_EQ(r.arm, plan.arm[k]) << "sequence " << k;
+    ASSERT_EQ(r.hand.size(), 22u);
+    for (int h = 0; h < 22; ++h) EXPECT_EQ(r.hand[h], plan.hand[k][h]) << "sequence " << k;
+    EXPECT_EQ(r.plan_time, plan.times[k]);
+  }
+}
+
+TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
+  TempDir dir;
+  const deploy::Plan plan = TenSecondPlan(true);
+  deploy::WritePlanJson(plan, dir / "plan.json");
+  const std::string url = Url(), channel = "DOASIDO_TEST_" + std::to_string(getpid());
+  const pid_t logger = Spawn({"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel,
+                              (dir / "run.lcmlog").string()}, dir / "logger.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  const auto r = RunDoasido({"deploy", "stream", "--plan", (dir / "plan.json").string(), "--url", url,
+                             "--channel", channel});
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  kill(logger, SIGINT);
+  Wait(logger);
+  ASSERT_EQ(r.exit_code, 0) << r.err << testing::ReadFile(dir / "logger.txt");
+  EXPECT_NE(r.out.find("sent 500 of 500"), std::string::npos) << r.out;
+
+  const auto got = deploy::ReadCommandLog(dir / "run.lcmlog", channel);
+  ASSERT_GE(got.size(), 2u) << testing::ReadFile(dir / "logger.txt");
+  const double mean_interval_ms =
+      (got.back().log_time_us - got.front().log_time_us) / 1000.0 / (got.size() - 1);
+  const double sender_interval_ms =
+      (got.back().timestamp_us - got.front().timestamp_us) / 1000.0 / (got.size() - 1);
+  std::printf("lcm-logger: %zu messages, mean interval %.4f ms (sender %.4f ms)\n", got.size(),
+              mean_interval_ms, sender_interval_ms);
+  EXPECT_NEAR(static_cast<double>(got.size()), 500.0, 2.0);
+  EXPECT_NEAR(mean_interval_ms, 20.0, 0.4);
+  ExpectEqualsPlan(got, plan);
+  for (size_t i = 1; i < got.size(); ++i) EXPECT_GT(got[i].sequence, got[i - 1].sequence);
+}
+
+TEST(DeployStream, DryRunLogHoldsThePlan) {
+  TempDir dir;
+  const deploy::Plan plan = TenSecondPlan(true);
+  deploy::WritePlanJson(plan, dir / "plan.json");
+  const auto r = RunDoasido({"deploy", "stream", "--plan", (dir / "plan.json").string(), "--dry-run",
+                             (dir / "dry.lcmlog").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto got = deploy::ReadCommandLog(dir / "dry.lcmlog");
+  ASSERT_EQ(got.size(), 500u);
+  ExpectEqualsPlan(got, plan);
+  EXPECT_EQ(got[499].log_time_us - got[0].log_time_us, 499 * 20000);
+}
+
+TEST(DeployStream, RefusesPlanThatFailedItsChecks) {
+  TempDir dir;
+  deploy::WritePlanJson(TenSecondPlan(false), dir / "plan.json");
+  const auto r = RunDoasido({"deploy", "stream", "--plan", (dir / "plan.json").string(), "--dry-run",
+                             (dir / "dry.lcmlog").string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("plan_failed_checks"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "dry.lcmlog"));
+}
+
+TEST(DeployStream, StopsCleanlyOnSigint) {
+  TempDir dir;
+  deploy::WritePlanJson(TenSecondPlan(true), dir / "plan.json");
+  const pid_t pid = Spawn({testing::DoasidoBin().string(), "deploy", "stream", "--plan",
+                           (dir / "plan.json").string(), "--url", Url(), "--channel",
+                           "DOASIDO_SIGINT_" + std::to_string(getpid())}, dir / "out.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  kill(pid, SIGINT);
+  const int code = Wait(pid);
+  const std::string out = testing::ReadFile(dir / "out.txt");
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("stopped after"), std::string::npos) << out;
+}
+
+TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
+  TempDir dir;
+  // A wrist that holds still, pointing down, for 1 s, then jumps 3 m up for 0.5 s.
+  Json t;
+  t["embodiment"] = "sharpa_right";
+  t["fps"] = 10;
+  t["scale"] = 1;
+  t["qpos_names"] = {"doasido_wrist_x", "doasido_wrist_y", "doasido_wrist_z",
+                     "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
+  for (int k = 0; k < 20; ++k) {
+    const double far = k >= 10 && k < 15 ? 3.0 : 0.0;
+    t["qpos"].push_back({0.0, 0.0, 0.25 + far, M_PI, 0.0, 0.0});
+    t["valid"].push_back(true);
+    t["fingertip_error"].push_back(0.0);
+  }
+  t["object_poses"] = Json::array();
+  testing::WriteFile(dir / "trajectory.json", t.dump());
+  const auto r = RunDoasido({"deploy", "plan", "--trajectory", (dir / "trajectory.json").string(),
+                             "--out", (dir / "plan.json").string(), "--rate", "10",
+                             "--yaw-steps", "1", "--offset-steps", "1", "--no-replay"});
+  EXPECT_NE(r.exit_code, 0) << r.out << r.err;
+  const deploy::Plan plan = deploy::ReadPlanJson(dir / "plan.json");
+  EXPECT_FALSE(plan.ok);
+  std::vector<double> times;
+  for (const auto& u : plan.unreachable) times.push_back(u.time);
+  EXPECT_EQ(times, (std::vector<double>{1.0, 1.1, 1.2, 1.3, 1.4})) << r.out;
+  EXPECT_NE(r.out.find("unreachable  frame    10  t=  1.000 s"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace doasido

@@ -1,0 +1,207 @@
+// Trajectory verification in real headless Chromium (Debian's chromium +
+// chromedriver; WebGL through SwiftShader): the page plays the clip beside
+// a three.js replay of the robot trajectory, scrubbing moves the robot, and
+// the keyboard's accept and reject land in the database as human verdicts.
+// Screenshots go to $DOASIDO_SHOTS_DIR when it is set.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <algorithm>
+#include <cstdlib>
+#include <numbers>
+
+#include "pipeline/stage_registry.h"
+#include "db/database.h"
+#include "retarget/embodiment.h"
+#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic_stage.h"
+#include "retarget/mug_mesh.h"
+#include "retarget/scene_builder.h"
+#include "review/server.h"
+#include "tests/test_util.h"
+#include "tests/webdriver.h"
+
+namespace doasido {
+namespace {
+
+using testing::ChromeDriver;
+using testing::RunDoasido;
+using testing::TempDir;
+using testing::WebDriverSession;
+
+// A 30-frame trajectory: the wrist sweeps 0.2 m along x while the fingers
+// close, above a mug when `mug` is set (scene written as the stage would).
+retarget::HandTrajectory WriteTrajectory(const std::filesystem::path& dir, bool mug) {
+  const retarget::HandModel hand =
+      retarget::BuildHandModel(retarget::FindEmbodiment("sharpa_right", {}));
+  retarget::HandTrajectory t;
+  t.embodiment = "sharpa_right";
+  t.fps = 30;
+  t.qpos_names = retarget::QposNames(hand.model.get());
+  const mjModel* m = hand.model.get();
+  for (int f = 0; f < 30; ++f) {
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(m->nq);
+    q[hand.wrist_qpos[0]] = -0.1 + 0.2 * f / 29.0;
+    q[hand.wrist_qpos[2]] = 0.15;
+    q[hand.wrist_qpos[4]] = std::numbers::pi / 2;  // fingers along +x, palm down
+    for (int j = 0; j < m->njnt; ++j) {
+      const int a = m->jnt_qposadr[j];
+      if (std::find(hand.finger_qpos.begin(), hand.finger_qpos.end(), a) == hand.finger_qpos.end()) continue;
+      q[a] = m->jnt_range[2 * j] + (m->jnt_range[2 * j + 1] - m->jnt_range[2 * j]) * 0.6 * f / 29.0;
+    }
+    t.qpos.push_back(q);
+    t.valid.push_back(true);
+    t.fingertip_error.push_back(0.002 + 0.0001 * f);
+  }
+  std::filesystem::create_directories(dir);
+  if (mug) {
+    const retarget::ObjectScene scene = retarget::BuildObjectScene(
+        retarget::MakeMug(), {Quat::Identity(), Vec3(0, 0, 0)}, retarget::SceneConfig{}, dir / "scene");
+    t.object_poses.assign(30, scene.pose);
+    for (int f = 0; f < 30; ++f) t.object_poses[f].t.y() += 0.002 * f;  // the reference drifts
+  }
+  retarget::WriteTrajectoryJson(t, dir / "trajectory.json");
+  return t;
+}
+
+// Pixels of the 3D view differing from its background, and a checksum.
+Json CanvasStats(WebDriverSession& session) {
+  return session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let differ = 0, sum = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.abs(d[i] - 0x20) + Math.abs(d[i + 1] - 0x24) + Math.abs(d[i + 2] - 0x2c) > 12) ++differ;
+      sum = (sum * 31 + d[i] + 7 * d[i + 1] + 13 * d[i + 2]) % 1000000007;
+    }
+    return {differ, sum, w: c.width, h: c.height, pixels: c.width * c.height};
+  )js");
+}
+
+// Pixels that differ between two renders of the view.
+int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
+  return session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data, b = window[arguments[0]];
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] !== b[i] || d[i + 1] !== b[i + 1] || d[i + 2] !== b[i + 2]) ++n;
+    return n;
+  )js", Json::array({before_var})).get<int>();
+}
+
+TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
+  if (!testing::ChromiumAvailable()) GTEST_SKIP() << "needs Debian's chromium and chromium-driver";
+  TempDir dir;
+  ASSERT_EQ(RunDoasido({"synth", "--out", (dir / "synth").string(), "--clips", "2", "--frames", "30",
+                        "--width", "160", "--height", "120", "--seed", "3", "--mix", "clean=1",
+                        "--no-bundles"}).exit_code, 0);
+  const auto db_path = dir / "work" / "d.db";
+  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline",
+                        std::string("probe,") + retarget::kKinematicStageName}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()})
+                .exit_code, 0);
+  Database db(db_path);
+  auto probe = pipeline::MakeStage("probe", Json::object());
+  while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
+    const StageResult result = probe->Run(db.LoadContext(claim->clip_id, "probe"));
+    ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
+  }
+  std::vector<ClipId> clips;
+  while (auto claim = db.ClaimNext("test", {retarget::kKinematicStageName}, 60, 3)) {
+    const ClipId id = claim->clip_id;
+    WriteTrajectory(db.ArtifactDir(id, retarget::kKinematicStageName), clips.empty());
+    StageResult result;
+    result.measurements = {{"fingertip_error_mean", 0.0035}, {"frames", 30}};
+    ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
+    clips.push_back(id);
+  }
+  ASSERT_EQ(clips.size(), 2u);
+
+  ChromeDriver driver(dir / "chromedriver.log");
+  review::ReviewServer server(db_path, {.port = 0, .reviewer = "vera"});
+  server.Start();
+  WebDriverSession session(driver, 1400, 900,
+                           {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+                            "--ignore-gpu-blocklist"});
+  session.Navigate(server.Origin() + "/verify");
+  EXPECT_EQ(session.WaitFor("document.body.dataset.ready === '1' && document.body.dataset.loaded === '1'"
+                            " && window.doasidoVerify.queue.length", "the verification queue", 60),
+            2);
+  // The clip's video is loaded beside the view.
+  const Json video = session.WaitFor(
+      "(() => { const v = document.getElementById('video'); return v.readyState >= 1 &&"
+      " v.src.endsWith('/video/" + std::to_string(clips[0]) + "') && {w: v.videoWidth}; })()",
+      "the clip's video");
+  EXPECT_EQ(video.at("w"), 160);
+
+  const Json first = CanvasStats(session);
+  std::printf("view %dx%d: %d of %d pixels differ from the background\n", first.at("w").get<int>(),
+              first.at("h").get<int>(), first.at("differ").get<int>(), first.at("pixels").get<int>());
+  EXPECT_GT(first.at("differ").get<int>(), 1000) << first.dump();
+  if (const char* shots = std::getenv("DOASIDO_SHOTS_DIR")) {
+    session.Screenshot(std::filesystem::path(shots) / "verify_frame0.png");
+  }
+
+  // Scrub to the last frame: the robot moves (pixels change) and the video follows.
+  session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    window.before = g.getImageData(0, 0, c.width, c.height).data;
+    const s = document.getElementById('scrub'); s.value = 29; s.dispatchEvent(new Event('input'));
+  )js");
+  session.WaitFor("document.body.dataset.frame === '29'", "the scrub");
+  const int changed = ChangedPixels(session, "before");
+  std::printf("scrub to frame 29: %d pixels changed\n", changed);
+  EXPECT_GT(changed, 500);
+  const Json t = session.WaitFor(
+      "(() => { const v = document.getElementById('video'); return !v.seeking && v.currentTime > 0.9 &&"
+      " v.currentTime; })()", "the video to follow the scrub");
+  EXPECT_NEAR(t.get<double>(), 29.0 / 30, 1.0 / 30);
+  if (const char* shots = std::getenv("DOASIDO_SHOTS_DIR")) {
+    session.Screenshot(std::filesystem::path(shots) / "verify_frame29.png");
+  }
+
+  // a accepts the first trajectory; 2 picks object_drift and r rejects the second.
+  session.PressKeys({"a"});
+  session.WaitFor("document.body.dataset.decisions === '1' && document.body.dataset.loaded === '1' &&"
+                  " document.body.dataset.clipId === '" + std::to_string(clips[1]) + "'",
+                  "the accept to be saved", 60);
+  session.PressKeys({"2", "r"});
+  session.WaitFor("document.body.dataset.decisions === '2'", "the reject to be saved");
+  EXPECT_EQ(session.Execute("return window.doasidoVerify.queue.length;"), 0);
+
+  const auto reviews = db.ListReviews();
+  ASSERT_EQ(reviews.size(), 2u);
+  EXPECT_EQ(reviews[0].clip_id, clips[0]);
+  EXPECT_EQ(reviews[0].decision, "accept");
+  EXPECT_EQ(reviews[0].reviewer, "vera");
+  EXPECT_EQ(reviews[1].clip_id, clips[1]);
+  EXPECT_EQ(reviews[1].decision, "reject");
+  EXPECT_EQ(reviews[1].reason, "object_drift");
+  const auto accepted = db.VerdictHistory(clips[0], retarget::kKinematicStageName);
+  ASSERT_FALSE(accepted.empty());
+  EXPECT_EQ(accepted.back().verdict, "pass");
+  EXPECT_EQ(accepted.back().source, "human");
+  EXPECT_EQ(accepted.back().reason, "");
+  const auto rejected = db.VerdictHistory(clips[1], retarget::kKinematicStageName);
+  EXPECT_EQ(rejected.back().verdict, "reject");
+  EXPECT_EQ(rejected.back().source, "human");
+  EXPECT_TRUE(db.ListTrajectoriesToVerify({"retarget", retarget::kKinematicStageName}).empty());
+
+  // The same security as the other routes: a decision without the token is refused.
+  httplib::Client client("127.0.0.1", server.port());
+  const auto refused = client.Post("/api/verify/decision",
+                                   R"({"clip_id":1,"stage":"retarget_kinematic","decision":"accept","reviewer":"x"})",
+                                   "application/json");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403);
+  EXPECT_EQ(client.Get("/api/verify/scene/1x")->status, 404);
+}
+
+}  // namespace
+}  // namespace doasido

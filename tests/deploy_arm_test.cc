@@ -1,0 +1,283 @@
+// The UR3e model against its published DH definition, the IK against
+// targets with known solutions, and the plan's reach report against a
+// trajectory whose unreachable frames are known.
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <set>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "deploy/arm_ik.h"
+#include "deploy/plan.h"
+#include "deploy/ur3e.h"
+#include "retarget/embodiment.h"
+#include "retarget/mug_mesh.h"
+#include "retarget/scene_builder.h"
+
+namespace doasido::deploy {
+namespace {
+
+ArmQ RandomQ(std::mt19937& rng, double span = M_PI) {
+  std::uniform_real_distribution<double> u(-span, span);
+  ArmQ q;
+  for (int i = 0; i < 6; ++i) q[i] = u(rng);
+  return q;
+}
+
+// Independent DH product from the published table (not DhForward).
+Mat4 ReferenceDh(const ArmQ& q) {
+  const double d[6] = {0.15185, 0, 0, 0.13105, 0.08535, 0.0921};
+  const double a[6] = {0, -0.24355, -0.2132, 0, 0, 0};
+  const double alpha[6] = {M_PI / 2, 0, 0, M_PI / 2, -M_PI / 2, 0};
+  Mat4 t = Mat4::Identity();
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Affine3d step = Eigen::Affine3d::Identity();
+    step.rotate(Eigen::AngleAxisd(q[i], Vec3::UnitZ()));
+    step.translate(Vec3(0, 0, d[i]));
+    step.translate(Vec3(a[i], 0, 0));
+    step.rotate(Eigen::AngleAxisd(alpha[i], Vec3::UnitX()));
+    t = t * step.matrix();
+  }
+  return t;
+}
+
+TEST(Ur3e, MjcfForwardKinematicsEqualsDh) {
+  retarget::ModelPtr model = retarget::CompileMjcfText(Ur3eMjcf(), "ur3e");
+  retarget::DataPtr data = retarget::MakeData(model.get());
+  const int flange = retarget::NameToId(model.get(), mjOBJ_BODY, "ur3e_flange");
+  ASSERT_GE(flange, 0);
+  ASSERT_EQ(model->nq, 6);
+  std::mt19937 rng(1);
+  double worst_p = 0, worst_r = 0;
+  for (int n = 0; n < 100; ++n) {
+    const ArmQ q = RandomQ(rng, 2 * M_PI);
+    for (int i = 0; i < 6; ++i) data->qpos[i] = q[i];
+    mj_kinematics(model.get(), data.get());
+    const Mat4 ref = ReferenceDh(q);
+    const Vec3 p(data->xpos[3 * flange], data->xpos[3 * flange + 1], data->xpos[3 * flange + 2]);
+    Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> r(data->xmat + 9 * flange);
+    worst_p = std::max(worst_p, (p - ref.topRightCorner<3, 1>()).norm());
+    worst_r = std::max(worst_r, (Mat3(r) - Mat3(ref.topLeftCorner<3, 3>())).norm());
+    // The templated DH used by the IK agrees too.
+    worst_p = std::max(worst_p, (DhForwardPose(q).t - ref.topRightCorner<3, 1>()).norm());
+  }
+  std::printf("MJCF vs DH at 100 configurations: worst %.2e m, rotation %.2e\n", worst_p, worst_r);
+  EXPECT_LT(worst_p, 1e-6);
+  EXPECT_LT(worst_r, 1e-6);
+  // Published reach: the flange of the stretched arm is |a2| + |a3| + ... away.
+  const Pose zero = DhForwardPose(ArmQ::Zero());
+  EXPECT_NEAR(zero.t.x(), -(0.24355 + 0.2132), 1e-9);
+}
+
+TEST(Ur3e, JointLimitsAndSpeedsInModel) {
+  retarget::ModelPtr model = retarget::CompileMjcfText(Ur3eMjcf(), "ur3e");
+  const ArmLimits l = Ur3eLimits();
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_TRUE(model->jnt_limited[i]);
+    EXPECT_NEAR(model->jnt_range[2 * i], -2 * M_PI, 1e-9);
+    EXPECT_NEAR(model->jnt_range[2 * i + 1], 2 * M_PI, 1e-9);
+    EXPECT_NEAR(l.max_speed[i], i < 3 ? M_PI : 2 * M_PI, 1e-12);
+    EXPECT_EQ(model->geom_type[i + 1], mjGEOM_CAPSULE);
+  }
+}
+
+TEST(Ur3e, HandMountedOnFlangeLeftAndRight) {
+  for (const char* name : {"sharpa_right", "sharpa_left"}) {
+    const retarget::Embodiment e = retarget::FindEmbodiment(name, {});
+    const Pose base{Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ())), Vec3(0.1, -0.2, 0.05)};
+    const ArmHandModel arm = BuildArmHandModel(e, base);
+    const mjModel* m = arm.model.get();
+    EXPECT_EQ(arm.hand_joints.size(), 22u) << name;
+    retarget::DataPtr d = retarget::MakeData(m);
+    std::mt19937 rng(2);
+    const ArmQ q = RandomQ(rng);
+    for (int i = 0; i < 6; ++i) d->qpos[arm.arm_qpos[i]] = q[i];
+    mj_kinematics(m, d.get());
+    // The hand frame is the flange turned by the canonical mount, and the
+    // flange is the DH pose in the placed base frame.
+    const int frame = retarget::NameToId(m, mjOBJ_BODY, "doasido_hand_frame");
+    const Pose flange = base * DhForwardPose(q);
+    const Vec3 p(d->xpos[3 * frame], d->xpos[3 * frame + 1], d->xpos[3 * frame + 2]);
+    Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> r(d->xmat + 9 * frame);
+    EXPECT_LT((p - flange.t).norm(), 1e-9) << name;
+    EXPECT_LT((Mat3(r) - flange.R() * arm.mount).norm(), 1e-9) << name;
+  }
+}
+
+TEST(ArmIk, ReachesRandomReachablePoses) {
+  ArmIk ik;
+  std::mt19937 rng(3);
+  int reached = 0, worst_starts = 0;
+  double worst_p = 0, worst_r = 0;
+  const ArmQ home(0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0);
+  for (int n = 0; n < 1000; ++n) {
+    const Pose target = DhForwardPose(RandomQ(rng));
+    const IkResult r = ik.Solve(target, home);
+    // Independent check of the answer by the reference DH product.
+    const Mat4 got = ReferenceDh(r.q);
+    const double pe = (got.topRightCorner<3, 1>() - target.t).norm();
+    const double re = RotationAngle(Quat(Mat3(got.topLeftCorner<3, 3>())), target.q);
+    reached += pe < 1e-3 && re < 0.01;
+    worst_p = std::max(worst_p, pe);
+    worst_r = std::max(worst_r, re);
+    worst_starts = std::max(worst_starts, r.starts);
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_GE(r.q[i], -2 * M_PI);
+      EXPECT_LE(r.q[i], 2 * M_PI);
+    }
+  }
+  std::printf("IK: %d/1000 reached, worst %.2e m, %.2e rad, at most %d starts\n", reached, worst_p,
+              worst_r, worst_starts);
+  EXPECT_EQ(reached, 1000);
+}
+
+// Wrist poses from a smooth joint path, so every frame has a known IK
+// answer, except frames 20..29, lifted 1 m (beyond the 0.5 m reach).
+retarget::HandTrajectory PathWithGap(Pose* centre_out) {
+  retarget::HandTrajectory t;
+  t.embodiment = "sharpa_right";
+  t.fps = 50;
+  t.qpos_names = {"doasido_wrist_x",  "doasido_wrist_y",  "doasido_wrist_z",
+                  "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
+  const ArmQ home(0.3, -1.9, 1.7, -1.4, -1.5, 0.2);
+  Vec3 centre = Vec3::Zero();
+  for (int k = 0; k < 60; ++k) {
+    ArmQ q = home;
+    for (int i = 0; i < 6; ++i) q[i] += 0.15 * std::sin(2 * M_PI * k / 60.0 + i);
+    Pose w = DhForwardPose(q);
+    if (k >= 20 && k < 30) w.t.z() += 1.0;
+    const Vec3 e = w.R().eulerAngles(0, 1, 2);  // R = Rx Ry Rz
+    Eigen::VectorXd v(6);
+    v << w.t, e;
+    t.qpos.push_back(v);
+    t.valid.push_back(true);
+    t.fingertip_error.push_back(0);
+    centre += w.t;
+  }
+  centre /= 60;
+  *centre_out = {Quat::Identity(), centre};
+  return t;
+}
+
+// No search, and the placement that maps PathWithGap's poses onto themselves.
+PlanConfig IdentityPlacement(const Pose& centre) {
+  PlanConfig config;
+  config.workspace.x = centre.t.x();
+  config.workspace.y = centre.t.y();
+  config.workspace.yaw_steps = 1;
+  config.workspace.offset_steps = 1;
+  config.home = {0.3, -1.9, 1.7, -1.4, -1.5, 0.2};
+  return config;
+}
+
+TEST(Plan, UnreachableFramesReportedWithTimes) {
+  Pose centre;
+  const retarget::HandTrajectory t = PathWithGap(&centre);
+  const PlanConfig config = IdentityPlacement(centre);  // the path is in the base frame
+  const Plan plan = MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config);
+  ASSERT_EQ(plan.times.size(), 60u);
+  EXPECT_FALSE(plan.ok);
+  std::set<int> frames;
+  for (const FrameIssue& u : plan.unreachable) {
+    frames.insert(u.frame);
+    EXPECT_NEAR(u.time, u.frame / 50.0, 1e-12);
+    EXPECT_GT(u.value, 0.4);  // ~1 m less the arm's reach toward it
+  }
+  std::set<int> expected;
+  for (int k = 20; k < 30; ++k) expected.insert(k);
+  EXPECT_EQ(frames, expected);
+  // Reachable frames are solved to tolerance.
+  for (int k = 0; k < 60; ++k) {
+    if (k >= 20 && k < 30) continue;
+    EXPECT_LT(plan.position_error[k], 1e-3) << k;
+    EXPECT_LT(plan.rotation_error[k], 0.01) << k;
+  }
+  EXPECT_EQ(plan.hand_joints.size(), 22u);
+}
+
+TEST(Plan, ReachablePathPassesAndSpeedLimitIsChecked) {
+  Pose centre;
+  retarget::HandTrajectory t = PathWithGap(&centre);
+  for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;  // close the gap
+  PlanConfig config = IdentityPlacement(centre);
+  const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
+  const Plan plan = MakePlan(t, e, config);
+  EXPECT_TRUE(plan.ok) << plan.unreachable.size() << " unreachable, " << plan.too_fast.size()
+                       << " too fast";
+  // The same path ten times faster: 0.15 rad amplitude over 0.12 s exceeds
+  // 180 deg/s on the big joints.
+  t.fps = 500;
+  config.rate_hz = 500;
+  const Plan fast = MakePlan(t, e, config);
+  EXPECT_TRUE(fast.unreachable.empty());
+  ASSERT_FALSE(fast.too_fast.empty());
+  for (const FrameIssue& f : fast.too_fast) {
+    EXPECT_GT(f.value, f.limit);
+    EXPECT_NEAR(f.time, f.frame / 500.0, 1e-12);
+  }
+}
+
+// The replay measures the object against the trajectory: a mug the hand
+// never touches stays where the scene put it, so against constant poses the
+// error is ~0, and against poses that claim it slid 0.2 m along x the mean
+// error is the mean claimed displacement, 0.1 m.
+TEST(Plan, ReplayMeasuresObjectError) {
+  Pose centre;
+  retarget::HandTrajectory t = PathWithGap(&centre);
+  for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;
+  const Vec3 away = -Vec3(centre.t.x(), centre.t.y(), 0).normalized() * 0.35;
+  const Pose mug_pose{Quat::Identity(), away};
+  const auto dir = std::filesystem::temp_directory_path() / ("replay_" + std::to_string(getpid()));
+  retarget::SceneConfig scene_config;
+  const retarget::ObjectScene scene =
+      retarget::BuildObjectScene(retarget::MakeMug(), mug_pose, scene_config, dir);
+  std::ifstream in(scene.xml_path);
+  const std::string xml((std::istreambuf_iterator<char>(in)), {});
+  PlanConfig config = IdentityPlacement(centre);
+  const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
+  Plan plan = MakePlan(t, e, config);
+  ASSERT_TRUE(plan.ok);
+  t.object_poses.assign(t.qpos.size(), scene.pose);
+  ReplayPlan(plan, t, e, xml, dir);
+  ASSERT_TRUE(plan.replay.ran);
+  EXPECT_LT(plan.replay.object_position_error_max, 0.003);
+  EXPECT_LT(plan.replay.object_rotation_error_max, 0.02);
+  EXPECT_TRUE(plan.replay.success);
+  for (size_t k = 0; k < t.qpos.size(); ++k) {
+    t.object_poses[k].t.x() += 0.2 * k / (t.qpos.size() - 1.0);
+  }
+  plan.replay = {};
+  ReplayPlan(plan, t, e, xml, dir);
+  std::filesystem::remove_all(dir);
+  EXPECT_NEAR(plan.replay.object_position_error_mean, 0.1, 0.005);
+  EXPECT_NEAR(plan.replay.object_position_error_max, 0.2, 0.005);
+}
+
+TEST(Plan, JsonRoundTrip) {
+  Pose centre;
+  const retarget::HandTrajectory t = PathWithGap(&centre);
+  PlanConfig config;
+  config.workspace.yaw_steps = 2;
+  config.workspace.offset_steps = 1;
+  config.workspace.search_frames = 5;
+  const Plan plan = MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config);
+  const auto path = std::filesystem::temp_directory_path() / ("plan_" + std::to_string(getpid()) + ".json");
+  WritePlanJson(plan, path);
+  const Plan back = ReadPlanJson(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(back.arm.size(), plan.arm.size());
+  for (size_t k = 0; k < plan.arm.size(); ++k) {
+    EXPECT_EQ(back.arm[k], plan.arm[k]);
+    EXPECT_EQ(back.hand[k], plan.hand[k]);
+  }
+  EXPECT_EQ(back.unreachable.size(), plan.unreachable.size());
+  EXPECT_EQ(back.ok, plan.ok);
+  EXPECT_EQ(back.placement.candidates, 2);
+}
+
+}  // namespace
+}  // namespace doasido::deploy

@@ -1,0 +1,110 @@
+// RunClaimedStage, the one path from a claim to a recorded result that the
+// worker loop and re-thresholding share: results complete the run, any
+// exception is a failed attempt (retried up to the limit, then failed with
+// its message), and a lost lease drops the result.
+#include "pipeline/stage_run.h"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "db/database.h"
+#include "pipeline/stage_registry.h"
+#include "tests/test_util.h"
+
+namespace doasido::pipeline {
+namespace {
+
+using testing::TempDir;
+
+// Passes clips whose external id is "good"; throws `Thrown` otherwise.
+template <typename Thrown>
+class PickyStage : public Stage {
+ public:
+  std::string Name() const override { return "picky"; }
+  Json Params() const override { return Json::object(); }
+  StageResult Run(const ClipContext& context) override {
+    if (context.clip.external_id != "good") throw Thrown("cannot judge " + context.clip.external_id);
+    StageResult r;
+    r.verdict = Verdict::kReject;
+    r.reason = "picky";
+    r.measurements = {{"seen", context.clip.id}};
+    return r;
+  }
+};
+
+ClipId AddClip(Database& db, const std::string& name) {
+  ClipRecord c;
+  c.video_id = db.UpsertVideo("/videos/" + name + ".mp4");
+  c.external_id = name;
+  return db.InsertClip(c).id;
+}
+
+TEST(StageRun, ResultCompletesAndAnyExceptionIsAnAttempt) {
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"picky"});
+  const ClipId good = AddClip(db, "good");
+  const ClipId bad = AddClip(db, "bad");
+  PickyStage<std::runtime_error> stage;  // not a doasido::Error: still recorded
+  int failed = 0, done = 0;
+  while (auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
+    const StageRunReport r = RunClaimedStage(db, stage, *claim, "w", "h", kDefaultMaxAttempts);
+    if (r.outcome == RunOutcome::kFailed) {
+      ++failed;
+      EXPECT_EQ(claim->clip_id, bad);
+      EXPECT_NE(r.error.find("unexpected: cannot judge bad"), std::string::npos) << r.error;
+    } else {
+      ++done;
+      EXPECT_EQ(r.outcome, RunOutcome::kDone);
+      EXPECT_EQ(r.clip, "good");
+    }
+  }
+  EXPECT_EQ(done, 1);
+  EXPECT_EQ(failed, kDefaultMaxAttempts);
+  const auto runs = db.ListRuns({.stage = "picky"});
+  ASSERT_EQ(runs.size(), 2u);
+  for (const auto& run : runs) {
+    if (run.clip_id == good) {
+      EXPECT_EQ(run.state, RunState::kDone);
+      EXPECT_EQ(run.verdict, "reject");
+      EXPECT_EQ((*db.GetMeasurements(good, "picky"))["seen"], good);
+    } else {
+      EXPECT_EQ(run.state, RunState::kFailed);
+      EXPECT_EQ(run.attempts, kDefaultMaxAttempts);
+      EXPECT_NE(run.error.find("cannot judge bad"), std::string::npos);
+    }
+  }
+  EXPECT_TRUE(std::filesystem::is_directory(db.ArtifactDir(good, "picky")));
+}
+
+TEST(StageRun, ALostLeaseDropsTheResultAndTheCommitHookStillRuns) {
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"picky"});
+  AddClip(db, "good");
+  const auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts);
+  ASSERT_TRUE(claim);
+  Claim stolen = *claim;
+  PickyStage<std::runtime_error> stage;
+  bool hook = false;
+  const StageRunReport r =
+      RunClaimedStage(db, stage, stolen, "not-the-owner", "h", kDefaultMaxAttempts,
+                      [&] { hook = true; });
+  EXPECT_EQ(r.outcome, RunOutcome::kLeaseLost);
+  EXPECT_TRUE(hook);
+  EXPECT_EQ(db.Summary().running, 1);
+}
+
+TEST(StageRun, EveryRegisteredStageIsNamedByItsEntryAndChecksItsDefaults) {
+  for (const auto& entry : StageTable()) {
+    EXPECT_NO_THROW(entry.check(Json::object())) << entry.name;
+    EXPECT_EQ(MakeStage(entry.name, Json::object())->Name(), entry.name);
+  }
+  EXPECT_THROW(CheckStageConfig(Json{{"activityy", Json::object()}}, {}), Error);
+  EXPECT_THROW(CheckStageConfig(Json{{"activity", {{"min_active_fraction", -0.1}}}}, {}), Error);
+  EXPECT_NO_THROW(CheckStageConfig(Json{{"report", Json::object()}}, {"report"}));
+}
+
+}  // namespace
+}  // namespace doasido::pipeline

@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
                          AddReportCommand, AddReviewCommand, AddHandCommand,
-                         AddDeployCommand};
+                         AddDeployCommand,
+                         AddShardCommands};
   for (auto add : commands) add(app);
 
   app.parse_complete_callback([&] { doasido::InitLogging(log_level); });

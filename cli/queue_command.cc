@@ -76,6 +76,18 @@ void AddQueueCommand(CLI::App& app) {
     std::printf("%lld runs of %s reset\n",
                 static_cast<long long>(db.Reset(opt->stage, opt->clip)), opt->stage.c_str());
   });
+
+  auto* release = cmd->add_subcommand(
+      "release", "Hand back the runs of workers that are gone, without waiting for their leases");
+  AddDbOptions(*release, opt->db);
+  release->footer(
+      "Only when no worker is running on this database: a shard whose Slurm task was\n"
+      "cancelled or preempted (its array script runs this before `doasido run`).\n\n"
+      "Example:\n  doasido queue release --db work/shards/shard-000/doasido.db");
+  release->callback([opt] {
+    Database db(opt->db.db);
+    std::printf("%lld running runs released\n", static_cast<long long>(db.ReleaseLeases()));
+  });
 }
 
 }  // namespace doasido::cli

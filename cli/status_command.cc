@@ -40,6 +40,11 @@ void PrintStatusTable(Database& db) {
     std::printf("\n%lld stage runs failed: `doasido queue list --state failed` shows why, "
                 "`doasido queue retry` tries them again\n", static_cast<long long>(s.failed));
   }
+  if (s.sharded > 0) {
+    std::printf("\n%lld unfinished stage runs belong to shards (below); `doasido merge` brings "
+                "their results back\n", static_cast<long long>(s.sharded));
+  }
+  PrintShardTable(db);
 }
 
 void AddStatusCommand(CLI::App& app) {
@@ -69,7 +74,7 @@ void AddStatusCommand(CLI::App& app) {
                       {"videos", db.CountVideos()},
                       {"queue", {{"pending", s.pending}, {"running", s.running},
                                  {"done", s.done}, {"failed", s.failed},
-                                 {"expired_leases", s.expired}}},
+                                 {"expired_leases", s.expired}, {"sharded", s.sharded}}},
                       {"counts", counts}};
     std::printf("%s\n", out.dump(2).c_str());
   });

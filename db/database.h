@@ -84,6 +84,7 @@ struct RunFilter {
 struct QueueSummary {
   std::int64_t pending = 0, running = 0, done = 0, failed = 0;
   std::int64_t expired = 0;  // running with an expired lease
+  std::int64_t sharded = 0;  // unfinished runs of clips handed to shards (not counted above)
 };
 
 class Database {
@@ -346,6 +347,80 @@ class Database {
   std::optional<VideoFile> GetVideoFile(VideoId video);
   // Videos with a downloaded file.
   std::int64_t CountDownloadedVideos();
+  // ---- Shards ---------------------------------------------------------------
+  // (db/database_shards.cc) Splitting the queue into self-contained shard
+  // databases and folding their results back (doasido shard, merge, slurm).
+  // Clips keep their ids in a shard, so a clip is the same row everywhere.
+
+  // This database's identity (created with the schema) and free key/values.
+  std::string Uuid();
+  std::optional<std::string> GetMeta(const std::string& key);
+  void SetMeta(const std::string& key, const std::string& value);
+
+  struct ShardCandidate {
+    ClipId clip_id = 0;
+    VideoId video_id = 0;
+    std::int64_t frames = 1;  // span length when known, else the video's, else 1
+  };
+  // Clips with an unfinished run (pending, running or failed) that are not
+  // in a shard yet, in id order.
+  std::vector<ShardCandidate> ShardCandidates();
+  struct ShardSpec {
+    std::string name;                  // shard-000
+    std::filesystem::path path;        // the shard database; must not exist
+    Json stage_hashes;                 // {stage: parameter hash} the shard runs with
+    std::vector<ClipId> clips;
+    std::int64_t frames = 0;
+    // Video path prefixes rewritten in the shard (old -> new), for nodes
+    // that mount the media elsewhere; other paths are made absolute.
+    std::vector<std::pair<std::string, std::string>> media_map;
+  };
+  // Creates the shard database: this database's pipeline, the clips with
+  // their videos, runs (running ones pending again), measurements, verdicts,
+  // reviews, artifact rows and detections, and the shard's parent, name and
+  // stage hashes in its meta; records the shard and its clips here, which
+  // takes them out of this database's queue. Artifact files are the
+  // caller's to copy. Throws Error("shard_exists") for a taken name or path,
+  // Error("already_sharded") for a clip that is in a shard.
+  void ExportShard(const ShardSpec& spec);
+
+  struct ShardRow {
+    std::int64_t id = 0;
+    std::string name;
+    std::filesystem::path path;
+    std::string config_hash;
+    std::int64_t clips = 0, frames = 0;
+    double created_at = 0;
+    std::optional<double> merged_at;
+    std::string slurm_job;
+    std::optional<std::int64_t> slurm_task;
+  };
+  std::vector<ShardRow> ListShards();
+  void SetShardJob(const std::string& name, const std::string& job, std::int64_t task);
+
+  struct MergeStats {
+    std::string shard;
+    std::int64_t clips = 0;          // clips of the shard
+    std::int64_t finished_runs = 0;  // done or failed in the shard
+    std::int64_t open_runs = 0;      // still pending or running there
+    std::int64_t changed_clips = 0;  // clips whose rows changed here
+    std::int64_t events = 0;         // new events folded in
+  };
+  // Folds a shard's results into this database: for each of its clips the
+  // runs, measurements, verdicts, reviews, artifact rows and detections here
+  // become the shard's (rows already equal are left alone, so merging twice
+  // changes nothing), and its new events are appended. Unfinished runs stay
+  // pending here and remain the shard's to finish. Throws
+  // Error("not_a_shard"), Error("foreign_shard") for a shard of another
+  // database or one this database does not list, Error("pipeline_mismatch"),
+  // and Error("config_mismatch") when a run was done with parameters other
+  // than the shard was made for; nothing is written then.
+  MergeStats MergeShard(const std::filesystem::path& shard);
+  // Every running run back to pending with its lease cleared (attempts
+  // kept), logged as "release" events; returns how many. Only for a
+  // database no live worker holds, e.g. a shard whose task was killed: its
+  // leases would otherwise block the next task until they expire.
+  std::int64_t ReleaseLeases();
 
   // ---- Trajectory verification ----------------------------------------------
   // (db/database_verify.cc) Robot trajectories waiting for a person to
@@ -371,6 +446,7 @@ class Database {
 
  private:
   db::Statement& Prepare(const std::string& sql);
+  void WriteShard(const ShardSpec& spec);  // ExportShard's writes
   // The first column of the first row of a query, or 0 without rows.
   std::int64_t QueryInt(const std::string& sql);
   void Migrate();

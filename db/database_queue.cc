@@ -16,7 +16,8 @@ std::optional<Claim> Database::ClaimNext(const std::string& worker,
                                          int max_attempts) {
   std::string sql =
       "SELECT id, clip_id, stage, attempts, state FROM stage_runs"
-      " WHERE state IN ('pending', 'running') AND (state = 'pending' OR lease_expires < ?)";
+      " WHERE state IN ('pending', 'running') AND (state = 'pending' OR lease_expires < ?)"
+      " AND clip_id NOT IN (SELECT clip_id FROM shard_clips)";  // shards run those
   if (!stages.empty()) {
     sql += " AND stage IN (";
     for (size_t i = 0; i < stages.size(); ++i) sql += (i ? ",?" : "?");
@@ -251,12 +252,14 @@ std::int64_t Database::Reset(const std::string& stage, std::optional<ClipId> cli
 QueueSummary Database::Summary() {
   QueueSummary s;
   auto& q = Prepare(
-      "SELECT state, COUNT(*), SUM(state = 'running' AND lease_expires < ?) FROM stage_runs"
-      " GROUP BY state");
+      "SELECT state, COUNT(*), SUM(state = 'running' AND lease_expires < ?),"
+      " SUM(clip_id IN (SELECT clip_id FROM shard_clips)) FROM stage_runs GROUP BY state");
   q.Bind(1, Now());
   while (q.Step()) {
     const std::string state = q.Text(0);
-    const std::int64_t n = q.Int(1);
+    const std::int64_t sharded = q.Int(3);
+    const std::int64_t n = q.Int(1) - (state == "pending" || state == "running" ? sharded : 0);
+    if (state == "pending" || state == "running") s.sharded += sharded;
     if (state == "pending") s.pending = n;
     if (state == "running") s.running = n, s.expired = q.Int(2);
     if (state == "done") s.done = n;

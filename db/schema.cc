@@ -175,6 +175,36 @@ ALTER TABLE videos ADD COLUMN size_bytes INTEGER;
 ALTER TABLE videos ADD COLUMN sha256 TEXT;
 ALTER TABLE videos ADD COLUMN downloaded_at REAL;
 )sql",
+      // 5: shards. Every database gets an identity (meta.uuid). A parent
+      // records the shard databases it split its queue into and which clip
+      // went where; a shard records its parent and the config it runs with.
+      R"sql(
+CREATE TABLE meta (
+  key TEXT PRIMARY KEY,
+  value TEXT NOT NULL
+);
+INSERT INTO meta VALUES ('uuid', lower(hex(randomblob(16))));
+
+CREATE TABLE shards (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,           -- shard-000
+  path TEXT NOT NULL,                  -- the shard database, stored like a video path
+  config_hash TEXT NOT NULL,           -- ParamHash of the config the shard runs with
+  clips INTEGER NOT NULL,
+  frames INTEGER NOT NULL,
+  created_at REAL NOT NULL,
+  merged_at REAL,                      -- last merge
+  merged_event INTEGER NOT NULL DEFAULT 0,  -- highest shard event id folded in
+  slurm_job TEXT,                      -- array job id, when submitted to Slurm
+  slurm_task INTEGER                   -- its task index
+);
+
+CREATE TABLE shard_clips (
+  clip_id INTEGER PRIMARY KEY REFERENCES clips(id) ON DELETE CASCADE,
+  shard_id INTEGER NOT NULL REFERENCES shards(id)
+);
+CREATE INDEX shard_clips_shard ON shard_clips(shard_id);
+)sql",
   };
   return kMigrations;
 }

@@ -22,6 +22,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium chromium-driver
   nodejs
+  slurm-wlm munge
 )
 
 # npm packages (pinned) for the review app's 3D view, into a cache folder

@@ -107,7 +107,7 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
   std::string table = run.out + run.err;
   for (const StageRunRow& r : check.ListRuns({})) {
     (r.stage == "bundle" ? bundle_runs : recon_runs)[r.external_id] = r;
-    table += "\n" + r.external_id + " " + r.stage + " " + r.state + " " + r.error;
+    table += "\n" + r.external_id + " " + r.stage + " " + ToString(r.state) + std::string(" ") + r.error;
   }
   ASSERT_EQ(bundle_runs.size(), 8u) << table;
   const std::map<std::string, std::vector<std::string>> expected = {

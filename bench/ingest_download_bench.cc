@@ -22,6 +22,7 @@
 #include "core/log.h"
 #include "db/database.h"
 #include "ingest/download_stage.h"
+#include "video/probe.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -45,7 +46,7 @@ double DbCycle(const fs::path& dir, int clips, bool with_file) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   doasido::Database db(dir / "d.db");
-  db.SetPipeline({doasido::ingest::kDownloadStageName, "probe"});
+  db.SetPipeline({doasido::ingest::kDownloadStageName, doasido::video::kProbeStageName});
   {
     doasido::Database::Transaction tx(db);
     for (int i = 0; i < clips; ++i) {

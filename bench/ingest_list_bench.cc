@@ -13,6 +13,7 @@
 #include "core/log.h"
 #include "db/database.h"
 #include "ingest/ingest.h"
+#include "video/probe.h"
 
 namespace fs = std::filesystem;
 
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   doasido::Database db(dir / "ingest.db");
-  db.SetPipeline({"probe"});
+  db.SetPipeline({doasido::video::kProbeStageName});
   const auto summary = doasido::ingest::IngestList(db, list);
   const double ours = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

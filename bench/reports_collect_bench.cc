@@ -19,6 +19,13 @@
 #include "reports/html_report.h"
 #include "reports/report_data.h"
 #include "reports/report_files.h"
+#include "filters/activity.h"
+#include "filters/camera_motion.h"
+#include "filters/interaction.h"
+#include "filters/out_of_frame.h"
+#include "filters/shot_boundary.h"
+#include "filters/stage_support.h"
+#include "video/probe.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -26,9 +33,11 @@ using namespace doasido;
 
 namespace {
 
-const std::vector<std::string> kPipeline = {"probe", "filters_analyze", "interaction",
-                                            "out_of_frame", "shot_boundary", "activity",
-                                            "camera_motion"};
+const std::vector<std::string> kPipeline = {
+    doasido::video::kProbeStageName,          doasido::filters::kAnalyzeStageName,
+    doasido::filters::kInteractionStageName,  doasido::filters::kOutOfFrameStageName,
+    doasido::filters::kShotBoundaryStageName, doasido::filters::kActivityStageName,
+    doasido::filters::kCameraMotionStageName};
 
 void Build(Database& db, int clips) {
   db.SetPipeline(kPipeline);

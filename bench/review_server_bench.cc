@@ -17,11 +17,15 @@
 #include "core/log.h"
 #include "db/database.h"
 #include "review/server.h"
+#include "filters/interaction.h"
+#include "filters/out_of_frame.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+constexpr const char* kInteraction = doasido::filters::kInteractionStageName;
 
 double Seconds(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -76,7 +80,7 @@ void FlagClips(doasido::Database& db, const std::string& video, int n, int offse
   doasido::StageResult flag;
   flag.verdict = doasido::Verdict::kFlag;
   flag.reason = "bench";
-  while (auto claim = db.ClaimNext("bench", {"interaction"}, 60, 3)) {
+  while (auto claim = db.ClaimNext("bench", {kInteraction}, 60, 3)) {
     db.Complete(*claim, "bench", "h", flag, 0.0);
   }
 }
@@ -95,7 +99,7 @@ int main(int argc, char** argv) {
 
   {
     doasido::Database db(dir / "d.db");
-    db.SetPipeline({"interaction", "out_of_frame"});
+    db.SetPipeline({kInteraction, doasido::filters::kOutOfFrameStageName});
     FlagClips(db, video.string(), 1 + 2 * decisions, 0);
   }
   doasido::review::ReviewServer server(dir / "d.db", {.port = 0});
@@ -143,7 +147,7 @@ int main(int argc, char** argv) {
   doasido::Database db(dir / "d.db");
   t0 = Clock::now();
   for (int i = 0; i < decisions; ++i) {
-    db.SetVerdict(2 + decisions + i, "interaction", doasido::Verdict::kPass, "bench", "bench");
+    db.SetVerdict(2 + decisions + i, kInteraction, doasido::Verdict::kPass, "bench", "bench");
   }
   const double direct_rate = decisions / Seconds(t0);
   std::printf("decisions (%d accepts, each queueing the next stage)\n", decisions);

@@ -447,6 +447,12 @@ class Database {
  private:
   db::Statement& Prepare(const std::string& sql);
   void WriteShard(const ShardSpec& spec);  // ExportShard's writes
+  // The writes both review and verification make once their check passed:
+  // the `reviews` row, the human verdict with `verdict_reason` and a
+  // "review" event with `event_detail`.
+  void RecordHumanDecision(ClipId clip, const std::string& stage, const std::string& reviewer,
+                           bool accept, const std::string& reason,
+                           const std::string& verdict_reason, const std::string& event_detail);
   // The first column of the first row of a query, or 0 without rows.
   std::int64_t QueryInt(const std::string& sql);
   void Migrate();

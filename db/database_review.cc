@@ -35,19 +35,27 @@ void Database::RecordReview(ClipId clip, const std::string& stage, const std::st
     throw Error("not_flagged", "stage '" + stage + "' of this clip is not waiting for review",
                 {.clip = std::to_string(clip), .field = "stage"});
   }
-  const char* decision = accept ? "accept" : "reject";
+  RecordHumanDecision(clip, stage, reviewer, accept, reason, reason,
+                      std::string(accept ? "accept " : "reject ") + reason);
+  tx.Commit();
+}
+
+void Database::RecordHumanDecision(ClipId clip, const std::string& stage,
+                                   const std::string& reviewer, bool accept,
+                                   const std::string& reason, const std::string& verdict_reason,
+                                   const std::string& event_detail) {
   Prepare("INSERT INTO reviews (clip_id, stage, reviewer, decision, reason, created_at)"
           " VALUES (?,?,?,?,?,?)")
       .Bind(1, clip)
       .Bind(2, stage)
       .Bind(3, reviewer)
-      .Bind(4, decision)
+      .Bind(4, accept ? "accept" : "reject")
       .Bind(5, reason)
       .Bind(6, Now())
       .Run();
-  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, reason, kHumanVerdictSource);
-  LogEvent(clip, stage, "review", reviewer, std::string(decision) + " " + reason);
-  tx.Commit();
+  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, verdict_reason,
+             kHumanVerdictSource);
+  LogEvent(clip, stage, "review", reviewer, event_detail);
 }
 
 std::vector<Database::ReviewRow> Database::ListReviews() {

@@ -14,11 +14,11 @@ std::vector<Database::TrajectoryRun> Database::ListTrajectoriesToVerify(
       " FROM stage_runs r JOIN clips c ON c.id = r.clip_id"
       " WHERE r.stage = ? AND r.state = 'done' AND r.verdict IN ('pass', 'flag')"
       " AND IFNULL((SELECT v.source FROM verdicts v WHERE v.clip_id = r.clip_id"
-      "             AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), '') <> 'human'"
+      "             AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), '') <> ?"
       " ORDER BY r.clip_id");
   std::vector<TrajectoryRun> out;
   for (const std::string& stage : stages) {
-    q.Bind(1, stage);
+    q.Bind(1, stage).Bind(2, kHumanVerdictSource);
     while (q.Step()) out.push_back({q.Int(0), q.Text(1), q.Text(2), q.Text(3), q.Text(4)});
     q.Reset();
   }
@@ -39,18 +39,8 @@ void Database::RecordVerification(ClipId clip, const std::string& stage,
     throw Error("not_verifiable", "stage '" + stage + "' of this clip has no trajectory to verify",
                 {.clip = std::to_string(clip), .field = "stage"});
   }
-  const char* decision = accept ? "accept" : "reject";
-  Prepare("INSERT INTO reviews (clip_id, stage, reviewer, decision, reason, created_at)"
-          " VALUES (?,?,?,?,?,?)")
-      .Bind(1, clip)
-      .Bind(2, stage)
-      .Bind(3, reviewer)
-      .Bind(4, decision)
-      .Bind(5, reason)
-      .Bind(6, Now())
-      .Run();
-  SetVerdict(clip, stage, accept ? Verdict::kPass : Verdict::kReject, accept ? "" : reason, "human");
-  LogEvent(clip, stage, "review", reviewer, std::string("verify ") + decision + " " + reason);
+  RecordHumanDecision(clip, stage, reviewer, accept, reason, accept ? "" : reason,
+                      std::string(accept ? "verify accept " : "verify reject ") + reason);
   tx.Commit();
 }
 

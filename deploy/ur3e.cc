@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "retarget/mjcf_compat.h"
+#include "retarget/mjcf_text.h"
 
 namespace doasido::deploy {
 namespace {
@@ -30,27 +31,6 @@ std::string QuatText(const Quat& q) {
 // Link radii (m) by joint: the UR3e's housings are ~9 cm across at the base
 // and ~6 cm at the wrists.
 constexpr std::array<double, 6> kRadius{0.045, 0.045, 0.038, 0.032, 0.032, 0.032};
-
-void Parse(const std::string& xml, const std::string& label, XMLDocument& doc) {
-  if (doc.Parse(xml.c_str()) != tinyxml2::XML_SUCCESS) {
-    throw Error("bad_mjcf", std::string("malformed XML: ") + doc.ErrorStr(), {.file = label});
-  }
-}
-
-std::string Print(const XMLDocument& doc) {
-  tinyxml2::XMLPrinter printer;
-  doc.Print(&printer);
-  return printer.CStr();
-}
-
-// Appends the children of `scene`'s root element to `doc`'s root.
-void MergeInto(XMLDocument& doc, const std::string& scene, const std::string& label) {
-  XMLDocument other;
-  Parse(scene, label, other);
-  for (const XMLNode* n = other.RootElement()->FirstChild(); n; n = n->NextSibling()) {
-    if (!n->ToComment()) doc.RootElement()->InsertEndChild(n->DeepClone(&doc));
-  }
-}
 
 }  // namespace
 
@@ -130,7 +110,7 @@ std::string Ur3eMjcf(const Pose& base, const DhParameters& dh, const ArmLimits& 
   inertial->SetAttribute("pos", "0 0 0");
   inertial->SetAttribute("mass", "0.05");
   inertial->SetAttribute("diaginertia", "1e-5 1e-5 1e-5");
-  return Print(doc);
+  return retarget::PrintMjcf(doc);
 }
 
 ArmHandModel BuildArmHandModel(const retarget::Embodiment& embodiment, const Pose& base,
@@ -145,7 +125,7 @@ ArmHandModel BuildArmHandModel(const retarget::Embodiment& embodiment, const Pos
     out.mount = retarget::BuildHandModel(floating).mount;
   }
   XMLDocument doc;
-  Parse(retarget::PrepareMjcf(embodiment.model_path).xml, label, doc);
+  retarget::ParseMjcfText(retarget::PrepareMjcf(embodiment.model_path).xml, label, doc);
   XMLElement* world = doc.RootElement()->FirstChildElement("worldbody");
   if (!world) throw Error("bad_mjcf", "model has no <worldbody>", {.file = label});
   std::vector<XMLElement*> hand_bodies;
@@ -155,7 +135,7 @@ ArmHandModel BuildArmHandModel(const retarget::Embodiment& embodiment, const Pos
   if (hand_bodies.empty()) throw Error("bad_mjcf", "no body under <worldbody>", {.file = label});
 
   XMLDocument arm;
-  Parse(Ur3eMjcf(base), "ur3e", arm);
+  retarget::ParseMjcfText(Ur3eMjcf(base), "ur3e", arm);
   XMLElement* arm_base = arm.RootElement()->FirstChildElement("worldbody")->FirstChildElement("body");
   XMLElement* copy = arm_base->DeepClone(&doc)->ToElement();
   world->InsertEndChild(copy);
@@ -172,9 +152,9 @@ ArmHandModel BuildArmHandModel(const retarget::Embodiment& embodiment, const Pos
   if (!scene_xml.empty()) {
     const retarget::PreparedMjcf scene =
         retarget::PrepareMjcfText(scene_xml, scene_dir, (scene_dir / "scene").string());
-    MergeInto(doc, scene.xml, label);
+    retarget::AppendRootChildren(doc, scene.xml, label);
   }
-  out.xml = Print(doc);
+  out.xml = retarget::PrintMjcf(doc);
   out.model = retarget::CompileMjcfText(out.xml, label);
   const mjModel* m = out.model.get();
   for (int i = 0; i < 6; ++i) {

@@ -239,31 +239,27 @@ std::int64_t NpyArray::size() const {
 
 std::string NpyArray::ShapeString() const { return ShapeTuple(shape); }
 
+namespace {
+
+// The value of type T stored at `p` (host byte order; unaligned is fine).
+template <typename T>
+T Load(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
+}  // namespace
+
 double NpyArray::AsDouble(std::int64_t i) const {
   const std::uint8_t* p = data.data() + i * item_size;
   switch (dtype) {
-    case DType::kF8: {
-      double v;
-      std::memcpy(&v, p, 8);
-      return v;
-    }
-    case DType::kF4: {
-      float v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+    case DType::kF8: return Load<double>(p);
+    case DType::kF4: return Load<float>(p);
     case DType::kU1: return *p;
     case DType::kB1: return *p != 0 ? 1.0 : 0.0;
-    case DType::kI4: {
-      std::int32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
-    case DType::kI8: {
-      std::int64_t v;
-      std::memcpy(&v, p, 8);
-      return static_cast<double>(v);
-    }
+    case DType::kI4: return Load<std::int32_t>(p);
+    case DType::kI8: return static_cast<double>(Load<std::int64_t>(p));
     case DType::kUnicode: break;
   }
   throw Error("bad_array", "a string array has no numeric value");
@@ -274,16 +270,8 @@ std::int64_t NpyArray::AsInt(std::int64_t i) const {
   switch (dtype) {
     case DType::kU1: return *p;
     case DType::kB1: return *p != 0 ? 1 : 0;
-    case DType::kI4: {
-      std::int32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
-    case DType::kI8: {
-      std::int64_t v;
-      std::memcpy(&v, p, 8);
-      return v;
-    }
+    case DType::kI4: return Load<std::int32_t>(p);
+    case DType::kI8: return Load<std::int64_t>(p);
     default: break;
   }
   throw Error("bad_array", "dtype " + DTypeName(dtype, item_size) + " is not an integer type");

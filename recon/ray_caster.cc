@@ -1,5 +1,6 @@
 #include "recon/ray_caster.h"
 
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -51,7 +52,8 @@ RayCaster::~RayCaster() {
   if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
-std::optional<double> RayCaster::FirstHit(const Vec3& origin, const Vec3& direction) const {
+std::optional<double> RayCaster::FirstHit(const Vec3& origin, const Vec3& direction,
+                                          double t_min) const {
   const Vec3 d = direction.normalized();
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -62,7 +64,7 @@ std::optional<double> RayCaster::FirstHit(const Vec3& origin, const Vec3& direct
   rh.ray.dir_x = static_cast<float>(d.x());
   rh.ray.dir_y = static_cast<float>(d.y());
   rh.ray.dir_z = static_cast<float>(d.z());
-  rh.ray.tnear = 0.f;
+  rh.ray.tnear = static_cast<float>(t_min);
   rh.ray.tfar = std::numeric_limits<float>::infinity();
   rh.ray.mask = 0xFFFFFFFFu;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -70,6 +72,17 @@ std::optional<double> RayCaster::FirstHit(const Vec3& origin, const Vec3& direct
   rtcIntersect1(impl_->scene, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   return static_cast<double>(rh.ray.tfar);
+}
+
+int RayCaster::Crossings(const Vec3& origin, const Vec3& direction, double gap) const {
+  int crossings = 0;
+  double t = 0;
+  while (const std::optional<double> hit = FirstHit(origin, direction, t)) {
+    ++crossings;
+    // Strictly past this hit even where float rounding swallows `gap`.
+    t = std::nextafter(static_cast<float>(*hit + gap), std::numeric_limits<float>::infinity());
+  }
+  return crossings;
 }
 
 }  // namespace doasido::recon

@@ -1,5 +1,6 @@
-// First-hit ray casting onto a triangle mesh with Embree 3: the one place
-// recon casts rays (visible-hand centroids, visibility of object points).
+// Ray casting onto a triangle mesh with Embree 3: the one place the project
+// casts rays (visible-hand centroids and visibility of object points in
+// recon; inside tests and solid points of convex decomposition in retarget).
 #pragma once
 
 #include <memory>
@@ -25,9 +26,16 @@ class RayCaster {
   RayCaster& operator=(const RayCaster&) = delete;
 
   // Distance along `direction` (any length > 0; normalised here) from
-  // `origin` to the first triangle hit, either side facing; nullopt on a
-  // miss.
-  std::optional<double> FirstHit(const Vec3& origin, const Vec3& direction) const;
+  // `origin` to the first triangle hit beyond `t_min`, either side facing;
+  // nullopt on a miss.
+  std::optional<double> FirstHit(const Vec3& origin, const Vec3& direction,
+                                 double t_min = 0) const;
+
+  // Number of surface crossings along the half-line from `origin`; hits
+  // closer than `gap` to the previous one count once (a ray through a shared
+  // edge meets both triangles). Odd exactly when `origin` is inside a closed
+  // mesh.
+  int Crossings(const Vec3& origin, const Vec3& direction, double gap = 1e-7) const;
 
  private:
   struct Impl;

@@ -12,6 +12,10 @@
 #include "core/error.h"
 #include "filters/kept_shot.h"
 #include "video/video_decoder.h"
+#include "filters/activity.h"
+#include "filters/camera_motion.h"
+#include "filters/out_of_frame.h"
+#include "filters/shot_boundary.h"
 
 namespace doasido::reports {
 namespace {
@@ -95,10 +99,10 @@ std::string OverlayKind(const std::string& stage, const std::string& reason) {
   auto has = [&](const char* word) {
     return stage.find(word) != std::string::npos || reason.find(word) != std::string::npos;
   };
-  if (has("shot_boundary") || has("cut")) return "cut";
-  if (has("camera_motion")) return "motion";
-  if (has("out_of_frame")) return "border";
-  if (has("activity")) return "activity";
+  if (has(filters::kShotBoundaryStageName) || has("cut")) return "cut";
+  if (has(filters::kCameraMotionStageName)) return "motion";
+  if (has(filters::kOutOfFrameStageName)) return "border";
+  if (has(filters::kActivityStageName)) return "activity";
   return "boxes";
 }
 

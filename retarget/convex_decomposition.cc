@@ -15,72 +15,30 @@ extern "C" {
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "recon/ray_caster.h"
 
 namespace doasido::retarget {
 namespace {
 
-// First hit of the ray o + t d (t > 0) with `mesh`, skipping triangle `skip`
-// (Moller-Trumbore); false when it leaves without a hit.
-bool Raycast(const TriMesh& mesh, const Vec3& o, const Vec3& d, int skip, Vec3* hit) {
-  double best = std::numeric_limits<double>::infinity();
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    if (f == skip) continue;
-    const Vec3 a = mesh.vertices.row(mesh.faces(f, 0)).transpose();
-    const Vec3 e1 = Vec3(mesh.vertices.row(mesh.faces(f, 1)).transpose()) - a;
-    const Vec3 e2 = Vec3(mesh.vertices.row(mesh.faces(f, 2)).transpose()) - a;
-    const Vec3 p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-18) continue;
-    const Vec3 s = o - a;
-    const double u = s.dot(p) / det;
-    if (u < 0 || u > 1) continue;
-    const Vec3 q = s.cross(e1);
-    const double v = d.dot(q) / det;
-    if (v < 0 || u + v > 1) continue;
-    const double t = e2.dot(q) / det;
-    if (t > 1e-7 && t < best) best = t;
-  }
-  if (!std::isfinite(best)) return false;
-  *hit = o + best * d;
-  return true;
-}
-
-// Parity test: a +x ray from p crosses a closed mesh an odd number of times
+// Parity test: a ray from p crosses a closed mesh an odd number of times
 // exactly when p is inside. The ray is tilted slightly to avoid edges.
-bool InsideSolid(const TriMesh& mesh, const Vec3& p) {
-  const Vec3 d = Vec3(1.0, 0.0123, 0.0071).normalized();
-  int crossings = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Vec3 a = mesh.vertices.row(mesh.faces(f, 0)).transpose();
-    const Vec3 e1 = Vec3(mesh.vertices.row(mesh.faces(f, 1)).transpose()) - a;
-    const Vec3 e2 = Vec3(mesh.vertices.row(mesh.faces(f, 2)).transpose()) - a;
-    const Vec3 q = d.cross(e2);
-    const double det = e1.dot(q);
-    if (std::abs(det) < 1e-18) continue;
-    const Vec3 s = p - a;
-    const double u = s.dot(q) / det;
-    if (u < 0 || u > 1) continue;
-    const Vec3 r = s.cross(e1);
-    const double v = d.dot(r) / det;
-    if (v < 0 || u + v > 1) continue;
-    if (e2.dot(r) / det > 0) ++crossings;
-  }
-  return crossings % 2 == 1;
+bool InsideSolid(const recon::RayCaster& solid, const Vec3& p) {
+  return solid.Crossings(p, Vec3(1.0, 0.0123, 0.0071)) % 2 == 1;
 }
 
-
-// Fraction of random points of `hull` that lie inside the solid `mesh`.
-double SolidFraction(const TriMesh& mesh, const TriMesh& hull, std::mt19937& rng) {
+// Fraction of random points of `hull` that lie inside the closed mesh
+// `solid`.
+double SolidFraction(const recon::RayCaster& solid, const TriMesh& hull, std::mt19937& rng) {
   const Vec3 lo = hull.Min(), hi = hull.Max();
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int in_hull = 0, solid = 0;
+  int in_hull = 0, inside = 0;
   for (int i = 0; i < 800 && in_hull < 96; ++i) {
     const Vec3 p = lo + Vec3(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
     if (!InsideHull(hull, p)) continue;
     ++in_hull;
-    solid += InsideSolid(mesh, p);
+    inside += InsideSolid(solid, p);
   }
-  return in_hull ? static_cast<double>(solid) / in_hull : 1.0;
+  return in_hull ? static_cast<double>(inside) / in_hull : 1.0;
 }
 
 // Connected pieces of the triangles `tris` (sharing a vertex connects).
@@ -118,7 +76,7 @@ bool InsideHull(const TriMesh& hull, const Vec3& p) {
 // Greedy bottom-up merging of neighbouring hulls whose joint hull stays
 // solid (>= 90% inside the mesh, at most 15% more volume than the two),
 // smallest hulls first, until no merge is left or `max_hulls` is reached.
-static void MergeHulls(const TriMesh& mesh, const DecompositionConfig& config, std::mt19937& rng,
+static void MergeHulls(const recon::RayCaster& solid, const DecompositionConfig& config, std::mt19937& rng,
                 std::vector<TriMesh>& hulls, std::vector<std::vector<Vec3>>& points) {
   const double gap = 0.002;
   for (int pass = 0; pass < 16; ++pass) {
@@ -147,7 +105,7 @@ static void MergeHulls(const TriMesh& mesh, const DecompositionConfig& config, s
         if (h.num_faces() < 4) continue;
         const double extra = h.Volume() - vi - hulls[j].Volume();
         if (h.Volume() > 1.15 * (vi + hulls[j].Volume()) || extra >= best_extra) continue;
-        if (SolidFraction(mesh, h, rng) < config.min_solidity) continue;
+        if (SolidFraction(solid, h, rng) < config.min_solidity) continue;
         best = static_cast<int>(j);
         best_extra = extra;
         best_hull = std::move(h);
@@ -350,6 +308,7 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
   // inside it (against its normal) leave the solid again. Rays start inside
   // the triangle: from a corner they would graze the neighbouring faces (a
   // rim edge) and cross the cavity.
+  const recon::RayCaster caster(input.vertices, input.faces);
   std::vector<std::vector<Vec3>> solid_points(input.num_faces());
   for (int f = 0; f < input.num_faces(); ++f) {
     const Vec3 a = input.vertices.row(input.faces(f, 0)).transpose();
@@ -362,8 +321,8 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
     if (!closed || !config.solidify) continue;
     for (const Vec3& p : {c, Vec3(c + 0.8 * (a - c)), Vec3(c + 0.8 * (b - c)),
                           Vec3(c + 0.8 * (d - c))}) {
-      Vec3 hit;
-      if (Raycast(input, p, -n.normalized(), f, &hit)) solid_points[f].push_back(hit);
+      // t_min steps off triangle f itself.
+      if (const auto t = caster.FirstHit(p, -n, 1e-6)) solid_points[f].push_back(p - *t * n.normalized());
     }
   }
   std::mt19937 rng(1);
@@ -403,7 +362,7 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
     }
     if (h.num_faces() < 4 || h.Volume() < 1e-12) continue;  // flat sliver
     const bool splittable = tris.size() > 1 && depth < config.max_depth;
-    if (closed && splittable && SolidFraction(input, h, rng) < config.min_solidity) {
+    if (closed && splittable && SolidFraction(caster, h, rng) < config.min_solidity) {
       Vec3 lo = Vec3::Constant(1e30), hi = Vec3::Constant(-1e30);
       std::vector<std::pair<double, int>> keyed;
       for (int f : tris) {
@@ -433,7 +392,7 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
     hulls.push_back(std::move(h));
     hull_points.push_back(std::move(points));
   }
-  if (closed && config.merge) MergeHulls(input, config, rng, hulls, hull_points);
+  if (closed && config.merge) MergeHulls(caster, config, rng, hulls, hull_points);
   if (hulls.empty()) throw Error("bad_mesh", "convex decomposition returned no usable hull");
   spdlog::debug("convex decomposition: {} triangles -> {} hulls", input.num_faces(), hulls.size());
   return hulls;

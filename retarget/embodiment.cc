@@ -11,6 +11,7 @@
 
 #include "core/data_dirs.h"
 #include "core/error.h"
+#include "retarget/mjcf_text.h"
 #include "retarget/urdf_import.h"
 
 namespace doasido::retarget {
@@ -38,18 +39,6 @@ std::string Fmt(double v) {
   return buf;
 }
 
-void ParseText(const std::string& xml, const std::string& label, XMLDocument& doc) {
-  if (doc.Parse(xml.c_str()) != tinyxml2::XML_SUCCESS) {
-    throw Error("bad_mjcf", std::string("malformed XML: ") + doc.ErrorStr(), {.file = label});
-  }
-}
-
-std::string Print(const XMLDocument& doc) {
-  tinyxml2::XMLPrinter printer;
-  doc.Print(&printer);
-  return printer.CStr();
-}
-
 // Moves every top-level body under a mount body carrying the six wrist joints
 // and a fixed frame with rotation `mount`; adds a position actuator per joint.
 struct BaseGains {
@@ -74,7 +63,7 @@ BaseGains GainsFor(const double inertia[6]) {
 std::string AddFloatingBase(const std::string& xml, const Mat3& mount, const BaseGains& gains,
                             const std::string& label) {
   XMLDocument doc;
-  ParseText(xml, label, doc);
+  ParseMjcfText(xml, label, doc);
   XMLElement* root = doc.RootElement();
   XMLElement* world = root->FirstChildElement("worldbody");
   if (!world) throw Error("bad_mjcf", "model has no <worldbody>", {.file = label});
@@ -120,18 +109,15 @@ std::string AddFloatingBase(const std::string& xml, const Mat3& mount, const Bas
     a->SetAttribute("ctrlrange", i < 3 ? "-3 3" : "-6.3 6.3");
     a->SetAttribute("forcelimited", "false");
   }
-  return Print(doc);
+  return PrintMjcf(doc);
 }
 
 // Appends the children of `scene`'s root to `xml`'s root.
 std::string Merge(const std::string& xml, const std::string& scene, const std::string& label) {
-  XMLDocument doc, other;
-  ParseText(xml, label, doc);
-  ParseText(scene, "scene", other);
-  for (const XMLNode* n = other.RootElement()->FirstChild(); n; n = n->NextSibling()) {
-    if (!n->ToComment()) doc.RootElement()->InsertEndChild(n->DeepClone(&doc));
-  }
-  return Print(doc);
+  XMLDocument doc;
+  ParseMjcfText(xml, label, doc);
+  AppendRootChildren(doc, scene, "scene");
+  return PrintMjcf(doc);
 }
 
 std::vector<ModelPoint> ResolvePoints(const mjModel* m, const Embodiment& e,

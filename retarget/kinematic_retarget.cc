@@ -8,7 +8,6 @@
 #include <optional>
 #include <sstream>
 
-#include <Eigen/Cholesky>
 #include <ceres/ceres.h>
 #include <Eigen/SVD>
 #include <spdlog/spdlog.h>
@@ -282,78 +281,37 @@ class SmoothCost : public ceres::CostFunction {
 // smoothness block without one, and
 // the joint limits as parameter bounds. The returned objective is the plain
 // least-squares one (Objective), so starts compare as before.
-Eigen::VectorXd KinematicRetargeter::MinimiseCeres(Eigen::VectorXd q, const std::vector<Vec3>& targets,
-                                              const Eigen::VectorXd* previous, double* objective) {
-  const int n = static_cast<int>(q.size());
-  Clamp(q);
-  PointEvaluator evaluator(*this, targets);
-  ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (size_t i = 0; i < active_.size(); ++i) {
-    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
-                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
-  }
-  if (previous) {
-    problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
-                             q.data());
-  }
-  for (int k = 0; k < n; ++k) {
-    if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
-    if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = config_.max_iterations;
-  options.function_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-12;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
-  return q;
-}
-
-// Levenberg-Marquardt with an active set for the joint limits (a joint at a
-// limit whose gradient pushes outward is held).
-Eigen::VectorXd KinematicRetargeter::MinimiseLm(Eigen::VectorXd q, const std::vector<Vec3>& targets,
-                                              const Eigen::VectorXd* previous, double* objective) {
-  const int n = static_cast<int>(q.size());
-  Clamp(q);
-  PointEvaluator evaluator(*this, targets);
-  ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (size_t i = 0; i < active_.size(); ++i) {
-    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
-                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
-  }
-  if (previous) {
-    problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
-                             q.data());
-  }
-  for (int k = 0; k < n; ++k) {
-    if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
-    if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = config_.max_iterations;
-  options.function_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-12;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
-  return q;
-}
-
 Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                                               const Eigen::VectorXd* previous, double* objective) {
-  return config_.solver == "ceres" ? MinimiseCeres(std::move(q), targets, previous, objective)
-                                   : MinimiseLm(std::move(q), targets, previous, objective);
+  const int n = static_cast<int>(q.size());
+  Clamp(q);
+  PointEvaluator evaluator(*this, targets);
+  ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (size_t i = 0; i < active_.size(); ++i) {
+    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
+                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
+  }
+  if (previous) {
+    problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
+                             q.data());
+  }
+  for (int k = 0; k < n; ++k) {
+    if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
+    if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = config_.max_iterations;
+  options.function_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-12;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
+  return q;
 }
 
 Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& targets) const {

@@ -7,13 +7,10 @@
 // over q within the joint limits, where x_i = wrist + s (k_i - wrist) are
 // the human keypoints scaled about the wrist by the human->robot scale s,
 // and p_i(q) come from MuJoCo forward kinematics with Jacobians from mj_jac.
-// The solver (`solver`) is the hand-written Levenberg-Marquardt with an
-// active set for the joint limits ("lm", the default), or Ceres'
-// Levenberg-Marquardt ("ceres") with the same analytic Jacobians, the joint
-// limits as parameter bounds and optionally a Huber loss per point
-// (robust_loss_scale, in sigma). On the real-hand bench Ceres is still
-// worse (sharpa fingertip mean 4.8 vs 4.2 mm single start), so "lm" stays
-// the default until that is understood. Each frame is
+// The solver is Ceres' Levenberg-Marquardt with the analytic Jacobians, the
+// joint limits as parameter bounds and optionally a Huber loss per point
+// (robust_loss_scale, in sigma; off by default, since on the real-hand bench
+// it did not lower the fingertip error). Each frame is
 // solved from the previous frame's answer (warm start) and from `restarts`
 // random configurations (wrist from a Kabsch fit of the palm points, fingers
 // uniform in their ranges); the lowest objective wins, which avoids the local
@@ -52,13 +49,11 @@ struct KinematicConfig {
   unsigned seed = 0;             // random starts
   double wrist_noise_rad = 0.3;  // spread of random starts' wrist rotation
   double wrist_noise_m = 0.01;   // and translation
-  double robust_loss_scale = 0;  // ceres: > 0 Huber threshold per point, in sigma
-  std::string solver = "lm";     // "lm" or "ceres"
+  double robust_loss_scale = 0;  // > 0: Huber threshold per point, in sigma
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_iterations, sigma,
                                                 smooth_weight, use_intermediate, scale, seed,
-                                                wrist_noise_rad, wrist_noise_m, robust_loss_scale,
-                                                solver)
+                                                wrist_noise_rad, wrist_noise_m, robust_loss_scale)
 
 // The reference the dynamics-aware optimiser tracks.
 struct HandTrajectory {
@@ -145,10 +140,6 @@ class KinematicRetargeter {
   Eigen::VectorXd Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                            const Eigen::VectorXd* previous, double* objective);
   class PointEvaluator;
-  Eigen::VectorXd MinimiseLm(Eigen::VectorXd q, const std::vector<Vec3>& targets,
-                             const Eigen::VectorXd* previous, double* objective);
-  Eigen::VectorXd MinimiseCeres(Eigen::VectorXd q, const std::vector<Vec3>& targets,
-                                const Eigen::VectorXd* previous, double* objective);
   Eigen::VectorXd KabschStart(const std::vector<Vec3>& targets) const;
   void Clamp(Eigen::VectorXd& q) const;
 

@@ -4,27 +4,14 @@
 #include <cmath>
 #include <vector>
 
+#include "core/mesh_builder.h"
+
 namespace doasido::retarget {
 namespace {
 
-struct Builder {
-  std::vector<Vec3> v;
-  std::vector<Eigen::Vector3i> f;
-  int Add(const Vec3& p) {
-    v.push_back(p);
-    return static_cast<int>(v.size()) - 1;
-  }
-  void Tri(int a, int b, int c) {
-    if (a != b && b != c && a != c) f.emplace_back(a, b, c);
-  }
-  TriMesh Mesh() const {
-    TriMesh m;
-    m.vertices.resize(static_cast<int>(v.size()), 3);
-    for (size_t i = 0; i < v.size(); ++i) m.vertices.row(i) = v[i].transpose();
-    m.faces.resize(static_cast<int>(f.size()), 3);
-    for (size_t i = 0; i < f.size(); ++i) m.faces.row(i) = f[i].transpose();
-    return m;
-  }
+// The mug's grids close at poles, where a row's vertices coincide.
+struct Builder : MeshBuilder {
+  Builder() { drop_degenerate = true; }
 };
 
 }  // namespace

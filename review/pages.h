@@ -22,6 +22,10 @@ std::string ScriptedPage(const std::string& title, const std::string& nonce,
                          const std::string& style, const std::string& body, const Json& config,
                          const std::string& script);
 
+// The style both decision pages (review, verify) start from: dark theme,
+// header bar, form controls, accept and reject buttons.
+extern const char* const kDecisionPageStyle;
+
 // The flagged-clip queue page; `config` holds token and reviewer.
 std::string ReviewPage(const std::string& nonce, const Json& config);
 // One rater's trials of a study; `config` holds token, study and rater.

@@ -5,17 +5,7 @@ namespace doasido::review {
 namespace {
 
 const char* kStyle = R"css(
-* { box-sizing: border-box; }
-body { margin: 0; font: 14px/1.4 system-ui, sans-serif; background: #15171c; color: #e4e6eb; }
-header { display: flex; gap: 16px; align-items: center; padding: 8px 16px; background: #1f232b;
-         border-bottom: 1px solid #333a45; }
-header h1 { font-size: 16px; margin: 0; }
-header .grow { flex: 1; }
-input, select, textarea, button { font: inherit; color: inherit; background: #262b35;
-  border: 1px solid #3b4350; border-radius: 4px; padding: 4px 8px; }
 button { cursor: pointer; }
-button.accept { background: #1f6f3f; border-color: #2c9a58; }
-button.reject { background: #7a2630; border-color: #a8394a; }
 main { display: grid; grid-template-columns: 240px 1fr 340px; gap: 12px; padding: 12px; }
 #queue { list-style: none; margin: 0; padding: 0; max-height: 80vh; overflow: auto; }
 #queue li { padding: 6px 8px; border-radius: 4px; cursor: pointer; border: 1px solid transparent; }
@@ -396,7 +386,8 @@ reloadQueue().then(() => {
 }  // namespace
 
 std::string ReviewPage(const std::string& nonce, const Json& config) {
-  return ScriptedPage("doasido review", nonce, kStyle, kBody, config, kScript);
+  return ScriptedPage("doasido review", nonce, std::string(kDecisionPageStyle) + kStyle, kBody,
+                      config, kScript);
 }
 
 }  // namespace doasido::review

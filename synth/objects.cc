@@ -4,32 +4,14 @@
 #include <limits>
 #include <vector>
 
+#include "core/mesh_builder.h"
+
 namespace doasido::synth {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-struct Builder {
-  std::vector<Vec3> v;
-  std::vector<Eigen::Vector3i> f;
-  int Add(const Vec3& p) {
-    v.push_back(p);
-    return static_cast<int>(v.size()) - 1;
-  }
-  void Tri(int a, int b, int c) { f.emplace_back(a, b, c); }
-  void Quad(int a, int b, int c, int d) {  // counter-clockwise seen from outside
-    Tri(a, b, c);
-    Tri(a, c, d);
-  }
-  TriMesh Mesh() const {
-    TriMesh m;
-    m.vertices.resize(static_cast<int>(v.size()), 3);
-    m.faces.resize(static_cast<int>(f.size()), 3);
-    for (size_t i = 0; i < v.size(); ++i) m.vertices.row(i) = v[i].transpose();
-    for (size_t i = 0; i < f.size(); ++i) m.faces.row(i) = f[i].transpose();
-    return m;
-  }
-};
+using Builder = MeshBuilder;
 
 // A surface of revolution about z from a profile of (radius, z) points;
 // each consecutive pair makes a band (a fan where the radius is 0). Bands
@@ -42,7 +24,7 @@ void Revolve(Builder& b, const std::vector<Vec2>& profile, int seg) {
       first[i] = b.Add(Vec3(0, 0, z));
       continue;
     }
-    first[i] = static_cast<int>(b.v.size());
+    first[i] = static_cast<int>(b.vertices.size());
     for (int k = 0; k < seg; ++k) {
       const double th = 2 * kPi * k / seg;
       b.Add(Vec3(r * std::cos(th), r * std::sin(th), z));

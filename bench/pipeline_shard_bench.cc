@@ -95,6 +95,7 @@ void MergeThroughput(const std::filesystem::path& dir, int clips) {
   t = Clock::now();
   Exec(copy_path, "ATTACH '" + shard.string() + "' AS s; BEGIN;"
                   "DELETE FROM stage_runs; DELETE FROM measurements; DELETE FROM verdicts;"
+                  "DELETE FROM detections;"
                   "INSERT INTO stage_runs SELECT * FROM s.stage_runs;"
                   "INSERT INTO measurements SELECT * FROM s.measurements;"
                   "INSERT INTO verdicts SELECT * FROM s.verdicts;"

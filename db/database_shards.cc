@@ -70,6 +70,48 @@ std::string Rewrite(const std::string& path,
   return path;
 }
 
+// The SQL aggregate row_fingerprint(col, ...): the wrapping sum of a 64-bit
+// hash of each row's values (type and bytes), so equal multisets of rows give
+// equal fingerprints in any order. Merging compares clips by (fingerprint,
+// row count) per table, one pass over the clip_id index on each side,
+// instead of sorting every row's full content.
+std::uint64_t HashValue(sqlite3_value* v, std::uint64_t h) {
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;  // FNV-1a
+  };
+  const int type = sqlite3_value_type(v);
+  mix(&type, sizeof type);
+  if (type == SQLITE_INTEGER) {
+    const sqlite3_int64 i = sqlite3_value_int64(v);
+    mix(&i, sizeof i);
+  } else if (type == SQLITE_FLOAT) {
+    const double d = sqlite3_value_double(v);
+    mix(&d, sizeof d);
+  } else if (type != SQLITE_NULL) {
+    const void* bytes = type == SQLITE_BLOB ? sqlite3_value_blob(v) : sqlite3_value_text(v);
+    const int n = sqlite3_value_bytes(v);
+    mix(&n, sizeof n);
+    if (bytes) mix(bytes, static_cast<std::size_t>(n));
+  }
+  return h;
+}
+void FingerprintStep(sqlite3_context* ctx, int argc, sqlite3_value** argv) {
+  auto* sum = static_cast<std::uint64_t*>(sqlite3_aggregate_context(ctx, sizeof(std::uint64_t)));
+  if (!sum) return sqlite3_result_error_nomem(ctx);
+  std::uint64_t h = 14695981039346656037ull;
+  for (int i = 0; i < argc; ++i) h = HashValue(argv[i], h);
+  *sum += h;
+}
+void FingerprintFinal(sqlite3_context* ctx) {
+  auto* sum = static_cast<std::uint64_t*>(sqlite3_aggregate_context(ctx, 0));
+  sqlite3_result_int64(ctx, sum ? static_cast<sqlite3_int64>(*sum) : 0);
+}
+void RegisterFingerprint(sqlite3* db) {
+  sqlite3_create_function_v2(db, "row_fingerprint", -1, SQLITE_UTF8 | SQLITE_DETERMINISTIC,
+                             nullptr, nullptr, FingerprintStep, FingerprintFinal, nullptr);
+}
+
 // A count over the attached file; not cached, so nothing holds it at DETACH.
 std::int64_t Count(sqlite3* db, const std::string& sql) {
   db::Statement q(db, sql);
@@ -300,28 +342,27 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
       }
     }
   }
-  std::set<ClipId> changed;
+  RegisterFingerprint(db_);
+  db::Exec(db_, "CREATE TEMP TABLE IF NOT EXISTS changed (clip_id INTEGER PRIMARY KEY);"
+                "CREATE TEMP TABLE IF NOT EXISTS differing (clip_id INTEGER PRIMARY KEY);"
+                "DELETE FROM temp.changed;");
   for (const ClipTable& t : kClipTables) {
     // Clips whose rows differ, as multisets of content.
-    const std::string mine = std::string("SELECT ") + t.columns + ", COUNT(*) FROM main." +
-                             t.name + " WHERE clip_id IN temp.selected GROUP BY " + t.columns;
-    const std::string theirs = std::string("SELECT ") + SourceColumns(t) + ", COUNT(*) FROM shard." +
-                               t.name + " WHERE clip_id IN temp.selected GROUP BY " +
-                               SourceColumns(t);
-    db::Statement diff(db_, "SELECT clip_id FROM (" + mine + " EXCEPT " + theirs +
-                                ") UNION SELECT clip_id FROM (" + theirs + " EXCEPT " + mine +
-                                ")");
-    std::vector<ClipId> clips;
-    while (diff.Step()) clips.push_back(diff.Int(0));
-    db::Statement remove(db_, std::string("DELETE FROM main.") + t.name + " WHERE clip_id = ?");
-    db::Statement copy(db_, std::string("INSERT INTO main.") + t.name + " (" + t.columns +
-                                ") SELECT " + SourceColumns(t) + " FROM shard." + t.name +
-                                " WHERE clip_id = ? ORDER BY rowid");
-    for (ClipId c : clips) {
-      remove.Bind(1, c).Run();
-      copy.Bind(1, c).Run();
-      changed.insert(c);
-    }
+    auto per_clip = [&t](const std::string& schema, const char* columns) {
+      return "SELECT clip_id, row_fingerprint(" + std::string(columns) + "), COUNT(*) FROM " +
+             schema + "." + t.name + " WHERE clip_id IN temp.selected GROUP BY clip_id";
+    };
+    const std::string mine = per_clip("main", t.columns);
+    const std::string theirs = per_clip("shard", SourceColumns(t));
+    db::Exec(db_, "DELETE FROM temp.differing;");
+    db::Exec(db_, "INSERT INTO temp.differing SELECT clip_id FROM (" + mine + " EXCEPT " +
+                      theirs + ") UNION SELECT clip_id FROM (" + theirs + " EXCEPT " + mine + ")");
+    db::Exec(db_, std::string("DELETE FROM main.") + t.name +
+                      " WHERE clip_id IN temp.differing");
+    db::Exec(db_, std::string("INSERT INTO main.") + t.name + " (" + t.columns + ") SELECT " +
+                      SourceColumns(t) + " FROM shard." + t.name +
+                      " WHERE clip_id IN temp.differing ORDER BY rowid");
+    db::Exec(db_, "INSERT OR IGNORE INTO temp.changed SELECT clip_id FROM temp.differing");
   }
   // What probing learnt about the videos (their paths stay this database's).
   db::Exec(db_,
@@ -353,7 +394,7 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
       update.Bind(9, local.OptReal(4)).Run();
     }
   }
-  stats.changed_clips = static_cast<std::int64_t>(changed.size());
+  stats.changed_clips = QueryInt("SELECT COUNT(*) FROM temp.changed");
   stats.clips = QueryInt("SELECT COUNT(*) FROM temp.selected");
   stats.finished_runs = Count(db_, 
       "SELECT COUNT(*) FROM shard.stage_runs WHERE state IN ('done', 'failed')"

@@ -30,6 +30,7 @@ HandTrajectory Resample(const mjModel* m, const SceneIndex& index, const Dynamic
   out.qpos_names = kinematic.qpos_names;
   out.valid = kinematic.valid;
   out.fingertip_error = kinematic.fingertip_error;
+  out.reference_keypoints = kinematic.reference_keypoints;
   std::vector<int> adr;
   for (const std::string& n : kinematic.qpos_names) {
     adr.push_back(m->jnt_qposadr[NameToId(m, mjOBJ_JOINT, n)]);

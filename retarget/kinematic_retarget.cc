@@ -102,12 +102,15 @@ std::vector<Vec3> KinematicRetargeter::Points(const Eigen::VectorXd& q) {
   return out;
 }
 
+Keypoints21 KinematicRetargeter::Reference(const Keypoints21& human) const {
+  const Eigen::RowVector3d wrist = human.row(0);
+  return (scale_ * (human.rowwise() - wrist)).rowwise() + wrist;
+}
+
 std::vector<Vec3> KinematicRetargeter::Targets(const Keypoints21& human) const {
-  const Vec3 wrist = human.row(0).transpose();
+  const Keypoints21 reference = Reference(human);
   std::vector<Vec3> out;
-  for (const ModelPoint& p : hand_.points) {
-    out.push_back(wrist + scale_ * (human.row(p.keypoint).transpose() - wrist));
-  }
+  for (const ModelPoint& p : hand_.points) out.push_back(reference.row(p.keypoint).transpose());
   return out;
 }
 
@@ -278,13 +281,47 @@ class SmoothCost : public ceres::CostFunction {
 // Ceres trust-region Levenberg-Marquardt: one residual block per matched
 // point, under a Huber loss when robust_loss_scale > 0 (a keypoint far off,
 // e.g. a mis-detected finger, then pulls linearly, not quadratically), the
-// smoothness block without one, and
-// the joint limits as parameter bounds. The returned objective is the plain
+// smoothness block without one, and the joint limits as parameter bounds.
+// Ceres projects a step that leaves the bounds back onto them, which stalls
+// the other joints when a finger rests on a limit it is pushed against, so
+// this is an active-set loop: joints at a limit that the gradient pushes
+// outward are held constant (SubsetManifold) and the rest solved again,
+// until the held set no longer changes. The returned objective is the plain
 // least-squares one (Objective), so starts compare as before.
 Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                                               const Eigen::VectorXd* previous, double* objective) {
-  const int n = static_cast<int>(q.size());
   Clamp(q);
+  std::vector<int> held;
+  for (int round = 0; round < kActiveSetRounds; ++round) {
+    SolveHolding(q, targets, previous, held);
+    std::vector<int> pushed = PushedAgainstLimits(q, targets, previous);
+    if (pushed == held || static_cast<int>(pushed.size()) == q.size()) break;
+    held = std::move(pushed);
+  }
+  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
+  return q;
+}
+
+std::vector<int> KinematicRetargeter::PushedAgainstLimits(const Eigen::VectorXd& q,
+                                                          const std::vector<Vec3>& targets,
+                                                          const Eigen::VectorXd* previous) {
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  Objective(q, targets, previous, &r, &J);
+  const Eigen::VectorXd g = J.transpose() * r;
+  std::vector<int> out;
+  for (int k = 0; k < q.size(); ++k) {
+    if ((q[k] <= lower_[k] + 1e-12 && g[k] > 0) || (q[k] >= upper_[k] - 1e-12 && g[k] < 0)) {
+      out.push_back(k);
+    }
+  }
+  return out;
+}
+
+void KinematicRetargeter::SolveHolding(Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                                       const Eigen::VectorXd* previous,
+                                       const std::vector<int>& held) {
+  const int n = static_cast<int>(q.size());
   PointEvaluator evaluator(*this, targets);
   ceres::HuberLoss huber(config_.robust_loss_scale > 0 ? config_.robust_loss_scale : 1.0);
   ceres::Problem::Options problem_options;
@@ -302,6 +339,7 @@ Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vect
     if (std::isfinite(lower_[k])) problem.SetParameterLowerBound(q.data(), k, lower_[k]);
     if (std::isfinite(upper_[k])) problem.SetParameterUpperBound(q.data(), k, upper_[k]);
   }
+  if (!held.empty()) problem.SetManifold(q.data(), new ceres::SubsetManifold(n, held));
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = config_.max_iterations;
@@ -310,8 +348,6 @@ Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vect
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  if (objective) *objective = Objective(q, targets, previous, nullptr, nullptr);
-  return q;
 }
 
 Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& targets) const {
@@ -395,6 +431,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
   out.qpos.resize(human.size());
   out.valid.resize(human.size());
   out.fingertip_error.assign(human.size(), std::nan(""));
+  out.reference_keypoints.assign(human.size(), Keypoints21::Constant(std::nan("")));
   std::optional<Eigen::VectorXd> previous;
   for (size_t t = 0; t < human.size(); ++t) {
     if (progress && t > 0) progress(t);
@@ -403,6 +440,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
       if (previous) out.qpos[t] = *previous;
       continue;
     }
+    out.reference_keypoints[t] = Reference(human[t]);
     FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr);
     out.qpos[t] = s.qpos;
     out.fingertip_error[t] = s.fingertip_mean;
@@ -452,6 +490,13 @@ void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& p
   for (const Pose& p : t.object_poses) {
     j["object_poses"].push_back({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
   }
+  if (!t.reference_keypoints.empty()) {
+    j["reference_keypoints"] = Json::array();
+    for (const Keypoints21& k : t.reference_keypoints) {
+      j["reference_keypoints"].push_back(k.allFinite() ? Json(std::vector<double>(k.data(), k.data() + 63))
+                                                       : Json());
+    }
+  }
   if (!t.ctrl.empty()) {
     j["ctrl_names"] = t.ctrl_names;
     j["ctrl"] = Json::array();
@@ -486,6 +531,14 @@ HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path) {
       if (v.size() != 7) throw Error("bad_trajectory", "object pose needs 7 numbers",
                                      {.file = path.string(), .field = "object_poses"});
       t.object_poses.push_back({Quat(v[3], v[4], v[5], v[6]), Vec3(v[0], v[1], v[2])});
+    }
+    if (j.contains("reference_keypoints")) {
+      for (const auto& row : j.at("reference_keypoints")) {
+        const auto v = row.is_null() ? std::vector<double>(63, std::nan("")) : row.get<std::vector<double>>();
+        if (v.size() != 63) throw Error("bad_trajectory", "a reference keypoint row needs 63 numbers",
+                                        {.file = path.string(), .field = "reference_keypoints"});
+        t.reference_keypoints.push_back(Eigen::Map<const Keypoints21>(v.data()));
+      }
     }
     if (j.contains("ctrl")) {
       t.ctrl_names = j.at("ctrl_names").get<std::vector<std::string>>();

@@ -8,9 +8,10 @@
 // the human keypoints scaled about the wrist by the human->robot scale s,
 // and p_i(q) come from MuJoCo forward kinematics with Jacobians from mj_jac.
 // The solver is Ceres' Levenberg-Marquardt with the analytic Jacobians, the
-// joint limits as parameter bounds and optionally a Huber loss per point
-// (robust_loss_scale, in sigma; off by default, since on the real-hand bench
-// it did not lower the fingertip error). Each frame is
+// joint limits as parameter bounds (with an active set: joints pushed against
+// a limit are held there and the rest solved again) and optionally a Huber
+// loss per point (robust_loss_scale, in sigma; off by default, since on the
+// real-hand bench it did not lower the fingertip error). Each frame is
 // solved from the previous frame's answer (warm start) and from `restarts`
 // random configurations (wrist from a Kabsch fit of the palm points, fingers
 // uniform in their ranges); the lowest objective wins, which avoids the local
@@ -65,6 +66,10 @@ struct HandTrajectory {
   std::vector<bool> valid;                 // (T) human hand seen; else the pose is held
   std::vector<double> fingertip_error;     // (T) mean fingertip distance to target, m
   std::vector<Pose> object_poses;          // (T) object->world, or empty
+  // (T) the human keypoints the hand followed: scaled by `scale` about the
+  // wrist, world frame; NaN where the hand was not seen. Empty in files
+  // written before it was recorded.
+  std::vector<Keypoints21> reference_keypoints;
   // Written by the dynamics-aware `retarget` stage; empty from retarget_kinematic.
   std::vector<std::string> ctrl_names;     // (nu) actuator names
   std::vector<Eigen::VectorXd> ctrl;       // (T, nu) position targets, or empty
@@ -73,7 +78,8 @@ struct HandTrajectory {
 
 // JSON: {"embodiment", "fps", "scale", "qpos_names", "qpos": [[...]], "valid",
 // "fingertip_error", "object_poses": [[tx,ty,tz,qw,qx,qy,qz]]} plus, when
-// present, "ctrl_names", "ctrl": [[...]] and "metrics". Throws Error("io").
+// present, "reference_keypoints": [[x0,y0,z0,...,x20,y20,z20] or null],
+// "ctrl_names", "ctrl": [[...]] and "metrics". Throws Error("io").
 void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path);
 // CSV: frame,time,valid,fingertip_error,<qpos names...>[,obj_tx..obj_qz]; one row a frame.
 void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path);
@@ -130,7 +136,9 @@ class KinematicRetargeter {
   std::vector<std::string> VariableNames() const;
   // Robot positions of the mapped points (in description order) at `qpos`.
   std::vector<Vec3> Points(const Eigen::VectorXd& qpos);
-  // Scaled human targets for the mapped points.
+  // The human keypoints scaled by scale_ about the wrist (keypoint 0).
+  Keypoints21 Reference(const Keypoints21& human) const;
+  // Reference's rows of the mapped points, in description order.
   std::vector<Vec3> Targets(const Keypoints21& human) const;
 
  private:
@@ -139,6 +147,13 @@ class KinematicRetargeter {
                    Eigen::MatrixXd* jacobian);
   Eigen::VectorXd Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                            const Eigen::VectorXd* previous, double* objective);
+  // One Ceres solve from q (in place) with the variables `held` constant.
+  void SolveHolding(Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                    const Eigen::VectorXd* previous, const std::vector<int>& held);
+  // Variables at a limit that the objective's gradient pushes outward.
+  std::vector<int> PushedAgainstLimits(const Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                                       const Eigen::VectorXd* previous);
+  static constexpr int kActiveSetRounds = 4;
   class PointEvaluator;
   Eigen::VectorXd KabschStart(const std::vector<Vec3>& targets) const;
   void Clamp(Eigen::VectorXd& q) const;

@@ -47,7 +47,9 @@ const char* kBody = R"html(
       <select id="reason"></select>
       <textarea id="reason_text" placeholder="optional note"></textarea></div>
       <p class="hint">space play/pause · ←/→ frame · j/k next/previous · 1-6 reason ·
-      drag to orbit · wheel to zoom</p></section>
+      drag to orbit · wheel to zoom</p>
+      <p class="hint"><span style="color:#6fd3ff">■</span> object pose from the reconstruction ·
+      <span style="color:#ffc46f">■</span> human keypoints the hand followed (scaled)</p></section>
   </aside>
   <div id="controls"><button id="play">▶</button><input id="scrub" type="range" min="0" max="0"
     value="0" step="1"><span id="time"></span></div>
@@ -76,7 +78,9 @@ const camera = new THREE.PerspectiveCamera(45, 1, 0.005, 50);
 scene3.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.4); sun.position.set(1, -1, 2); scene3.add(sun);
 const orbit = { theta: -0.6, phi: 1.0, radius: 0.6, target: new THREE.Vector3() };
-let groups = [], ghost = null;
+let groups = [], ghost = null, skeleton = null;
+// OpenPose-21 bones: wrist to each finger's base, then along the finger.
+const BONES = Array.from({ length: 20 }, (_, i) => i + 1).map(k => [k % 4 === 1 ? 0 : k - 1, k]);
 
 function placeCamera() {
   const o = orbit, s = Math.sin(o.phi);
@@ -118,7 +122,8 @@ function geomObject(g, meshes, material) {
 function buildScene(data) {
   for (const g of groups) scene3.remove(g);
   if (ghost) scene3.remove(ghost);
-  groups = []; ghost = null;
+  if (skeleton) scene3.remove(skeleton);
+  groups = []; ghost = null; skeleton = null;
   data.bodies.forEach(b => { const grp = new THREE.Group();
     for (const g of b.geoms) { const o = geomObject(g, data.meshes); if (o) grp.add(o); }
     scene3.add(grp); groups.push(grp); });
@@ -131,6 +136,22 @@ function buildScene(data) {
       if (o) ghost.add(o); }
     scene3.add(ghost);
   }
+  // The human keypoints the hand followed: ghost joints and bones.
+  if (data.reference_keypoints && data.reference_keypoints.some(k => k)) {
+    skeleton = new THREE.Group();
+    const mat = new THREE.MeshBasicMaterial({ color: 0xffc46f, transparent: true, opacity: 0.6,
+                                              depthWrite: false });
+    skeleton.userData.joints = [];
+    for (let k = 0; k < 21; ++k) { const j = new THREE.Mesh(new THREE.SphereGeometry(0.004, 8, 6), mat);
+      skeleton.add(j); skeleton.userData.joints.push(j); }
+    const bones = new THREE.BufferGeometry();
+    bones.setAttribute('position', new THREE.Float32BufferAttribute(new Float32Array(BONES.length * 6), 3));
+    skeleton.userData.bones = new THREE.LineSegments(bones,
+      new THREE.LineBasicMaterial({ color: 0xffc46f, transparent: true, opacity: 0.8 }));
+    skeleton.add(skeleton.userData.bones);
+    scene3.add(skeleton);
+  }
+  state.skeleton = skeleton;  // for tests and the console
   // Orbit around the hand's mean position.
   const p = data.poses, c = new THREE.Vector3(); let n = 0;
   for (let f = 0; f < p.length; f += Math.max(1, Math.floor(p.length / 30))) {
@@ -147,6 +168,13 @@ function poseFrame(f) {
     g.quaternion.set(p[7 * b + 4], p[7 * b + 5], p[7 * b + 6], p[7 * b + 3]); });
   if (ghost) { const r = d.object_reference[Math.min(f, d.object_reference.length - 1)];
     ghost.position.set(r[0], r[1], r[2]); ghost.quaternion.set(r[4], r[5], r[6], r[3]); }
+  if (skeleton) { const k = d.reference_keypoints[Math.min(f, d.reference_keypoints.length - 1)];
+    skeleton.visible = !!k;
+    if (k) { skeleton.userData.joints.forEach((j, i) => j.position.set(k[3 * i], k[3 * i + 1], k[3 * i + 2]));
+      const a = skeleton.userData.bones.geometry.attributes.position;
+      BONES.forEach(([p, c], i) => { a.setXYZ(2 * i, k[3 * p], k[3 * p + 1], k[3 * p + 2]);
+        a.setXYZ(2 * i + 1, k[3 * c], k[3 * c + 1], k[3 * c + 2]); });
+      a.needsUpdate = true; } }
   scrub.value = f;
   $('time').textContent = (f / d.fps).toFixed(2) + ' s · frame ' + f + '/' + (d.frames - 1);
   const fe = d.fingertip_error[f];
@@ -156,6 +184,7 @@ function poseFrame(f) {
   render();
 }
 function render() { resize(); placeCamera(); renderer.render(scene3, camera); }
+state.render = render;
 
 // Orbit and zoom.
 let drag = null;

@@ -143,6 +143,11 @@ Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
   Json ref = Json::array();
   for (const Pose& p : t.object_poses) ref.push_back(PoseJson(p));
   out["object_reference"] = ref;
+  Json keypoints = Json::array();
+  for (const retarget::Keypoints21& k : t.reference_keypoints) {
+    keypoints.push_back(k.allFinite() ? Json(std::vector<double>(k.data(), k.data() + 63)) : Json());
+  }
+  out["reference_keypoints"] = keypoints;
   out["fingertip_error"] = t.fingertip_error;
   const auto m = db.GetMeasurements(clip, stage);
   out["measurements"] = m ? *m : Json::object();

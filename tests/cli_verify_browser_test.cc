@@ -52,6 +52,14 @@ retarget::HandTrajectory WriteTrajectory(const std::filesystem::path& dir, bool 
     t.qpos.push_back(q);
     t.valid.push_back(true);
     t.fingertip_error.push_back(0.002 + 0.0001 * f);
+    // The human hand it followed: a fan of five fingers ahead of the wrist.
+    retarget::Keypoints21 k;
+    const Vec3 wrist(q[hand.wrist_qpos[0]], q[hand.wrist_qpos[1]], q[hand.wrist_qpos[2]]);
+    k.row(0) = wrist.transpose();
+    for (int i = 1; i < 21; ++i) {
+      k.row(i) = (wrist + Vec3(0.025 * ((i - 1) % 4 + 1), 0.02 * ((i - 1) / 4 - 2), 0.01)).transpose();
+    }
+    t.reference_keypoints.push_back(k);
   }
   std::filesystem::create_directories(dir);
   if (mug) {
@@ -81,6 +89,16 @@ Json CanvasStats(WebDriverSession& session) {
 }
 
 // Pixels that differ between two renders of the view.
+// Keeps the view's pixels in window[var] for ChangedPixels.
+void SnapshotView(WebDriverSession& session, const std::string& var) {
+  session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    window[arguments[0]] = g.getImageData(0, 0, c.width, c.height).data;
+  )js", Json::array({var}));
+}
+
 int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
   return session.Execute(R"js(
     const v = document.getElementById('view');
@@ -146,14 +164,18 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
     session.Screenshot(std::filesystem::path(shots) / "verify_frame0.png");
   }
 
+  // The human keypoints the hand followed are drawn: hiding them changes pixels.
+  SnapshotView(session, "with_keypoints");
+  session.Execute("window.doasidoVerify.skeleton.visible = false; window.doasidoVerify.render();");
+  const int keypoint_pixels = ChangedPixels(session, "with_keypoints");
+  std::printf("reference keypoints: %d pixels\n", keypoint_pixels);
+  EXPECT_GT(keypoint_pixels, 50);
+  session.Execute("window.doasidoVerify.skeleton.visible = true; window.doasidoVerify.render();");
+
   // Scrub to the last frame: the robot moves (pixels change) and the video follows.
-  session.Execute(R"js(
-    const v = document.getElementById('view');
-    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
-    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
-    window.before = g.getImageData(0, 0, c.width, c.height).data;
-    const s = document.getElementById('scrub'); s.value = 29; s.dispatchEvent(new Event('input'));
-  )js");
+  SnapshotView(session, "before");
+  session.Execute(
+      "const s = document.getElementById('scrub'); s.value = 29; s.dispatchEvent(new Event('input'));");
   session.WaitFor("document.body.dataset.frame === '29'", "the scrub");
   const int changed = ChangedPixels(session, "before");
   std::printf("scrub to frame 29: %d pixels changed\n", changed);

@@ -80,6 +80,8 @@ TEST_P(KinematicTest, RecoversFingertipsOfAKnownTrajectory) {
   for (size_t t = 0; t < refs.size(); ++t) {
     EXPECT_LT(MaxFingertipError(solver, hand, traj.qpos[t], refs[t]), 0.002) << "frame " << t;
     EXPECT_LT(traj.fingertip_error[t], 0.002);
+    EXPECT_LT((traj.reference_keypoints[t] - refs[t]).cwiseAbs().maxCoeff(), 1e-12)
+        << "scale 1: the reference is the input";
   }
 }
 
@@ -112,9 +114,10 @@ TEST(KinematicScale, AdaptationRecoversAKnownScale) {
   const HandModel hand = BuildHandModel(FindEmbodiment("sharpa_right", SharedData() / "robots"));
   KinematicRetargeter solver(hand);
   std::mt19937 rng(3);
-  std::vector<Keypoints21> human;
+  std::vector<Keypoints21> human, robot_sized;
   for (int i = 0; i < 5; ++i) {
     Keypoints21 k = Reference(solver, hand, RandomConfig(hand, rng));
+    robot_sized.push_back(k);
     const Eigen::RowVector3d wrist = k.row(0);
     for (int r = 0; r < 21; ++r) k.row(r) = wrist + (k.row(r) - wrist) / 1.3;
     human.push_back(k);
@@ -122,6 +125,11 @@ TEST(KinematicScale, AdaptationRecoversAKnownScale) {
   // Not exact to 1e-9: the pinky's CMC joint (random here, 0 in the robot's
   // straight pose) moves its knuckle relative to the wrist by microns.
   EXPECT_NEAR(solver.AdaptScale(human), 1.3, 1e-4);
+  // The reference the hand follows is the human hand grown back about the wrist.
+  for (size_t i = 0; i < human.size(); ++i) {
+    EXPECT_LT((solver.Reference(human[i]) - robot_sized[i]).cwiseAbs().maxCoeff(), 1e-5);
+    EXPECT_EQ(solver.Reference(human[i]).row(0), human[i].row(0));
+  }
 }
 
 TEST(KinematicIo, KeypointCsvAndTrajectoryRoundTrip) {
@@ -140,6 +148,7 @@ TEST(KinematicIo, KeypointCsvAndTrajectoryRoundTrip) {
   t.valid = {true, false};
   t.fingertip_error = {0.001, std::nan("")};
   t.object_poses = {Pose{Quat(1, 0, 0, 0), Vec3(1, 2, 3)}, Pose{Quat(0, 1, 0, 0), Vec3(4, 5, 6)}};
+  t.reference_keypoints = {Keypoints21::Random(), Keypoints21::Constant(std::nan(""))};
   doasido::testing::TempDir dir;
   WriteTrajectoryJson(t, dir / "t.json");
   const HandTrajectory r = ReadTrajectoryJson(dir / "t.json");
@@ -148,6 +157,9 @@ TEST(KinematicIo, KeypointCsvAndTrajectoryRoundTrip) {
   EXPECT_EQ(r.valid, t.valid);
   EXPECT_TRUE(std::isnan(r.fingertip_error[1]));
   EXPECT_EQ(r.object_poses[1].t, Vec3(4, 5, 6));
+  ASSERT_EQ(r.reference_keypoints.size(), 2u);
+  EXPECT_EQ(r.reference_keypoints[0], t.reference_keypoints[0]);
+  EXPECT_TRUE(r.reference_keypoints[1].array().isNaN().all()) << "unseen frame written as null";
   WriteTrajectoryCsv(t, dir / "t.csv");
   EXPECT_EQ(doasido::testing::ReadFile(dir / "t.csv").substr(0, 35),
             "frame,time,valid,fingertip_error,a,");

@@ -44,6 +44,7 @@ void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
 void AddHandCommand(CLI::App& app);
 void AddDeployCommand(CLI::App& app);
+void AddDatasetCommand(CLI::App& app);
 // shard, merge and slurm (cli/shard_command.cc).
 void AddShardCommands(CLI::App& app);
 // Per-shard progress under the status table; nothing without shards.

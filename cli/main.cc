@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
                          AddReportCommand, AddReviewCommand, AddHandCommand,
-                         AddDeployCommand,
+                         AddDeployCommand, AddDatasetCommand,
                          AddShardCommands};
   for (auto add : commands) add(app);
 

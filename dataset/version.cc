@@ -34,12 +34,20 @@ Json OrNull(const std::optional<T>& v) {
   return v ? Json(*v) : Json(nullptr);
 }
 
+Json ToJson(const StageProvenance& s) {
+  return {{"stage", s.stage}, {"param_hash", s.param_hash}, {"verdict", s.verdict},
+          {"reason", s.reason}, {"source", s.source}};
+}
+
+StageProvenance StageFromJson(const Json& j, const std::string& at) {
+  return {Get<std::string>(j, "stage", at), Get<std::string>(j, "param_hash", at),
+          Get<std::string>(j, "verdict", at), Get<std::string>(j, "reason", at),
+          Get<std::string>(j, "source", at)};
+}
+
 Json ToJson(const Episode& e) {
   Json stages = Json::array();
-  for (const StageProvenance& s : e.stages) {
-    stages.push_back({{"stage", s.stage}, {"param_hash", s.param_hash}, {"verdict", s.verdict},
-                      {"reason", s.reason}, {"source", s.source}});
-  }
+  for (const StageProvenance& s : e.stages) stages.push_back(ToJson(s));
   Json verification = nullptr;
   if (e.verification) {
     verification = {{"reviewer", e.verification->reviewer}, {"at", e.verification->at},
@@ -92,12 +100,7 @@ Episode EpisodeFromJson(const Json& j, const std::string& where) {
   e.embodiment = Get<std::string>(j, "embodiment", where);
   const Json stages = Get<Json>(j, "stages", where);
   for (size_t i = 0; i < stages.size(); ++i) {
-    const std::string at = where + ".stages[" + std::to_string(i) + "]";
-    e.stages.push_back({Get<std::string>(stages[i], "stage", at),
-                        Get<std::string>(stages[i], "param_hash", at),
-                        Get<std::string>(stages[i], "verdict", at),
-                        Get<std::string>(stages[i], "reason", at),
-                        Get<std::string>(stages[i], "source", at)});
+    e.stages.push_back(StageFromJson(stages[i], where + ".stages[" + std::to_string(i) + "]"));
   }
   if (j.contains("verification") && !j["verification"].is_null()) {
     const Json& v = j["verification"];
@@ -133,6 +136,11 @@ Json ToJson(const Manifest& m) {
   for (const auto& [name, fraction] : m.split_fractions) splits.push_back({name, fraction});
   Json episodes = Json::array();
   for (const Episode& e : m.episodes) episodes.push_back(ToJson(e));
+  Json excluded = Json::array();
+  for (const Exclusion& x : m.excluded) {
+    excluded.push_back({{"clip_id", x.clip_id}, {"external_id", x.external_id},
+                        {"decided_by", ToJson(x.decided_by)}, {"why", x.why}});
+  }
   Json files = Json::array();
   for (const FileEntry& f : m.files) {
     files.push_back({{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}});
@@ -148,7 +156,9 @@ Json ToJson(const Manifest& m) {
           {"selection", ToString(m.selection)},
           {"splits", splits},
           {"seed", m.seed},
+          {"trajectory_stage", m.trajectory_stage},
           {"episodes", episodes},
+          {"excluded", excluded},
           {"files", files}};
 }
 
@@ -180,6 +190,15 @@ Manifest ManifestFromJson(const Json& j) {
   const Json episodes = Get<Json>(j, "episodes", "");
   for (size_t i = 0; i < episodes.size(); ++i) {
     m.episodes.push_back(EpisodeFromJson(episodes[i], "episodes[" + std::to_string(i) + "]"));
+  }
+  m.trajectory_stage = Get<std::string>(j, "trajectory_stage", "");
+  const Json excluded = Get<Json>(j, "excluded", "");
+  for (size_t i = 0; i < excluded.size(); ++i) {
+    const std::string at = "excluded[" + std::to_string(i) + "]";
+    m.excluded.push_back({Get<std::int64_t>(excluded[i], "clip_id", at),
+                          Get<std::string>(excluded[i], "external_id", at),
+                          StageFromJson(Get<Json>(excluded[i], "decided_by", at), at + ".decided_by"),
+                          Get<std::string>(excluded[i], "why", at)});
   }
   const Json files = Get<Json>(j, "files", "");
   for (size_t i = 0; i < files.size(); ++i) {

@@ -84,6 +84,16 @@ struct Episode {
   Json metadata = Json::object();  // the list row's other columns
 };
 
+// A clip the version considered and left out, with the stage that decided
+// it: what `dataset diff` gives as the reason an episode went away.
+struct Exclusion {
+  std::int64_t clip_id = 0;
+  std::string external_id;
+  StageProvenance decided_by;  // the first stage that did not pass, or the
+                               // trajectory stage when the selection refused it
+  std::string why;             // e.g. "interaction: reject (no_interaction)"
+};
+
 struct Manifest {
   std::string name;
   std::string version;  // "v3"
@@ -95,7 +105,9 @@ struct Manifest {
   Selection selection = Selection::kVerified;
   std::vector<std::pair<std::string, double>> split_fractions;  // in the order given
   std::int64_t seed = 0;
+  std::string trajectory_stage;  // retarget, else retarget_kinematic
   std::vector<Episode> episodes;
+  std::vector<Exclusion> excluded;  // clips considered and not taken, by id
   std::vector<FileEntry> files;  // every file of the version but manifest.json
 };
 

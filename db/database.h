@@ -221,6 +221,7 @@ class Database {
     // Source of the latest verdict history row ('stage', 'rethreshold',
     // 'human'); empty without one.
     std::string verdict_source;
+    std::string param_hash;  // empty until done
   };
   // Every stage run, ordered by clip id and pipeline position.
   std::vector<ReportRun> ReportRuns();

@@ -10,7 +10,7 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
       "SELECT r.clip_id, r.stage, r.position, r.state, IFNULL(r.verdict, ''),"
       " IFNULL(r.reason, ''), IFNULL(r.error, ''), r.attempts, r.duration_s,"
       " IFNULL((SELECT v.source FROM verdicts v WHERE v.clip_id = r.clip_id"
-      "         AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), '')"
+      "         AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), ''), IFNULL(r.param_hash, '')"
       " FROM stage_runs r ORDER BY r.clip_id, r.position");
   std::vector<ReportRun> out;
   while (q.Step()) {
@@ -25,6 +25,7 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
     r.attempts = static_cast<int>(q.Int(7));
     if (r.state == "done") r.duration_s = q.OptReal(8);
     r.verdict_source = q.Text(9);
+    r.param_hash = q.Text(10);
     out.push_back(std::move(r));
   }
   q.Reset();

@@ -12,7 +12,7 @@ PACKAGES=(
   libassimp-dev libbullet-extras-dev libbullet-dev libtinyxml2-dev
   liblcm-dev liblcm-bin libglib2.0-dev
   libembree-dev
-  libhdf5-dev
+  libhdf5-dev python3-h5py python3-numpy
   libzip-dev
   libcurl4-openssl-dev libssl-dev
   libopenexr-dev

@@ -1,0 +1,7 @@
+#include "core/tool_version.h"
+
+namespace doasido {
+
+const char* ToolVersion() { return DOASIDO_VERSION; }
+
+}  // namespace doasido

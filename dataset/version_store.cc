@@ -1,0 +1,207 @@
+#include "dataset/version_store.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <regex>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "core/tool_version.h"
+#include "dataset/episode_selection.h"
+#include "dataset/version_files.h"
+#include "recon/recon_stage.h"
+#include "reports/report.h"
+#include "retarget/kinematic_retarget.h"
+
+namespace doasido::dataset {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::regex kVersionName("v([1-9][0-9]*)");
+const std::regex kTempName("\\.v[0-9]+\\.tmp-([0-9]+)-[0-9a-f]+");
+
+void CheckName(const std::string& name) {
+  static const std::regex ok("[A-Za-z0-9_-][A-Za-z0-9_.-]*");
+  if (!std::regex_match(name, ok)) {
+    throw Error("bad_option", "'" + name + "' is not a dataset name (letters, digits, _ . -)",
+                {.field = "--name"});
+  }
+}
+
+// Removes temporary version folders whose writer process is gone.
+void RemoveAbandoned(const fs::path& dataset_dir) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dataset_dir, ec)) {
+    std::smatch m;
+    const std::string leaf = entry.path().filename().string();
+    if (!std::regex_match(leaf, m, kTempName)) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(m[1]));
+    if (kill(pid, 0) == 0 || errno != ESRCH) continue;
+    fs::remove_all(entry.path(), ec);
+  }
+}
+
+// Copies a stage's artifact folder into the episode, when the stage made one.
+void CopyTree(const fs::path& from, const fs::path& to, const std::string& clip) {
+  std::error_code ec;
+  if (!fs::is_directory(from, ec)) return;
+  fs::create_directories(to.parent_path(), ec);
+  fs::copy(from, to, fs::copy_options::recursive, ec);
+  if (ec) {
+    throw Error("io", "cannot copy into the version: " + ec.message(),
+                {.clip = clip, .file = from.string()});
+  }
+}
+
+// Copies one episode's files into `episode_dir` and fills in what the
+// trajectory says (frames, fps, embodiment).
+void WriteEpisode(Database& db, Episode& e, const fs::path& episode_dir) {
+  const std::string clip = e.external_id.empty() ? std::to_string(e.clip_id) : e.external_id;
+  const fs::path trajectory_dir = db.ArtifactDir(e.clip_id, e.trajectory_stage);
+  CopyTree(trajectory_dir, episode_dir / e.trajectory_stage, clip);
+  CopyTree(db.ArtifactDir(e.clip_id, recon::kReconStageName), episode_dir / recon::kReconStageName,
+           clip);
+  const fs::path trajectory = episode_dir / e.trajectory_stage / kTrajectoryFile;
+  std::error_code ec;
+  if (!fs::exists(trajectory, ec)) {
+    throw Error("missing_trajectory", "the trajectory stage's artifact is missing",
+                {.clip = clip, .file = (trajectory_dir / kTrajectoryFile).string()});
+  }
+  fs::copy_file(trajectory, episode_dir / kTrajectoryFile, ec);
+  if (ec) throw Error("io", "cannot copy: " + ec.message(), {.clip = clip, .file = trajectory.string()});
+  try {
+    const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(trajectory);
+    e.frames = static_cast<std::int64_t>(t.qpos.size());
+    e.fps = t.fps;
+    e.embodiment = t.embodiment;
+  } catch (const Error& err) {
+    throw Error(err.code(), err.message(),
+                {.clip = clip, .file = (trajectory_dir / kTrajectoryFile).string(),
+                 .field = err.site().field});
+  }
+}
+
+std::string TempSuffix() {
+  std::random_device rd;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%d-%08x", static_cast<int>(getpid()), rd());
+  return buf;
+}
+
+}  // namespace
+
+std::vector<VersionRef> ListVersions(const fs::path& root) {
+  std::vector<VersionRef> out;
+  std::error_code ec;
+  for (const auto& name_dir : fs::directory_iterator(root, ec)) {
+    const std::string name = name_dir.path().filename().string();
+    if (name.empty() || name[0] == '.' || !name_dir.is_directory()) continue;
+    for (const auto& v : fs::directory_iterator(name_dir.path(), ec)) {
+      std::smatch m;
+      const std::string leaf = v.path().filename().string();
+      if (!std::regex_match(leaf, m, kVersionName) || !fs::exists(v.path() / kManifestFile)) continue;
+      out.push_back({name, leaf, std::stoi(m[1]), v.path()});
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const VersionRef& a, const VersionRef& b) {
+    return a.name != b.name ? a.name < b.name : a.number < b.number;
+  });
+  return out;
+}
+
+fs::path FindVersion(const fs::path& root, const std::string& name, const std::string& version) {
+  std::error_code ec;
+  if (fs::exists(fs::path(version) / kManifestFile, ec)) return version;
+  const size_t slash = version.find('/');
+  const std::string want_name = slash == std::string::npos ? name : version.substr(0, slash);
+  const std::string want = slash == std::string::npos ? version : version.substr(slash + 1);
+  std::string known;
+  for (const VersionRef& v : ListVersions(root)) {
+    if (v.name == want_name && v.version == want) return v.dir;
+    known += (known.empty() ? "" : ", ") + v.name + "/" + v.version;
+  }
+  throw Error("no_version",
+              "no version '" + want_name + "/" + want + "' under " + root.string() +
+                  (known.empty() ? " (there are none yet: doasido dataset create)"
+                                 : " (there are: " + known + ")"),
+              {.field = "version"});
+}
+
+Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& options,
+                       const std::function<void(int, int)>& progress) {
+  CheckName(options.name);
+  EpisodeSelection selection = SelectEpisodes(db, options.selection);
+  if (selection.episodes.empty() && !options.allow_empty) {
+    throw Error("empty_version",
+                "no clip's trajectory meets --select " + std::string(ToString(options.selection)) +
+                    " (" + std::to_string(selection.excluded.size()) + " clips considered)",
+                {.field = "--select"});
+  }
+  const fs::path dataset_dir = root / options.name;
+  std::error_code ec;
+  fs::create_directories(dataset_dir, ec);
+  if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = dataset_dir.string()});
+  RemoveAbandoned(dataset_dir);
+
+  Manifest m;
+  m.name = options.name;
+  int number = 1;
+  for (const VersionRef& v : ListVersions(root)) {
+    if (v.name != options.name) continue;
+    number = v.number + 1;
+    m.parent = v.version;
+  }
+  m.version = "v" + std::to_string(number);
+  m.created_at = static_cast<double>(std::time(nullptr));
+  m.tool_version = ToolVersion();
+  m.tool_revision = SourceRevision();
+  m.database = fs::absolute(db.path()).string();
+  m.selection = options.selection;
+  m.split_fractions = options.splits;
+  m.seed = options.seed;
+  m.trajectory_stage = selection.trajectory_stage;
+  m.excluded = std::move(selection.excluded);
+  m.episodes = std::move(selection.episodes);
+  AssignSplits(m.episodes, options.splits, options.seed);
+
+  const fs::path temp = dataset_dir / ("." + m.version + ".tmp-" + TempSuffix());
+  fs::create_directories(temp / kEpisodesFolder, ec);
+  if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
+  try {
+    for (size_t i = 0; i < m.episodes.size(); ++i) {
+      m.episodes[i].index = static_cast<std::int64_t>(i);
+      WriteEpisode(db, m.episodes[i], temp / kEpisodesFolder / m.episodes[i].id);
+      if (progress) progress(static_cast<int>(i + 1), static_cast<int>(m.episodes.size()));
+    }
+    reports::ReportOptions report;
+    report.thumbnails = options.thumbnails;
+    reports::WriteReport(db, temp / kPlaybookFolder, report);
+    m.files = HashFiles(temp);
+    WriteManifest(m, temp);
+  } catch (...) {
+    fs::remove_all(temp, ec);
+    throw;
+  }
+  const fs::path final_dir = dataset_dir / m.version;
+  if (renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, final_dir.c_str(), RENAME_NOREPLACE) != 0) {
+    const int err = errno;
+    fs::remove_all(temp, ec);
+    if (err == EEXIST || err == ENOTEMPTY) {
+      throw Error("version_exists", "another run created " + m.version + " first; run again",
+                  {.file = final_dir.string()});
+    }
+    throw Error("io", std::string("cannot rename the version into place: ") + std::strerror(err),
+                {.file = final_dir.string()});
+  }
+  return m;
+}
+
+}  // namespace doasido::dataset

@@ -1,0 +1,56 @@
+// The dataset root: named datasets, each a sequence of immutable versions
+// <root>/<name>/v1, v2, ... A version is built in a hidden temporary folder
+// beside them and renamed into place in one step, so a reader (or a killed
+// writer) never sees part of one; an existing version is never written to.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dataset/splits.h"
+#include "dataset/version.h"
+#include "db/database.h"
+
+namespace doasido::dataset {
+
+inline constexpr const char* kDefaultDatasetName = "default";
+
+struct CreateOptions {
+  std::string name = kDefaultDatasetName;  // [A-Za-z0-9_.-]+, not starting with '.'
+  Selection selection = Selection::kVerified;
+  SplitFractions splits = {{"train", 0.8}, {"val", 0.1}, {"test", 0.1}};
+  std::int64_t seed = 0;
+  bool thumbnails = true;  // in the playbook report
+  bool allow_empty = false;  // else Error("empty_version") when nothing is selected
+};
+
+// Every version under `root`, by name then number.
+struct VersionRef {
+  std::string name;
+  std::string version;  // "v3"
+  int number = 0;
+  std::filesystem::path dir;
+};
+std::vector<VersionRef> ListVersions(const std::filesystem::path& root);
+
+// Resolves "v3", "name/v3" or a folder path to a version folder holding a
+// manifest; `name` is used for a bare "vK". Throws Error("no_version")
+// listing the versions that exist.
+std::filesystem::path FindVersion(const std::filesystem::path& root, const std::string& name,
+                                  const std::string& version);
+
+// Makes the next version of `options.name` from `db`: selects the episodes,
+// assigns splits, copies each episode's trajectory, its trajectory stage's
+// and its reconstruction's artifact folders, writes the playbook report of
+// every clip considered and the manifest with each file's SHA-256, then
+// renames the folder into place. `progress(done, total)` is called per
+// episode. Temporary folders that killed runs left behind are removed
+// first. Throws Error("empty_version") when no clip is selected (unless
+// allowed), Error("version_exists") when another process created the same
+// version first, Error("io") naming a file it cannot copy or write.
+Manifest CreateVersion(Database& db, const std::filesystem::path& root, const CreateOptions& options,
+                       const std::function<void(int, int)>& progress = {});
+
+}  // namespace doasido::dataset

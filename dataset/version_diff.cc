@@ -39,13 +39,20 @@ const StageProvenance* Find(const std::vector<StageProvenance>& stages, const st
   return nullptr;
 }
 
-// Reasons an episode's stages differ.
+// Reasons an episode's stages differ: a changed verdict, or new parameters
+// alone when `files_changed` (a stage that re-ran and made other files).
 void CompareStages(const std::vector<StageProvenance>& old, const std::vector<StageProvenance>& now,
-                   std::vector<std::string>& reasons) {
+                   bool files_changed, std::vector<std::string>& reasons) {
   for (const StageProvenance& s : now) {
     const StageProvenance* before = Find(old, s.stage);
-    const std::string why = before ? Compare(*before, s) : s.stage + ": new stage, " + Verdict(s);
-    if (!why.empty()) reasons.push_back(why);
+    if (!before) {
+      reasons.push_back(s.stage + ": new stage, " + Verdict(s));
+    } else if (before->verdict != s.verdict || before->reason != s.reason) {
+      reasons.push_back(Compare(*before, s));
+    } else if (files_changed && before->param_hash != s.param_hash) {
+      reasons.push_back(s.stage + ": new parameters (" + Short(before->param_hash) + " -> " +
+                        Short(s.param_hash) + ")");
+    }
   }
 }
 
@@ -107,7 +114,8 @@ std::vector<EpisodeChange> DiffVersions(const Manifest& a, const Manifest& b) {
       continue;
     }
     EpisodeChange c{EpisodeChange::Kind::kChanged, clip, e->external_id, {}};
-    CompareStages(old->second->stages, e->stages, c.reasons);
+    const bool files_changed = FilesOf(a, old->second->id) != FilesOf(b, e->id);
+    CompareStages(old->second->stages, e->stages, files_changed, c.reasons);
     const auto& va = old->second->verification;
     const auto& vb = e->verification;
     if (va.has_value() != vb.has_value() || (va && (va->reviewer != vb->reviewer || va->at != vb->at))) {
@@ -116,7 +124,7 @@ std::vector<EpisodeChange> DiffVersions(const Manifest& a, const Manifest& b) {
     if (old->second->split != e->split) {
       c.reasons.push_back("split " + old->second->split + " -> " + e->split);
     }
-    if (FilesOf(a, old->second->id) != FilesOf(b, e->id)) c.reasons.push_back("files changed");
+    if (files_changed) c.reasons.push_back("files changed");
     if (!c.reasons.empty()) changes[clip] = std::move(c);
   }
   std::vector<EpisodeChange> out;

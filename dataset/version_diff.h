@@ -20,8 +20,10 @@ struct EpisodeChange {
 const char* ToString(EpisodeChange::Kind kind);
 
 // Episodes are matched by clip id. A changed episode differs in a stage's
-// parameters, verdict or verdict source, its human verification, its split
-// or the content of its files; episodes equal in all of these are left out.
+// verdict, its human verification, its split or the content of its files
+// (then stages with new parameters are named too); an episode whose stages
+// only got new parameters (a re-threshold that kept its verdict) is not
+// listed. A removed or added episode names the stage that decided it.
 std::vector<EpisodeChange> DiffVersions(const Manifest& a, const Manifest& b);
 
 }  // namespace doasido::dataset

@@ -1,0 +1,335 @@
+// `doasido dataset` end to end through the built binary: synthetic clips
+// with their ground-truth bundles -> `doasido run` through the filters,
+// bundle, recon and retarget_kinematic -> `dataset create` v1 -> a person
+// verifies one trajectory and `doasido rethreshold` applies a stricter
+// out-of-frame limit -> v2. `dataset diff` must list exactly the episodes
+// whose verdicts changed, `verify` must catch one changed byte, the
+// robomimic export is read back by Debian's h5py, and `dataset create`
+// killed with SIGKILL at random points never leaves a partial version.
+#include <chrono>
+#include <csignal>
+#include <fstream>
+#include <map>
+#include <random>
+#include <set>
+#include <thread>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "dataset/version.h"
+#include "dataset/version_files.h"
+#include "dataset/version_store.h"
+#include "db/database.h"
+#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic_stage.h"
+#include "tests/test_util.h"
+
+namespace doasido {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using doasido::testing::RunDoasido;
+using doasido::testing::TempDir;
+using doasido::testing::WriteFile;
+
+constexpr const char* kPipeline =
+    "download,probe,filters_analyze,shot_boundary,interaction,out_of_frame,activity,"
+    "camera_motion,bundle,recon,retarget_kinematic";
+
+// One pool run through the whole pipeline, shared by the tests (read-only
+// for all but the first, which works on its own copy).
+class CliDataset : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    const fs::path synth = *dir_ / "s";
+    ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "6", "--seed", "3",
+                          "--frames", "40", "--width", "320", "--height", "240", "--mix",
+                          "clean=0.5,no_contact=0.25,static=0.25"})
+                  .exit_code,
+              0);
+    // The stand-in model: copies the synthetic bundle of the clip's video.
+    WriteFile(*dir_ / "run.toml",
+              "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename "
+              "{video} .mp4)/. {output}/\"\n");
+    ASSERT_EQ(RunDoasido({"init", "--db", Db(), "--pipeline", kPipeline}).exit_code, 0);
+    const auto run = RunDoasido({"run", "--db", Db(), "--jobs", "2", "--config",
+                                 (*dir_ / "run.toml").string(), synth.string()});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static std::string Db() { return (*dir_ / "d.db").string(); }
+  static TempDir* dir_;
+};
+TempDir* CliDataset::dir_ = nullptr;
+
+std::set<std::int64_t> Clips(const dataset::Manifest& m) {
+  std::set<std::int64_t> out;
+  for (const auto& e : m.episodes) out.insert(e.clip_id);
+  return out;
+}
+
+TEST_F(CliDataset, VersionsDiffVerifyAndRobomimic) {
+  TempDir work;
+  const std::string db = (work / "d.db").string();
+  fs::copy_file(Db(), db);
+  fs::copy(*dir_ / "artifacts", work / "artifacts", fs::copy_options::recursive);
+  const std::string root = (work / "datasets").string();
+
+  auto v1_run = RunDoasido({"dataset", "create", "--db", db, "--root", root, "--select", "all",
+                            "--no-thumbnails", "--name", "pour"});
+  ASSERT_EQ(v1_run.exit_code, 0) << v1_run.err;
+  const dataset::Manifest v1 = dataset::ReadManifest(work / "datasets/pour/v1");
+  ASSERT_GE(v1.episodes.size(), 2u) << v1_run.out;
+  EXPECT_EQ(v1.episodes.size() + v1.excluded.size(), 6u);
+  EXPECT_EQ(RunDoasido({"dataset", "verify", "--root", root, "--name", "pour", "v1"}).exit_code, 0);
+  for (const auto& e : v1.episodes) {
+    EXPECT_TRUE(fs::exists(work / "datasets/pour/v1/episodes" / e.id / "trajectory.json"));
+    EXPECT_TRUE(fs::exists(work / "datasets/pour/v1/episodes" / e.id / "recon"));
+    EXPECT_EQ(e.frames, 40);
+    EXPECT_EQ(e.stages.size(), 11u);
+  }
+  EXPECT_TRUE(fs::exists(work / "datasets/pour/v1/playbook/report.html"));
+
+  // A stricter out-of-frame limit between the kept clips' cut fractions.
+  std::map<std::int64_t, double> cut;
+  {
+    Database d(db);
+    for (const auto& e : v1.episodes) {
+      cut[e.clip_id] = (*d.GetMeasurements(e.clip_id, "out_of_frame"))["summary"]["cut_fraction"];
+    }
+  }
+  double lo = 1, hi = 0;
+  for (const auto& [clip, c] : cut) lo = std::min(lo, c), hi = std::max(hi, c);
+  ASSERT_LT(lo, hi) << "the synthetic pool must hold kept clips with different cut fractions";
+  const double limit = (lo + hi) / 2;
+  WriteFile(work / "strict.toml", "[out_of_frame]\nreject_cut_fraction = " + std::to_string(limit) +
+                                      "\nflag_cut_fraction = " + std::to_string(limit) + "\n");
+  std::int64_t verified = 0;
+  for (const auto& [clip, c] : cut) {
+    if (c < limit) verified = clip;
+  }
+  {
+    Database d(db);
+    d.RecordVerification(verified, retarget::kKinematicStageName, "alice", true, "follows the mug");
+  }
+  const auto re = RunDoasido({"rethreshold", "--db", db, "--config", (work / "strict.toml").string()});
+  ASSERT_EQ(re.exit_code, 0) << re.err;
+  std::set<std::int64_t> expect_removed;
+  {
+    Database d(db);
+    for (const auto& [clip, c] : cut) {
+      for (const auto& r : d.ListRuns({.stage = "out_of_frame", .clip = clip})) {
+        if (r.verdict != "pass") expect_removed.insert(clip);
+      }
+    }
+  }
+  ASSERT_FALSE(expect_removed.empty());
+
+  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", db, "--root", root, "--select", "all",
+                        "--no-thumbnails", "--name", "pour"})
+                .exit_code,
+            0);
+  const dataset::Manifest v2 = dataset::ReadManifest(work / "datasets/pour/v2");
+  EXPECT_EQ(v2.parent, "v1");
+  EXPECT_EQ(v2.episodes.size(), v1.episodes.size() - expect_removed.size());
+
+  const auto diff = RunDoasido({"dataset", "diff", "--root", root, "--name", "pour", "v1", "v2", "--json"});
+  ASSERT_EQ(diff.exit_code, 0) << diff.err;
+  std::set<std::int64_t> removed, changed;
+  for (const Json& c : Json::parse(diff.out)) {
+    const std::string kind = c["change"];
+    const std::string reasons = c["reasons"].dump();
+    if (kind == "removed") {
+      removed.insert(c["clip_id"].get<std::int64_t>());
+      EXPECT_THAT(reasons, HasSubstr("out_of_frame: re-threshold")) << reasons;
+      EXPECT_THAT(reasons, HasSubstr("pass -> reject")) << reasons;
+    } else {
+      EXPECT_EQ(kind, "changed") << c.dump();
+      changed.insert(c["clip_id"].get<std::int64_t>());
+      EXPECT_THAT(reasons, HasSubstr("verified by alice")) << reasons;
+    }
+  }
+  EXPECT_EQ(removed, expect_removed);
+  EXPECT_EQ(changed, std::set<std::int64_t>{verified});
+  const auto text = RunDoasido({"dataset", "diff", "--root", root, "--name", "pour", "v1", "v2"});
+  EXPECT_THAT(text.out, HasSubstr("v1 -> v2: 0 added, " + std::to_string(expect_removed.size()) +
+                                  " removed, 1 changed"));
+
+  // --select verified takes exactly the trajectory the person accepted.
+  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", db, "--root", root, "--select", "verified",
+                        "--no-thumbnails", "--name", "pour"})
+                .exit_code,
+            0);
+  const dataset::Manifest v3 = dataset::ReadManifest(work / "datasets/pour/v3");
+  EXPECT_EQ(Clips(v3), std::set<std::int64_t>{verified});
+  ASSERT_TRUE(v3.episodes[0].verification);
+  EXPECT_EQ(v3.episodes[0].verification->reviewer, "alice");
+
+  // robomimic, read back by h5py.
+  const fs::path h5 = work / "pour.hdf5";
+  const auto ex = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
+                              "--format", "robomimic", "--out", h5.string()});
+  ASSERT_EQ(ex.exit_code, 0) << ex.err;
+  WriteFile(work / "read.py", R"PY(import h5py, json, sys
+f = h5py.File(sys.argv[1], 'r')
+d = f['data']
+out = {'total': int(d.attrs['total']), 'env_args': json.loads(d.attrs['env_args']),
+       'mask': {k: [x.decode() for x in f['mask'][k][()]] for k in f['mask']}, 'demos': {}}
+for name in d:
+    g = d[name]
+    out['demos'][name] = {'num_samples': int(g.attrs['num_samples']),
+        'episode_id': g.attrs['episode_id'].decode(),
+        'keys': sorted(g.keys()), 'obs': sorted(g['obs'].keys()),
+        'actions': g['actions'][()].tolist(), 'states': g['states'][()].tolist(),
+        'rewards': g['rewards'][()].tolist(), 'dones': g['dones'][()].tolist(),
+        'joint_pos': g['obs/robot0_joint_pos'][()].tolist(),
+        'next_joint_pos': g['next_obs/robot0_joint_pos'][()].tolist(),
+        'object': g['obs/object'][()].tolist()}
+print(json.dumps(out))
+)PY");
+  const fs::path json_out = work / "h5.json";
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + (work / "read.py").string() + " " + h5.string() +
+                         " > " + json_out.string())
+                            .c_str()),
+            0);
+  std::ifstream in(json_out);
+  const Json got = Json::parse(in);
+  ASSERT_EQ(got["demos"].size(), v2.episodes.size());
+  std::int64_t total = 0;
+  std::map<std::string, std::set<std::string>> mask;
+  for (const auto& [split, demos] : got["mask"].items()) {
+    for (const auto& d : demos) mask[split].insert(d.get<std::string>());
+  }
+  for (const auto& e : v2.episodes) {
+    const std::string name = "demo_" + std::to_string(e.index);
+    const Json& demo = got["demos"][name];
+    const retarget::HandTrajectory t =
+        retarget::ReadTrajectoryJson(work / "datasets/pour/v2/episodes" / e.id / "trajectory.json");
+    const size_t n = t.qpos.size(), nq = t.qpos[0].size();
+    ASSERT_EQ(demo["num_samples"], n);
+    EXPECT_EQ(demo["episode_id"], e.id);
+    EXPECT_EQ(demo["keys"], (Json{"actions", "dones", "next_obs", "obs", "rewards", "states"}));
+    EXPECT_EQ(demo["obs"], (Json{"hand_keypoints", "object", "robot0_joint_pos"}));
+    for (size_t f = 0; f < n; ++f) {
+      for (size_t j = 0; j < nq; ++j) {
+        ASSERT_EQ(demo["joint_pos"][f][j].get<double>(), t.qpos[f][j]);
+        ASSERT_EQ(demo["states"][f][j].get<double>(), t.qpos[f][j]);
+        ASSERT_EQ(demo["actions"][f][j].get<double>(), t.qpos[std::min(f + 1, n - 1)][j]);
+        ASSERT_EQ(demo["next_joint_pos"][f][j].get<double>(), t.qpos[std::min(f + 1, n - 1)][j]);
+      }
+      EXPECT_EQ(demo["object"][f][0].get<double>(), t.object_poses[f].t.x());
+      EXPECT_EQ(demo["object"][f][3].get<double>(), t.object_poses[f].q.w());
+      EXPECT_EQ(demo["states"][f][nq + 2].get<double>(), t.object_poses[f].t.z());
+      EXPECT_EQ(demo["dones"][f], f + 1 == n ? 1 : 0);
+      EXPECT_EQ(demo["rewards"][f], f + 1 == n ? 1.0 : 0.0);
+    }
+    EXPECT_EQ(mask[e.split].count(name), 1u) << name;
+    total += static_cast<std::int64_t>(n);
+  }
+  EXPECT_EQ(got["total"], total);
+  EXPECT_EQ(got["env_args"]["env_kwargs"]["embodiment"], v2.episodes[0].embodiment);
+
+  // One byte of an episode changed: verify fails naming the file.
+  const fs::path victim = work / "datasets/pour/v2/episodes" / v2.episodes[0].id / "trajectory.json";
+  {
+    std::fstream f(victim, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(40);
+    const char c = static_cast<char>(f.get());
+    f.seekp(40);
+    f.put(c == '1' ? '2' : '1');
+  }
+  const auto bad = RunDoasido({"dataset", "verify", "--root", root, "--name", "pour", "v2"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.err, HasSubstr("corrupt_version"));
+  EXPECT_THAT(bad.err, HasSubstr(victim.string()));
+  EXPECT_EQ(RunDoasido({"dataset", "verify", "--root", root, "--name", "pour", "v1"}).exit_code, 0);
+}
+
+TEST_F(CliDataset, SplitsKeepEachVideoWholeAndListShowsVersions) {
+  TempDir work;
+  const std::string root = (work / "d").string();
+  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", Db(), "--root", root, "--select", "all",
+                        "--no-thumbnails", "--split", "train=0.5,test=0.5", "--seed", "9"})
+                .exit_code,
+            0);
+  const dataset::Manifest m = dataset::ReadManifest(work / "d/default/v1");
+  std::map<std::string, std::set<std::string>> splits;
+  for (const auto& e : m.episodes) splits[e.video_key].insert(e.split);
+  for (const auto& [video, s] : splits) EXPECT_EQ(s.size(), 1u) << video;
+  const auto list = RunDoasido({"dataset", "list", "--root", root});
+  EXPECT_THAT(list.out, HasSubstr("default          v1"));
+  const auto show = RunDoasido({"dataset", "show", "--root", root, "v1"});
+  EXPECT_THAT(show.out, HasSubstr(m.episodes[0].id));
+  const auto missing = RunDoasido({"dataset", "show", "--root", root, "v7"});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.err, HasSubstr("no_version"));
+  EXPECT_THAT(missing.err, HasSubstr("default/v1"));
+  const auto empty = RunDoasido({"dataset", "create", "--db", Db(), "--root", root});
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_THAT(empty.err, HasSubstr("empty_version"));
+}
+
+// Runs `dataset create` and kills it with SIGKILL after `delay`; returns
+// whether it had finished first.
+bool CreateAndKill(const std::vector<std::string>& args, std::chrono::microseconds delay) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    freopen("/dev/null", "w", stdout);
+    freopen("/dev/null", "w", stderr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  std::this_thread::sleep_for(delay);
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status);
+}
+
+TEST_F(CliDataset, KilledCreateLeavesNoPartialVersion) {
+  TempDir work;
+  const fs::path root = work / "d";
+  const std::vector<std::string> args = {testing::DoasidoBin().string(), "dataset", "create",
+                                         "--db", Db(), "--root", root.string(), "--select",
+                                         "all"};
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(RunDoasido({args.begin() + 1, args.end()}).exit_code, 0);
+  const auto full = std::chrono::duration_cast<std::chrono::microseconds>(
+      std::chrono::steady_clock::now() - t0);
+  std::mt19937 rng(11);
+  int killed = 0;
+  for (int i = 0; i < 12; ++i) {
+    const auto delay = std::chrono::microseconds(
+        std::uniform_int_distribution<std::int64_t>(0, full.count())(rng));
+    killed += !CreateAndKill(args, delay);
+    // Whatever is listed is whole: every version verifies.
+    for (const auto& v : dataset::ListVersions(root)) {
+      EXPECT_TRUE(dataset::VerifyVersion(v.dir).empty()) << v.dir << " after kill " << i;
+    }
+  }
+  std::printf("killed %d of 12 runs before they finished\n", killed);
+  EXPECT_GE(killed, 10);
+  const auto versions_before = dataset::ListVersions(root).size();
+  ASSERT_EQ(RunDoasido({args.begin() + 1, args.end()}).exit_code, 0);
+  const auto versions = dataset::ListVersions(root);
+  ASSERT_EQ(versions.size(), versions_before + 1);
+  EXPECT_TRUE(dataset::VerifyVersion(versions.back().dir).empty());
+  for (const auto& entry : fs::directory_iterator(root / "default")) {
+    EXPECT_NE(entry.path().filename().string()[0], '.') << "left behind: " << entry.path();
+  }
+}
+
+}  // namespace
+}  // namespace doasido

@@ -75,7 +75,12 @@ void WriteEpisode(Database& db, Episode& e, const fs::path& episode_dir) {
     throw Error("missing_trajectory", "the trajectory stage's artifact is missing",
                 {.clip = clip, .file = (trajectory_dir / kTrajectoryFile).string()});
   }
-  fs::copy_file(trajectory, episode_dir / kTrajectoryFile, ec);
+  // The same bytes twice: a hard link where the file system allows one.
+  fs::create_hard_link(trajectory, episode_dir / kTrajectoryFile, ec);
+  if (ec) {
+    ec.clear();
+    fs::copy_file(trajectory, episode_dir / kTrajectoryFile, ec);
+  }
   if (ec) throw Error("io", "cannot copy: " + ec.message(), {.clip = clip, .file = trajectory.string()});
   try {
     const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(trajectory);

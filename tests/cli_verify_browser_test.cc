@@ -12,6 +12,7 @@
 
 #include "pipeline/stage_registry.h"
 #include "db/database.h"
+#include "dataset/version.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
@@ -214,6 +215,19 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
   EXPECT_EQ(rejected.back().verdict, "reject");
   EXPECT_EQ(rejected.back().source, "human");
   EXPECT_TRUE(db.ListTrajectoriesToVerify({"retarget", retarget::kKinematicStageName}).empty());
+
+  // `dataset create` (--select verified by default) takes exactly the accepted one.
+  const auto created = RunDoasido({"dataset", "create", "--db", db_path.string(), "--root",
+                                   (dir / "datasets").string(), "--no-thumbnails"});
+  ASSERT_EQ(created.exit_code, 0) << created.err;
+  const dataset::Manifest version = dataset::ReadManifest(dir / "datasets/default/v1");
+  ASSERT_EQ(version.episodes.size(), 1u);
+  EXPECT_EQ(version.episodes[0].clip_id, clips[0]);
+  ASSERT_TRUE(version.episodes[0].verification);
+  EXPECT_EQ(version.episodes[0].verification->reviewer, "vera");
+  ASSERT_EQ(version.excluded.size(), 1u);
+  EXPECT_EQ(version.excluded[0].clip_id, clips[1]);
+  EXPECT_EQ(version.excluded[0].decided_by.source, "human");
 
   // The same security as the other routes: a decision without the token is refused.
   httplib::Client client("127.0.0.1", server.port());

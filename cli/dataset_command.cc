@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "core/progress.h"
+#include "dataset/lerobot_export.h"
 #include "dataset/robomimic_export.h"
 #include "dataset/version_diff.h"
 #include "dataset/version_files.h"
@@ -31,6 +32,7 @@ struct Options {
   std::string format;
   std::string out;
   bool json = false;
+  bool no_videos = false;
 };
 
 void AddRootOptions(CLI::App& cmd, Options& o) {
@@ -178,6 +180,8 @@ void Export(const Options& o) {
   ExportSummary s;
   if (o.format == "robomimic") {
     s = ExportRobomimic(dir, o.out);
+  } else if (o.format == "lerobot") {
+    s = ExportLeRobot(dir, o.out, {.videos = !o.no_videos});
   } else {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
   }
@@ -203,6 +207,7 @@ void AddDatasetCommand(CLI::App& app) {
       "  doasido dataset list   --root work/datasets\n"
       "  doasido dataset diff   --root work/datasets v1 v2\n"
       "  doasido dataset verify --root work/datasets v2\n"
+      "  doasido dataset export --root work/datasets v2 --format lerobot --out work/lerobot\n"
       "  doasido dataset export --root work/datasets v2 --format robomimic --out demo.hdf5");
 
   auto* create = cmd->add_subcommand("create", "Make the next version from the database");
@@ -250,10 +255,14 @@ void AddDatasetCommand(CLI::App& app) {
   auto* exp = cmd->add_subcommand("export", "Write a version in a training format");
   AddRootOptions(*exp, *o);
   exp->add_option("version", o->version, "vK, name/vK or a version folder")->required();
-  exp->add_option("--format", o->format, "robomimic: one HDF5 file")
+  exp->add_option("--format", o->format,
+                  "lerobot: a LeRobot v3.0 folder (Parquet and MP4); robomimic: one HDF5 file")
       ->required()
-      ->check(CLI::IsMember({"robomimic"}));
-  exp->add_option("--out", o->out, "Output file (robomimic)")->required();
+      ->check(CLI::IsMember({"lerobot", "robomimic"}));
+  exp->add_option("--out", o->out, "Output folder (lerobot, empty or new) or file (robomimic)")
+      ->required();
+  exp->add_flag("--no-videos", o->no_videos,
+                "lerobot: leave out the source video feature (no decoding or encoding)");
   exp->callback([o] { Export(*o); });
 }
 

@@ -47,5 +47,23 @@ target_include_directories(doasido_hdf5 SYSTEM INTERFACE ${HDF5_INCLUDE_DIRS})
 target_link_libraries(doasido_hdf5 INTERFACE ${HDF5_LIBRARIES})
 add_library(deps::hdf5 ALIAS doasido_hdf5)
 
+# DuckDB's C library for Parquet (dataset/parquet_writer.h). Debian has no
+# Parquet library; scripts/setup.sh installs the pinned npm package that
+# ships libduckdb.so into the npm cache folder.
+set(DOASIDO_NPM_DIR "$ENV{DOASIDO_NPM_DIR}")
+if(NOT DOASIDO_NPM_DIR)
+  set(DOASIDO_NPM_DIR "$ENV{HOME}/.cache/doasido/npm")
+endif()
+find_library(DUCKDB_LIBRARY duckdb
+  HINTS ${DOASIDO_NPM_DIR}/node_modules/@duckdb/node-bindings-linux-x64 NO_DEFAULT_PATH)
+if(NOT DUCKDB_LIBRARY)
+  message(FATAL_ERROR "libduckdb.so not found under ${DOASIDO_NPM_DIR}: run scripts/setup.sh "
+                      "(it installs @duckdb/node-bindings-linux-x64 with npm)")
+endif()
+get_filename_component(duckdb_dir ${DUCKDB_LIBRARY} DIRECTORY)
+add_library(doasido_duckdb INTERFACE)
+target_link_libraries(doasido_duckdb INTERFACE ${DUCKDB_LIBRARY} "-Wl,-rpath,${duckdb_dir}")
+add_library(deps::duckdb ALIAS doasido_duckdb)
+
 find_package(GTest REQUIRED)
 find_package(benchmark REQUIRED)

@@ -25,19 +25,26 @@ PACKAGES=(
   slurm-wlm munge
 )
 
-# npm packages (pinned) for the review app's 3D view, into a cache folder
-# outside the repository that the server reads (review/vendor.h); nothing
-# is fetched at build or run time.
+# npm packages (pinned), into a cache folder outside the repository: three.js
+# for the review app's 3D view (served by review/verify_routes.cc), DuckDB's
+# C library for the Parquet files of the LeRobot export (linked by
+# cmake/Dependencies.cmake), and hyparquet, the independent Parquet reader
+# the tests read those files back with. Nothing is fetched at build or run time.
+NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1 hyparquet@1.31.5)
 install_npm() {
   local dir=${DOASIDO_NPM_DIR:-$HOME/.cache/doasido/npm}
-  if [ -f "$dir/node_modules/three/package.json" ] &&
-     grep -q '"version": "0.160.0"' "$dir/node_modules/three/package.json"; then
-    return
-  fi
+  local todo=()
+  for spec in "${NPM_PACKAGES[@]}"; do
+    local name=${spec%@*} version=${spec##*@}
+    if ! grep -qs "\"version\": \"$version\"" "$dir/node_modules/$name/package.json"; then
+      todo+=("$spec")
+    fi
+  done
+  [ ${#todo[@]} -eq 0 ] && return
   command -v npm >/dev/null || { echo "setup: npm missing (install Node.js and npm)" >&2; return 1; }
   mkdir -p "$dir"
-  (cd "$dir" && npm install --no-audit --no-fund --save-exact three@0.160.0 >/dev/null)
-  echo "setup: three.js 0.160.0 in $dir"
+  (cd "$dir" && npm install --no-audit --no-fund --save-exact "${NPM_PACKAGES[@]}" >/dev/null)
+  echo "setup: npm packages ${NPM_PACKAGES[*]} in $dir"
 }
 
 missing=()

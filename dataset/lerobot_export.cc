@@ -1,0 +1,355 @@
+#include "dataset/lerobot_export.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+
+#include "core/error.h"
+#include "dataset/feature_stats.h"
+#include "dataset/mp4_writer.h"
+#include "dataset/parquet_writer.h"
+#include "dataset/version.h"
+#include "retarget/kinematic_retarget.h"
+#include "video/video_decoder.h"
+
+namespace doasido::dataset {
+namespace {
+
+namespace fs = std::filesystem;
+using Rows = std::vector<std::vector<double>>;
+
+constexpr const char* kChunk = "chunk-000";
+constexpr const char* kFile = "file-000";
+
+struct LoadedEpisode {
+  const Episode* episode = nullptr;
+  retarget::HandTrajectory trajectory;
+  std::int64_t task_index = 0;
+  std::int64_t from = 0;  // global index of its first frame
+  Rows state, action, object_pose;
+};
+
+Json Feature(const char* dtype, std::vector<int> shape, const Json& names) {
+  return {{"dtype", dtype}, {"shape", shape}, {"names", names}};
+}
+
+// Episodes in split order (the manifest's split list), then manifest order.
+std::vector<const Episode*> ExportOrder(const Manifest& m) {
+  std::vector<const Episode*> out;
+  for (const auto& [split, fraction] : m.split_fractions) {
+    for (const Episode& e : m.episodes) {
+      if (e.split == split) out.push_back(&e);
+    }
+  }
+  for (const Episode& e : m.episodes) {  // splits the list does not name
+    if (std::find(out.begin(), out.end(), &e) == out.end()) out.push_back(&e);
+  }
+  return out;
+}
+
+void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* first) {
+  const Episode& e = *l.episode;
+  const fs::path path = version_dir / kEpisodesFolder / e.id / kTrajectoryFile;
+  l.trajectory = retarget::ReadTrajectoryJson(path);
+  const retarget::HandTrajectory& t = l.trajectory;
+  auto mixed = [&](const std::string& field, const std::string& why) {
+    throw Error("mixed_trajectories", why + " (LeRobot wants one robot and rate per dataset)",
+                {.clip = e.external_id, .file = path.string(), .field = field});
+  };
+  if (t.qpos.empty()) mixed("qpos", "the trajectory has no frames");
+  if (first) {
+    const retarget::HandTrajectory& f = first->trajectory;
+    if (t.fps != f.fps) mixed("fps", "fps " + std::to_string(t.fps) + " differs from the first episode's");
+    if (t.qpos_names != f.qpos_names) mixed("qpos_names", "joints differ from the first episode's");
+  }
+  for (const auto& q : t.qpos) l.state.emplace_back(q.data(), q.data() + q.size());
+  for (const auto& p : t.object_poses) {
+    l.object_pose.push_back({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
+  }
+}
+
+void WriteJson(const fs::path& path, const Json& j) {
+  fs::create_directories(path.parent_path());
+  std::ofstream f(path, std::ios::binary);
+  f << j.dump(2) << "\n";
+  f.close();
+  if (!f) throw Error("io", "cannot write", {.file = path.string()});
+}
+
+// Decodes each episode's span at full size and appends it to one MP4;
+// returns the video feature's info.
+Json WriteVideo(const std::vector<LoadedEpisode>& episodes, double fps, const fs::path& path) {
+  std::unique_ptr<Mp4Writer> writer;
+  fs::create_directories(path.parent_path());
+  for (const LoadedEpisode& l : episodes) {
+    const Episode& e = *l.episode;
+    DecoderOptions options;
+    options.analysis_size = 0;
+    options.skip_loop_filter = false;
+    options.first_frame = e.start_frame.value_or(0);
+    options.last_frame = options.first_frame + static_cast<std::int64_t>(l.trajectory.qpos.size()) - 1;
+    options.clip = e.external_id;
+    VideoDecoder decoder(e.video, options);
+    AnalysisFrame frame;
+    cv::Mat last;
+    for (size_t f = 0; f < l.trajectory.qpos.size(); ++f) {
+      if (decoder.Next(&frame)) last = frame.bgr;
+      if (last.empty()) {
+        throw Error("truncated_video", "no frame in the episode's span",
+                    {.clip = e.external_id, .file = e.video});
+      }
+      if (!writer) writer = std::make_unique<Mp4Writer>(path, last.cols, last.rows, fps);
+      writer->Write(last);  // a span shorter than the trajectory repeats its last frame
+    }
+  }
+  writer->Finish();
+  const Mp4Info& v = writer->info();
+  return {{"dtype", "video"},
+          {"shape", {v.height, v.width, 3}},
+          {"names", {"height", "width", "channels"}},
+          {"info",
+           {{"video.height", v.height},
+            {"video.width", v.width},
+            {"video.codec", v.codec},
+            {"video.pix_fmt", v.pix_fmt},
+            {"video.is_depth_map", false},
+            {"video.fps", fps},
+            {"video.channels", 3},
+            {"has_audio", false}}}};
+}
+
+std::string ListType(const char* element, size_t n) {
+  return std::string(element) + "[" + std::to_string(n) + "]";
+}
+
+}  // namespace
+
+ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir,
+                            const LeRobotOptions& options) {
+  const Manifest m = ReadManifest(version_dir);
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec)) {
+    throw Error("output_exists", "the export folder is not empty", {.file = out_dir.string()});
+  }
+  if (m.episodes.empty()) throw Error("empty_version", "the version has no episodes", {.file = version_dir.string()});
+
+  std::vector<LoadedEpisode> episodes;
+  std::map<std::string, std::int64_t> task_index;
+  std::vector<std::string> tasks;
+  for (const Episode* e : ExportOrder(m)) {
+    LoadedEpisode l;
+    l.episode = e;
+    Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front());
+    if (!task_index.count(e->task)) {
+      task_index[e->task] = static_cast<std::int64_t>(tasks.size());
+      tasks.push_back(e->task);
+    }
+    l.task_index = task_index[e->task];
+    episodes.push_back(std::move(l));
+  }
+  const retarget::HandTrajectory& first = episodes.front().trajectory;
+  const double fps = first.fps;
+  const bool use_ctrl = std::all_of(episodes.begin(), episodes.end(), [&](const LoadedEpisode& l) {
+    return !l.trajectory.ctrl.empty() && l.trajectory.ctrl_names == first.ctrl_names;
+  });
+  const bool with_object = std::all_of(episodes.begin(), episodes.end(),
+                                       [](const LoadedEpisode& l) { return !l.object_pose.empty(); });
+  std::int64_t total = 0;
+  for (LoadedEpisode& l : episodes) {
+    const auto& t = l.trajectory;
+    const size_t n = t.qpos.size();
+    for (size_t f = 0; f < n; ++f) {
+      const Eigen::VectorXd& a = use_ctrl ? t.ctrl[f] : t.qpos[std::min(f + 1, n - 1)];
+      l.action.emplace_back(a.data(), a.data() + a.size());
+    }
+    l.from = total;
+    total += static_cast<std::int64_t>(n);
+  }
+  const size_t nq = first.qpos_names.size();
+  const size_t na = episodes.front().action[0].size();
+  const std::vector<std::string>& action_names = use_ctrl ? first.ctrl_names : first.qpos_names;
+
+  // Frames.
+  std::vector<ParquetColumn> data_columns = {
+      {"timestamp", "FLOAT"},          {"frame_index", "BIGINT"}, {"episode_index", "BIGINT"},
+      {"index", "BIGINT"},             {"task_index", "BIGINT"},  {kStateFeature, ListType("FLOAT", nq)},
+      {kActionFeature, ListType("FLOAT", na)}};
+  if (with_object) data_columns.push_back({kObjectPoseFeature, "FLOAT[7]"});
+  const fs::path scratch = out_dir / ".staging";
+  ExportSummary summary;
+  {
+    ParquetWriter data(out_dir / "data" / kChunk / (std::string(kFile) + ".parquet"), data_columns, scratch);
+    for (size_t i = 0; i < episodes.size(); ++i) {
+      const LoadedEpisode& l = episodes[i];
+      std::vector<Json> rows;
+      for (size_t f = 0; f < l.state.size(); ++f) {
+        Json row = {{"timestamp", static_cast<double>(f) / fps},
+                    {"frame_index", f},
+                    {"episode_index", i},
+                    {"index", l.from + static_cast<std::int64_t>(f)},
+                    {"task_index", l.task_index},
+                    {kStateFeature, l.state[f]},
+                    {kActionFeature, l.action[f]}};
+        if (with_object) row[kObjectPoseFeature] = l.object_pose[f];
+        rows.push_back(std::move(row));
+      }
+      data.AddRowGroup(rows);
+    }
+    data.Finish();
+  }
+
+  // Statistics, per episode and over the dataset.
+  std::vector<std::pair<std::string, std::function<Rows(const LoadedEpisode&, size_t)>>> numeric = {
+      {"timestamp", [fps](const LoadedEpisode& l, size_t) {
+         Rows r;
+         for (size_t f = 0; f < l.state.size(); ++f) r.push_back({static_cast<double>(static_cast<float>(f / fps))});
+         return r;
+       }},
+      {"frame_index", [](const LoadedEpisode& l, size_t) {
+         Rows r;
+         for (size_t f = 0; f < l.state.size(); ++f) r.push_back({static_cast<double>(f)});
+         return r;
+       }},
+      {"episode_index", [](const LoadedEpisode& l, size_t i) { return Rows(l.state.size(), {static_cast<double>(i)}); }},
+      {"index", [](const LoadedEpisode& l, size_t) {
+         Rows r;
+         for (size_t f = 0; f < l.state.size(); ++f) r.push_back({static_cast<double>(l.from + static_cast<std::int64_t>(f))});
+         return r;
+       }},
+      {"task_index", [](const LoadedEpisode& l, size_t) { return Rows(l.state.size(), {static_cast<double>(l.task_index)}); }},
+      {kStateFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.state); }},
+      {kActionFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.action); }},
+  };
+  if (with_object) {
+    numeric.push_back({kObjectPoseFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.object_pose); }});
+  }
+  Json stats = Json::object();
+  std::vector<Json> episode_stats(episodes.size(), Json::object());
+  for (const auto& [feature, rows_of] : numeric) {
+    Rows all;
+    for (size_t i = 0; i < episodes.size(); ++i) {
+      Rows rows = rows_of(episodes[i], i);
+      episode_stats[i][feature] = ToJson(ComputeStats(rows));
+      all.insert(all.end(), rows.begin(), rows.end());
+    }
+    stats[feature] = ToJson(ComputeStats(all));
+  }
+
+  // Video.
+  Json video_feature;
+  if (options.videos) {
+    video_feature = WriteVideo(episodes, fps,
+                               out_dir / "videos" / kSourceVideoFeature / kChunk / (std::string(kFile) + ".mp4"));
+  }
+
+  // Episodes.
+  std::vector<ParquetColumn> episode_columns = {
+      {"episode_index", "BIGINT"},          {"tasks", "VARCHAR[]"},
+      {"length", "BIGINT"},                 {"data/chunk_index", "BIGINT"},
+      {"data/file_index", "BIGINT"},        {"dataset_from_index", "BIGINT"},
+      {"dataset_to_index", "BIGINT"},       {"meta/episodes/chunk_index", "BIGINT"},
+      {"meta/episodes/file_index", "BIGINT"}, {"doasido/episode_id", "VARCHAR"},
+      {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"}};
+  const std::string video_prefix = std::string("videos/") + kSourceVideoFeature + "/";
+  if (options.videos) {
+    for (const char* c : {"chunk_index", "file_index"}) episode_columns.push_back({video_prefix + c, "BIGINT"});
+    for (const char* c : {"from_timestamp", "to_timestamp"}) episode_columns.push_back({video_prefix + c, "DOUBLE"});
+  }
+  for (const auto& [feature, rows_of] : numeric) {
+    const size_t dims = episode_stats[0][feature]["min"].size();
+    for (const char* stat : kStatNames) {
+      episode_columns.push_back({"stats/" + feature + "/" + stat,
+                                 std::string(stat) == "count" ? "BIGINT[1]" : ListType("DOUBLE", dims)});
+    }
+  }
+  {
+    ParquetWriter writer(out_dir / "meta/episodes" / kChunk / (std::string(kFile) + ".parquet"),
+                         episode_columns, scratch);
+    std::vector<Json> rows;
+    for (size_t i = 0; i < episodes.size(); ++i) {
+      const LoadedEpisode& l = episodes[i];
+      const auto length = static_cast<std::int64_t>(l.state.size());
+      Json row = {{"episode_index", i},
+                  {"tasks", {l.episode->task}},
+                  {"length", length},
+                  {"data/chunk_index", 0},
+                  {"data/file_index", 0},
+                  {"dataset_from_index", l.from},
+                  {"dataset_to_index", l.from + length},
+                  {"meta/episodes/chunk_index", 0},
+                  {"meta/episodes/file_index", 0},
+                  {"doasido/episode_id", l.episode->id},
+                  {"doasido/clip_id", l.episode->clip_id},
+                  {"doasido/split", l.episode->split}};
+      if (options.videos) {
+        row[video_prefix + "chunk_index"] = 0;
+        row[video_prefix + "file_index"] = 0;
+        row[video_prefix + "from_timestamp"] = static_cast<double>(l.from) / fps;
+        row[video_prefix + "to_timestamp"] = static_cast<double>(l.from + length) / fps;
+      }
+      for (const auto& [feature, s] : episode_stats[i].items()) {
+        for (const auto& [stat, v] : s.items()) row["stats/" + feature + "/" + stat] = v;
+      }
+      rows.push_back(std::move(row));
+    }
+    writer.AddRowGroup(rows);
+    writer.Finish();
+  }
+  {
+    ParquetWriter writer(out_dir / "meta/tasks.parquet", {{"task", "VARCHAR"}, {"task_index", "BIGINT"}}, scratch);
+    std::vector<Json> rows;
+    for (size_t i = 0; i < tasks.size(); ++i) rows.push_back({{"task", tasks[i]}, {"task_index", i}});
+    writer.AddRowGroup(rows);
+    writer.Finish();
+  }
+  fs::remove_all(scratch, ec);
+
+  // info.json, stats.json, provenance.
+  Json features = {{"timestamp", Feature("float32", {1}, nullptr)},
+                   {"frame_index", Feature("int64", {1}, nullptr)},
+                   {"episode_index", Feature("int64", {1}, nullptr)},
+                   {"index", Feature("int64", {1}, nullptr)},
+                   {"task_index", Feature("int64", {1}, nullptr)},
+                   {kStateFeature, Feature("float32", {static_cast<int>(nq)}, first.qpos_names)},
+                   {kActionFeature, Feature("float32", {static_cast<int>(na)}, action_names)}};
+  if (with_object) {
+    features[kObjectPoseFeature] = Feature("float32", {7}, {"tx", "ty", "tz", "qw", "qx", "qy", "qz"});
+  }
+  if (options.videos) features[kSourceVideoFeature] = video_feature;
+  Json splits = Json::object();
+  for (size_t i = 0; i < episodes.size();) {
+    size_t j = i;
+    while (j < episodes.size() && episodes[j].episode->split == episodes[i].episode->split) ++j;
+    splits[episodes[i].episode->split] = std::to_string(i) + ":" + std::to_string(j);
+    i = j;
+  }
+  const Json info = {
+      {"codebase_version", kLeRobotVersion},
+      {"robot_type", first.embodiment},
+      {"total_episodes", episodes.size()},
+      {"total_frames", total},
+      {"total_tasks", tasks.size()},
+      {"chunks_size", 1000},
+      {"data_files_size_in_mb", 100},
+      {"video_files_size_in_mb", 200},
+      {"fps", fps},
+      {"splits", splits},
+      {"data_path", "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"},
+      {"video_path", options.videos ? Json("videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4")
+                                    : Json(nullptr)},
+      {"features", features}};
+  WriteJson(out_dir / "meta/info.json", info);
+  WriteJson(out_dir / "meta/stats.json", stats);
+  WriteJson(out_dir / "meta/doasido_manifest.json", ToJson(m));
+
+  summary.episodes = static_cast<std::int64_t>(episodes.size());
+  summary.frames = total;
+  for (auto it = fs::recursive_directory_iterator(out_dir); it != fs::end(it); ++it) {
+    if (it->is_regular_file()) summary.bytes += static_cast<std::int64_t>(it->file_size());
+  }
+  return summary;
+}
+
+}  // namespace doasido::dataset

@@ -1,0 +1,47 @@
+// Export of a version in LeRobot's v3.0 layout (REFERENCE §6):
+//   meta/info.json        codebase_version "v3.0", robot_type, fps, features,
+//                         totals, chunks_size, path templates, splits
+//   meta/stats.json       min, max, mean, std, count, q01/q10/q50/q90/q99 per
+//                         numeric feature and dimension
+//   meta/tasks.parquet    task (string) -> task_index
+//   meta/episodes/chunk-000/file-000.parquet   one row per episode: indices,
+//                         lengths, data and video locations, per-episode stats
+//   data/chunk-000/file-000.parquet            one row per frame, one row group
+//                         per episode (dataset/parquet_writer.h for the limit)
+//   videos/observation.images.source/chunk-000/file-000.mp4   the episodes'
+//                         source spans, one after another (dataset/mp4_writer.h)
+//   meta/doasido_manifest.json   the version's manifest (provenance)
+// Frame features: observation.state (the robot's joint positions), action
+// (the actuator targets when every trajectory has them, else the next
+// frame's joint positions), observation.object_pose (tx, ty, tz, qw, qx, qy,
+// qz, when every trajectory has object poses); float32, as LeRobot stores
+// them. Episodes are ordered by split so that each split is one index range
+// in info.json's "splits". Everything goes into one data file and one video
+// file (no rollover at data_files_size_in_mb / video_files_size_in_mb).
+#pragma once
+
+#include <filesystem>
+
+#include "dataset/robomimic_export.h"
+
+namespace doasido::dataset {
+
+inline constexpr const char* kLeRobotVersion = "v3.0";
+inline constexpr const char* kStateFeature = "observation.state";
+inline constexpr const char* kActionFeature = "action";
+inline constexpr const char* kObjectPoseFeature = "observation.object_pose";
+inline constexpr const char* kSourceVideoFeature = "observation.images.source";
+
+struct LeRobotOptions {
+  bool videos = true;  // encode the source spans (needs the source videos)
+};
+
+// Writes the export into `out_dir`, which must not exist or be empty.
+// Throws Error("output_exists"), Error("mixed_trajectories") naming the
+// episode whose fps or joints differ from the first one's, Error("io"),
+// Error("parquet"), Error("video_encode"), and the decoder's errors naming
+// the clip's video.
+ExportSummary ExportLeRobot(const std::filesystem::path& version_dir,
+                            const std::filesystem::path& out_dir, const LeRobotOptions& options);
+
+}  // namespace doasido::dataset

@@ -1,0 +1,223 @@
+// The LeRobot v3.0 export of a hand-made version (three episodes with
+// distinct values, two tasks, two splits, spans of a test-pattern video made
+// by ffmpeg), read back by independent readers: every Parquet file by
+// hyparquet (npm, through node), the MP4 by ffprobe.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "dataset/lerobot_export.h"
+#include "dataset/version.h"
+#include "retarget/kinematic_retarget.h"
+#include "tests/test_util.h"
+
+namespace doasido::dataset {
+namespace {
+
+namespace fs = std::filesystem;
+using doasido::testing::TempDir;
+using doasido::testing::WriteFile;
+
+fs::path NpmDir() {
+  if (const char* dir = std::getenv("DOASIDO_NPM_DIR")) return dir;
+  return fs::path(std::getenv("HOME")) / ".cache/doasido/npm";
+}
+
+std::string Shell(const std::string& command) {
+  std::string out;
+  FILE* p = popen(command.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  EXPECT_EQ(pclose(p), 0) << command;
+  return out;
+}
+
+// Every row and the row-group sizes of a Parquet file, through hyparquet.
+Json ReadParquet(const fs::path& dir, const fs::path& file) {
+  WriteFile(dir / "read.mjs", R"JS(
+import { pathToFileURL } from 'node:url';
+const hp = await import(pathToFileURL(process.argv[2] + '/node_modules/hyparquet/src/node.js'));
+const file = await hp.asyncBufferFromFile(process.argv[3]);
+const meta = await hp.parquetMetadataAsync(file);
+const rows = await hp.parquetReadObjects({ file });
+const big = (k, v) => typeof v === 'bigint' ? Number(v) : v;
+process.stdout.write(JSON.stringify({ rows, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
+)JS");
+  return Json::parse(Shell("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
+                         file.string()));
+}
+
+float F(double v) { return static_cast<float>(v); }
+
+struct Made {
+  Manifest manifest;
+  std::vector<retarget::HandTrajectory> trajectories;  // by manifest index
+};
+
+Made MakeVersion(const fs::path& dir) {
+  Shell("ffmpeg -v error -f lavfi -i testsrc=size=96x64:rate=30 -frames:v 90 -pix_fmt yuv420p " +
+      (dir / "src.mp4").string());
+  Made made;
+  Manifest& m = made.manifest;
+  m.name = "t";
+  m.version = "v1";
+  m.selection = Selection::kAll;
+  m.split_fractions = {{"train", 0.5}, {"test", 0.5}};
+  m.trajectory_stage = "retarget_kinematic";
+  const char* tasks[] = {"pour water", "stir", "pour water"};
+  const char* splits[] = {"train", "test", "train"};
+  for (int k = 0; k < 3; ++k) {
+    retarget::HandTrajectory t;
+    t.embodiment = "test_hand";
+    t.fps = 30;
+    for (int j = 0; j < 5; ++j) t.qpos_names.push_back("q" + std::to_string(j));
+    const int frames = 10 + 5 * k;
+    for (int f = 0; f < frames; ++f) {
+      Eigen::VectorXd q(5);
+      for (int j = 0; j < 5; ++j) q[j] = 100.0 * k + f + 0.001 * j + 1.0 / 3.0;
+      t.qpos.push_back(q);
+      t.valid.push_back(true);
+      t.fingertip_error.push_back(0.001);
+      t.object_poses.push_back({Quat(1, 0, 0, 0), Vec3(0.01 * f, -0.5 * k, 0.25 + 0.001 * f)});
+    }
+    Episode e;
+    e.id = "clip-00000" + std::to_string(k + 1);
+    e.index = k;
+    e.clip_id = k + 1;
+    e.external_id = "c" + std::to_string(k);
+    e.video = e.video_key = (dir / "src.mp4").string();
+    e.start_frame = 20 * k;
+    e.end_frame = 20 * k + frames - 1;
+    e.task = tasks[k];
+    e.split = splits[k];
+    e.trajectory_stage = m.trajectory_stage;
+    e.frames = frames;
+    e.fps = 30;
+    m.episodes.push_back(e);
+    fs::create_directories(dir / "v1/episodes" / e.id);
+    retarget::WriteTrajectoryJson(t, dir / "v1/episodes" / e.id / "trajectory.json");
+    made.trajectories.push_back(t);
+  }
+  WriteFile(dir / "v1/manifest.json", ToJson(m).dump());
+  return made;
+}
+
+TEST(LeRobotExport, ParquetAndVideoReadBackByIndependentReaders) {
+  TempDir dir;
+  const Made made = MakeVersion(dir.path());
+  const ExportSummary s = ExportLeRobot(dir / "v1", dir / "out", {});
+  EXPECT_EQ(s.episodes, 3);
+  EXPECT_EQ(s.frames, 10 + 15 + 20);
+
+  // Export order: train (manifest episodes 0, 2), then test (1).
+  const std::vector<int> order = {0, 2, 1};
+  const std::map<std::string, int> task_index = {{"pour water", 0}, {"stir", 1}};
+
+  const Json data = ReadParquet(dir.path(), dir / "out/data/chunk-000/file-000.parquet");
+  EXPECT_EQ(data["groups"], (Json{10, 20, 15}));  // one row group per episode
+  size_t row = 0;
+  for (size_t i = 0; i < order.size(); ++i) {
+    const auto& t = made.trajectories[order[i]];
+    const size_t n = t.qpos.size();
+    for (size_t f = 0; f < n; ++f, ++row) {
+      const Json& r = data["rows"][row];
+      ASSERT_EQ(r["timestamp"].get<double>(), F(f / 30.0)) << row;
+      ASSERT_EQ(r["frame_index"], f);
+      ASSERT_EQ(r["episode_index"], i);
+      ASSERT_EQ(r["index"], row);
+      ASSERT_EQ(r["task_index"], task_index.at(made.manifest.episodes[order[i]].task));
+      for (int j = 0; j < 5; ++j) {
+        ASSERT_EQ(r["observation.state"][j].get<double>(), F(t.qpos[f][j]));
+        ASSERT_EQ(r["action"][j].get<double>(), F(t.qpos[std::min(f + 1, n - 1)][j]));
+      }
+      ASSERT_EQ(r["observation.object_pose"][0].get<double>(), F(t.object_poses[f].t.x()));
+      ASSERT_EQ(r["observation.object_pose"][1].get<double>(), F(t.object_poses[f].t.y()));
+      ASSERT_EQ(r["observation.object_pose"][3].get<double>(), 1.0f);
+    }
+  }
+  EXPECT_EQ(data["rows"].size(), row);
+
+  std::ifstream info_file(dir / "out/meta/info.json");
+  const Json info = Json::parse(info_file);
+  EXPECT_EQ(info["codebase_version"], "v3.0");
+  EXPECT_EQ(info["robot_type"], "test_hand");
+  EXPECT_EQ(info["total_frames"], data["rows"].size());
+  EXPECT_EQ(info["splits"], (Json{{"train", "0:2"}, {"test", "2:3"}}));
+  EXPECT_EQ(info["features"]["observation.state"]["shape"], Json{5});
+  EXPECT_EQ(info["features"]["observation.state"]["names"][4], "q4");
+
+  const Json episodes = ReadParquet(dir.path(), dir / "out/meta/episodes/chunk-000/file-000.parquet");
+  ASSERT_EQ(episodes["rows"].size(), 3u);
+  EXPECT_EQ(info["total_episodes"], episodes["rows"].size());
+  std::int64_t from = 0;
+  for (size_t i = 0; i < order.size(); ++i) {
+    const Json& e = episodes["rows"][i];
+    const auto& t = made.trajectories[order[i]];
+    const auto n = static_cast<std::int64_t>(t.qpos.size());
+    EXPECT_EQ(e["episode_index"], i);
+    EXPECT_EQ(e["tasks"], Json{made.manifest.episodes[order[i]].task});
+    EXPECT_EQ(e["length"], n);
+    EXPECT_EQ(e["dataset_from_index"], from);
+    EXPECT_EQ(e["dataset_to_index"], from + n);
+    EXPECT_DOUBLE_EQ(e["videos/observation.images.source/from_timestamp"].get<double>(), from / 30.0);
+    EXPECT_DOUBLE_EQ(e["videos/observation.images.source/to_timestamp"].get<double>(), (from + n) / 30.0);
+    EXPECT_EQ(e["doasido/episode_id"], made.manifest.episodes[order[i]].id);
+    // Per-episode stats against the stored (float32) values.
+    double sum = 0, lo = 1e300, hi = -1e300;
+    for (const auto& q : t.qpos) sum += F(q[2]), lo = std::min<double>(lo, F(q[2])), hi = std::max<double>(hi, F(q[2]));
+    EXPECT_NEAR(e["stats/observation.state/mean"][2].get<double>(), sum / n, 1e-9);
+    EXPECT_EQ(e["stats/observation.state/min"][2].get<double>(), lo);
+    EXPECT_EQ(e["stats/observation.state/max"][2].get<double>(), hi);
+    EXPECT_EQ(e["stats/observation.state/count"], Json{n});
+    from += n;
+  }
+
+  const Json tasks = ReadParquet(dir.path(), dir / "out/meta/tasks.parquet");
+  EXPECT_EQ(tasks["rows"], (Json{{{"task", "pour water"}, {"task_index", 0}},
+                                 {{"task", "stir"}, {"task_index", 1}}}));
+  EXPECT_EQ(info["total_tasks"], tasks["rows"].size());
+
+  std::ifstream stats_file(dir / "out/meta/stats.json");
+  const Json stats = Json::parse(stats_file);
+  EXPECT_EQ(stats["observation.state"]["min"][0].get<double>(), F(1.0 / 3.0));
+  EXPECT_EQ(stats["observation.state"]["max"][0].get<double>(), F(200 + 19 + 1.0 / 3.0));
+  EXPECT_EQ(stats["index"]["count"], Json{45});
+  EXPECT_EQ(stats["index"]["q50"][0].get<double>(), 22.0);
+
+  const Json probe = Json::parse(Shell(
+      "ffprobe -v error -count_frames -show_entries stream=nb_read_frames,width,height,codec_name "
+      "-of json " + (dir / "out/videos/observation.images.source/chunk-000/file-000.mp4").string()));
+  EXPECT_EQ(probe["streams"][0]["nb_read_frames"], std::to_string(45));
+  EXPECT_EQ(probe["streams"][0]["width"], 96);
+  EXPECT_EQ(info["features"]["observation.images.source"]["shape"], (Json{64, 96, 3}));
+}
+
+TEST(LeRobotExport, RefusesNonEmptyOutputAndMixedRates) {
+  TempDir dir;
+  MakeVersion(dir.path());
+  WriteFile(dir / "out/x", "x");
+  try {
+    ExportLeRobot(dir / "v1", dir / "out", {});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "output_exists");
+  }
+  retarget::HandTrajectory t = retarget::ReadTrajectoryJson(dir / "v1/episodes/clip-000002/trajectory.json");
+  t.fps = 25;
+  retarget::WriteTrajectoryJson(t, dir / "v1/episodes/clip-000002/trajectory.json");
+  try {
+    ExportLeRobot(dir / "v1", dir / "out2", {.videos = false});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "mixed_trajectories");
+    EXPECT_EQ(e.site().field, "fps");
+    EXPECT_EQ(e.site().clip, "c1");
+  }
+}
+
+}  // namespace
+}  // namespace doasido::dataset

@@ -1,6 +1,7 @@
 // Dataset throughput: `dataset create` (copy every episode's artifacts,
 // SHA-256 them, write the manifest and playbook, rename into place) and the
-// robomimic export, each beside a plain recursive copy of the same bytes
+// robomimic and LeRobot exports (LeRobot without the video feature: the
+// bench has no source videos), each beside a plain recursive copy of the same bytes
 // (the peer) in the same run.
 // Usage: dataset_export_bench [episodes] [frames]
 #include <chrono>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include "core/log.h"
+#include "dataset/lerobot_export.h"
 #include "dataset/robomimic_export.h"
 #include "dataset/version_store.h"
 #include "db/database.h"
@@ -116,6 +118,10 @@ int main(int argc, char** argv) {
   const dataset::ExportSummary s = dataset::ExportRobomimic(version, dir / "out.hdf5");
   const double export_s = Since(t);
 
+  t = Clock::now();
+  const dataset::ExportSummary lr = dataset::ExportLeRobot(version, dir / "lerobot", {.videos = false});
+  const double lerobot_s = Since(t);
+
   std::printf("dataset_export_bench: %d episodes x %d frames, artifacts %.1f MB, version %.1f MB\n",
               episodes, frames, artifact_bytes / 1e6, version_bytes / 1e6);
   std::printf("%-22s %9s %11s %9s %14s\n", "", "seconds", "episodes/s", "MB/s", "vs plain copy");
@@ -128,6 +134,9 @@ int main(int argc, char** argv) {
   std::printf("%-22s %9.3f %11.1f %9.1f %14.2f   (%.1f MB of HDF5)\n", "export robomimic",
               export_s, episodes / export_s, version_bytes / 1e6 / export_s,
               copy_again_s / export_s, s.bytes / 1e6);
+  std::printf("%-22s %9.3f %11.1f %9.1f %14.2f   (%.1f MB of Parquet and JSON; no video)\n",
+              "export lerobot", lerobot_s, episodes / lerobot_s, version_bytes / 1e6 / lerobot_s,
+              copy_again_s / lerobot_s, lr.bytes / 1e6);
   fs::remove_all(dir);
   return 0;
 }

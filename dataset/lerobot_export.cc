@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "core/tool_version.h"
 #include "dataset/feature_stats.h"
 #include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
@@ -118,6 +119,22 @@ Json WriteVideo(const std::vector<LoadedEpisode>& episodes, double fps, const fs
             {"video.fps", fps},
             {"video.channels", 3},
             {"has_audio", false}}}};
+}
+
+// LeRobot reads tasks.parquet with pandas, which makes `task` the index
+// (what LeRobot's own writer stores): pandas' schema metadata says so.
+Json PandasTaskIndex() {
+  auto column = [](const char* name, const char* pandas_type, const char* numpy_type) {
+    return Json{{"name", name}, {"field_name", name}, {"pandas_type", pandas_type},
+                {"numpy_type", numpy_type}, {"metadata", nullptr}};
+  };
+  return {{"index_columns", {"task"}},
+          {"column_indexes",
+           {{{"name", nullptr}, {"field_name", nullptr}, {"pandas_type", "unicode"},
+             {"numpy_type", "object"}, {"metadata", {{"encoding", "UTF-8"}}}}}},
+          {"columns", {column("task_index", "int64", "int64"), column("task", "unicode", "object")}},
+          {"creator", {{"library", "doasido"}, {"version", ToolVersion()}}},
+          {"pandas_version", "2.1.4"}};
 }
 
 std::string ListType(const char* element, size_t n) {
@@ -298,7 +315,9 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
     writer.Finish();
   }
   {
-    ParquetWriter writer(out_dir / "meta/tasks.parquet", {{"task", "VARCHAR"}, {"task_index", "BIGINT"}}, scratch);
+    ParquetWriter writer(out_dir / "meta/tasks.parquet", {{"task_index", "BIGINT"}, {"task", "VARCHAR"}},
+                         scratch);
+    writer.SetMetadata("pandas", PandasTaskIndex().dump());
     std::vector<Json> rows;
     for (size_t i = 0; i < tasks.size(); ++i) rows.push_back({{"task", tasks[i]}, {"task_index", i}});
     writer.AddRowGroup(rows);

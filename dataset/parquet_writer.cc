@@ -84,6 +84,10 @@ void ParquetWriter::AddRowGroup(const std::vector<Json>& rows) {
   parts_.push_back(path);
 }
 
+void ParquetWriter::SetMetadata(const std::string& key, const std::string& value) {
+  metadata_.emplace_back(key, value);
+}
+
 void ParquetWriter::Finish() {
   std::string columns;
   for (const ParquetColumn& c : columns_) {
@@ -104,8 +108,15 @@ void ParquetWriter::Finish() {
   }
   std::error_code ec;
   if (out_.has_parent_path()) fs::create_directories(out_.parent_path(), ec);
-  db_->Query("COPY (" + source + ") TO " + SqlString(out_.string()) +
-                 " (FORMAT parquet, COMPRESSION snappy, ROW_GROUP_SIZE 1)",
+  std::string options = "FORMAT parquet, COMPRESSION snappy, ROW_GROUP_SIZE 1";
+  if (!metadata_.empty()) {
+    std::string kv;
+    for (const auto& [key, value] : metadata_) {
+      kv += (kv.empty() ? "" : ", ") + SqlString(key) + ": " + SqlString(value);
+    }
+    options += ", KV_METADATA {" + kv + "}";
+  }
+  db_->Query("COPY (" + source + ") TO " + SqlString(out_.string()) + " (" + options + ")",
              out_.string());
   for (const fs::path& p : parts_) fs::remove(p, ec);
   parts_.clear();

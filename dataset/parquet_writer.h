@@ -35,6 +35,8 @@ class ParquetWriter {
   // Adds one row group; each row is an object with a member per column
   // (null or missing: NULL). Throws Error("io") naming the staging file.
   void AddRowGroup(const std::vector<Json>& rows);
+  // Key/value metadata of the file footer (e.g. pandas' "pandas" schema).
+  void SetMetadata(const std::string& key, const std::string& value);
   // Writes the file (snappy). Throws Error("parquet") with DuckDB's message,
   // naming the output file.
   void Finish();
@@ -44,6 +46,7 @@ class ParquetWriter {
   std::vector<ParquetColumn> columns_;
   std::filesystem::path scratch_;
   std::vector<std::filesystem::path> parts_;
+  std::vector<std::pair<std::string, std::string>> metadata_;
   std::unique_ptr<class DuckDb> db_;
 };
 

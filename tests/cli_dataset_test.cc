@@ -82,6 +82,7 @@ TEST_F(CliDataset, VersionsDiffVerifyAndRobomimic) {
   const std::string db = (work / "d.db").string();
   fs::copy_file(Db(), db);
   fs::copy(*dir_ / "artifacts", work / "artifacts", fs::copy_options::recursive);
+  fs::create_directory_symlink(*dir_ / "s", work / "s");  // videos are stored relative to the db
   const std::string root = (work / "datasets").string();
 
   auto v1_run = RunDoasido({"dataset", "create", "--db", db, "--root", root, "--select", "all",
@@ -237,6 +238,21 @@ print(json.dumps(out))
   }
   EXPECT_EQ(got["total"], total);
   EXPECT_EQ(got["env_args"]["env_kwargs"]["embodiment"], v2.episodes[0].embodiment);
+
+  // LeRobot: one row per trajectory frame, one video frame per row.
+  const auto lr = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
+                              "--format", "lerobot", "--out", (work / "lerobot").string()});
+  ASSERT_EQ(lr.exit_code, 0) << lr.err;
+  std::ifstream info_file(work / "lerobot/meta/info.json");
+  const Json info = Json::parse(info_file);
+  EXPECT_EQ(info["total_episodes"], v2.episodes.size());
+  EXPECT_EQ(info["total_frames"], total);
+  EXPECT_EQ(info["robot_type"], v2.episodes[0].embodiment);
+  EXPECT_EQ(info["features"]["observation.images.source"]["shape"], (Json{240, 320, 3}));
+  const auto again = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
+                                 "--format", "lerobot", "--out", (work / "lerobot").string()});
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_THAT(again.err, HasSubstr("output_exists"));
 
   // One byte of an episode changed: verify fails naming the file.
   const fs::path victim = work / "datasets/pour/v2/episodes" / v2.episodes[0].id / "trajectory.json";

@@ -45,7 +45,8 @@ const file = await hp.asyncBufferFromFile(process.argv[3]);
 const meta = await hp.parquetMetadataAsync(file);
 const rows = await hp.parquetReadObjects({ file });
 const big = (k, v) => typeof v === 'bigint' ? Number(v) : v;
-process.stdout.write(JSON.stringify({ rows, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
+const kv = Object.fromEntries((meta.key_value_metadata || []).map(e => [e.key, e.value]));
+process.stdout.write(JSON.stringify({ rows, kv, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
 )JS");
   return Json::parse(Shell("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
                          file.string()));
@@ -179,6 +180,8 @@ TEST(LeRobotExport, ParquetAndVideoReadBackByIndependentReaders) {
   const Json tasks = ReadParquet(dir.path(), dir / "out/meta/tasks.parquet");
   EXPECT_EQ(tasks["rows"], (Json{{{"task", "pour water"}, {"task_index", 0}},
                                  {{"task", "stir"}, {"task_index", 1}}}));
+  // pandas (LeRobot's reader) makes the task string the index.
+  EXPECT_EQ(Json::parse(tasks["kv"]["pandas"].get<std::string>())["index_columns"], Json{"task"});
   EXPECT_EQ(info["total_tasks"], tasks["rows"].size());
 
   std::ifstream stats_file(dir / "out/meta/stats.json");

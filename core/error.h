@@ -16,7 +16,7 @@ struct ErrorSite {
   std::string field;  // column, key or attribute name
 };
 
-// An error with a short machine-readable code ("truncated_video",
+// An error with a short machine-readable code ("video_truncated",
 // "bad_timestamp", ...) and a human message. what() gives
 // "code: message [clip C, file F:L, field X]".
 class Error : public std::runtime_error {

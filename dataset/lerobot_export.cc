@@ -13,6 +13,7 @@
 #include "dataset/parquet_writer.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
+#include "video/frame_count.h"
 #include "video/video_decoder.h"
 
 namespace doasido::dataset {
@@ -98,7 +99,7 @@ Json WriteVideo(const std::vector<LoadedEpisode>& episodes, double fps, const fs
     for (size_t f = 0; f < l.trajectory.qpos.size(); ++f) {
       if (decoder.Next(&frame)) last = frame.bgr;
       if (last.empty()) {
-        throw Error("truncated_video", "no frame in the episode's span",
+        throw Error(kVideoTruncated, "no frame in the episode's span",
                     {.clip = e.external_id, .file = e.video});
       }
       if (!writer) writer = std::make_unique<Mp4Writer>(path, last.cols, last.rows, fps);

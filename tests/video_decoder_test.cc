@@ -169,7 +169,7 @@ TEST(VideoDecoder, TruncatedFileNamesFileAndFrame) {
     while (decoder.Next(&frame)) ++delivered;
     FAIL() << "decoded " << delivered << " frames without an error";
   } catch (const Error& e) {
-    EXPECT_EQ(e.code(), "truncated_video") << e.what();
+    EXPECT_EQ(e.code(), "video_truncated") << e.what();
     EXPECT_EQ(e.site().file, truncated.string());
     EXPECT_EQ(e.site().clip, "cups-half");
     // The first frame it could not decode, out of the 300 the file declares.

@@ -5,7 +5,11 @@
 #include <cstdio>
 #include <fstream>
 
+#include <opencv2/videoio.hpp>
+
+#include "core/permanent_error.h"
 #include "video/probe.h"
+#include "video/video_decoder.h"
 #include "tests/test_util.h"
 
 namespace doasido::video {
@@ -97,6 +101,114 @@ TEST(Probe, TruncatedAndGarbageFilesFailWithNamedErrors) {
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), "video_missing");
+  }
+}
+
+std::string Shell(const std::string& command) {
+  std::string out;
+  FILE* p = popen(command.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  EXPECT_EQ(pclose(p), 0) << command;
+  return out;
+}
+
+TEST(Probe, EveryRealVideoMatchesFfprobeCountFrames) {
+  int checked = 0;
+  for (const char* folder : {"videos", "shots"}) {
+    for (const auto& entry : std::filesystem::directory_iterator(SharedData() / folder)) {
+      const auto ext = entry.path().extension();
+      if (ext != ".mp4" && ext != ".avi") continue;
+      const VideoInfo info = ProbeVideo(entry.path());
+      const FfprobeInfo ff = Ffprobe(entry.path());
+      EXPECT_EQ(info.frame_count, ff.frames) << entry.path();
+      EXPECT_EQ(info.width, ff.width) << entry.path();
+      EXPECT_EQ(info.height, ff.height) << entry.path();
+      EXPECT_NEAR(info.fps, ff.fps, 1e-3) << entry.path();
+      // Rotation as OpenCV (and players) apply it.
+      cv::VideoCapture cap(entry.path().string(), cv::CAP_FFMPEG);
+      EXPECT_EQ(info.rotation_deg, static_cast<int>(cap.get(cv::CAP_PROP_ORIENTATION_META)))
+          << entry.path();
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 15);
+}
+
+TEST(Probe, ConstantRateIsNotVariableAndVariableIs) {
+  doasido::testing::TempDir dir;
+  // libx264 with B-frames: packets arrive out of presentation order.
+  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 -c:v libx264 "
+        "-bf 3 " + (dir / "cfr.mp4").string());
+  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 "
+        "-vf \"setpts='if(lt(N,45),N,45+2*(N-45))/30/TB'\" -fps_mode vfr -c:v libx264 " +
+        (dir / "vfr.mp4").string());
+  EXPECT_FALSE(ProbeVideo(dir / "cfr.mp4").variable_frame_rate);
+  EXPECT_EQ(ProbeVideo(dir / "cfr.mp4").frame_count, 90);
+  EXPECT_TRUE(ProbeVideo(dir / "vfr.mp4").variable_frame_rate);
+  for (const char* f : {"02_cups.mp4", "03_blocks.mp4", "bedroom.mp4"}) {
+    EXPECT_FALSE(ProbeVideo(SharedData() / "videos" / f).variable_frame_rate) << f;
+  }
+}
+
+TEST(Probe, RotationFromTheDisplayMatrix) {
+  doasido::testing::TempDir dir;
+  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 10 " +
+        (dir / "plain.mp4").string());
+  Shell("ffmpeg -v error -i " + (dir / "plain.mp4").string() +
+        " -c copy -metadata:s:v:0 rotate=90 " + (dir / "rotated.mp4").string());
+  const VideoInfo info = ProbeVideo(dir / "rotated.mp4");
+  cv::VideoCapture cap((dir / "rotated.mp4").string(), cv::CAP_FFMPEG);
+  EXPECT_EQ(info.rotation_deg, static_cast<int>(cap.get(cv::CAP_PROP_ORIENTATION_META)));
+  EXPECT_EQ(info.rotation_deg, 90);
+  EXPECT_EQ(ProbeVideo(dir / "plain.mp4").rotation_deg, 0);
+}
+
+// A faststart MP4 (index first) cut at `offset` bytes.
+std::filesystem::path Cut(const doasido::testing::TempDir& dir, const std::string& name,
+                          const std::string& bytes, size_t offset) {
+  doasido::testing::WriteFile(dir / name, bytes.substr(0, offset));
+  return dir / name;
+}
+
+TEST(Probe, ShortTailPassesProbeAndDecodeTruncationFailsBothOnce) {
+  doasido::testing::TempDir dir;
+  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 60 -c:v libx264 -bf 0 "
+        "-movflags +faststart " + (dir / "whole.mp4").string());
+  const std::string bytes = doasido::testing::ReadFile(dir / "whole.mp4");
+  // The last packet's offset: the file ends just before it, so the index
+  // declares one frame more than the file holds.
+  const std::string last = Shell("ffprobe -v error -select_streams v:0 -show_entries packet=pos "
+                                 "-of csv=p=0 " + (dir / "whole.mp4").string() + " | tail -1");
+  const auto tail = Cut(dir, "tail.mp4", bytes, std::stoul(last));
+  const VideoInfo info = ProbeVideo(tail);
+  EXPECT_EQ(info.frame_count, 59);
+  DecoderOptions options;
+  options.last_frame = 59;  // the span the list gives: the declared last frame
+  VideoDecoder decoder(tail, options);
+  AnalysisFrame frame;
+  int frames = 0;
+  while (decoder.Next(&frame)) ++frames;
+  EXPECT_EQ(frames, 59);
+
+  const auto half = Cut(dir, "half.mp4", bytes, bytes.size() / 2);
+  try {
+    ProbeVideo(half);
+    FAIL() << "a half file probed fine";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "video_truncated") << e.what();
+    EXPECT_NE(dynamic_cast<const PermanentError*>(&e), nullptr) << "a retry cannot fix it";
+    EXPECT_NE(std::string(e.what()).find("half.mp4"), std::string::npos);
+  }
+  try {
+    VideoDecoder d(half, DecoderOptions{});
+    while (d.Next(&frame)) {
+    }
+    FAIL() << "a half file decoded fine";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "video_truncated") << e.what();
+    EXPECT_NE(dynamic_cast<const PermanentError*>(&e), nullptr);
   }
 }
 

@@ -1,13 +1,61 @@
 #include "video/probe.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
-#include <opencv2/videoio.hpp>
+extern "C" {
+#include <libavformat/avformat.h>
+#include <libavutil/display.h>
+}
 
 #include "core/config_check.h"
 #include "core/permanent_error.h"
+#include "video/frame_count.h"
 
 namespace doasido::video {
+namespace {
+
+// The demuxer of one file, closed when it goes out of scope.
+struct Container {
+  AVFormatContext* format = nullptr;
+  ~Container() { avformat_close_input(&format); }
+};
+
+// Display rotation as OpenCV reports it (CAP_PROP_ORIENTATION_META) and
+// as the `rotate` tag wrote it: the display matrix's angle in [0, 360).
+int RotationOf(const AVStream* stream) {
+  const uint8_t* matrix = av_stream_get_side_data(stream, AV_PKT_DATA_DISPLAYMATRIX, nullptr);
+  if (!matrix) return 0;
+  const double theta = av_display_rotation_get(reinterpret_cast<const int32_t*>(matrix));
+  if (!std::isfinite(theta)) return 0;
+  int deg = static_cast<int>(std::lround(theta));
+  deg %= 360;
+  return deg < 0 ? deg + 360 : deg;
+}
+
+std::string CodecOf(const AVCodecParameters* par) {
+  std::string tag;
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((par->codec_tag >> (8 * i)) & 0xFF);
+    if (c > ' ') tag += c;
+  }
+  return tag.size() == 4 ? tag : avcodec_get_name(par->codec_id);
+}
+
+// Constant-rate when every interval between consecutive presentation
+// times (sorted: B-frames arrive out of order) is 1/fps within `tolerance`.
+bool VariableRate(std::vector<std::int64_t> pts, double time_base, double fps, double tolerance) {
+  std::sort(pts.begin(), pts.end());
+  const double expected = 1.0 / fps;
+  for (size_t i = 1; i < pts.size(); ++i) {
+    const double interval = static_cast<double>(pts[i] - pts[i - 1]) * time_base;
+    if (std::abs(interval - expected) > tolerance * expected) return true;
+  }
+  return false;
+}
+
+}  // namespace
 
 void CheckConfig(const ProbeConfig& c, const std::string& section) {
   RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
@@ -23,52 +71,59 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
                          site);
   }
   if (!std::filesystem::exists(path)) throw Error("video_missing", "no such file", site);
-  cv::VideoCapture cap(path.string(), cv::CAP_FFMPEG);
-  if (!cap.isOpened()) {
-    throw Error("video_unreadable", "FFmpeg cannot open it (corrupt, truncated or not a video)",
-                site);
+  Container c;
+  if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
+      avformat_find_stream_info(c.format, nullptr) < 0) {
+    throw PermanentError("video_unreadable",
+                         "FFmpeg cannot open it (corrupt, truncated or not a video)", site);
   }
+  const int index = av_find_best_stream(c.format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
+  if (index < 0) throw PermanentError("video_unreadable", "no video stream", site);
+  const AVStream* stream = c.format->streams[index];
+  const AVCodecParameters* par = stream->codecpar;
   VideoInfo info;
-  info.width = static_cast<int>(cap.get(cv::CAP_PROP_FRAME_WIDTH));
-  info.height = static_cast<int>(cap.get(cv::CAP_PROP_FRAME_HEIGHT));
-  info.fps = cap.get(cv::CAP_PROP_FPS);
-  info.rotation_deg = static_cast<int>(cap.get(cv::CAP_PROP_ORIENTATION_META));
-  const int fourcc = static_cast<int>(cap.get(cv::CAP_PROP_FOURCC));
-  for (int i = 0; i < 4; ++i) {
-    const char c = static_cast<char>((fourcc >> (8 * i)) & 0xFF);
-    if (c > ' ') info.codec += c;
-  }
-  const auto declared = static_cast<std::int64_t>(cap.get(cv::CAP_PROP_FRAME_COUNT));
+  info.width = par->width;
+  info.height = par->height;
+  const AVRational rate = stream->r_frame_rate.num > 0 ? stream->r_frame_rate : stream->avg_frame_rate;
+  info.fps = rate.den > 0 ? av_q2d(rate) : 0;
+  info.rotation_deg = RotationOf(stream);
+  info.codec = CodecOf(par);
   if (info.width <= 0 || info.height <= 0) {
-    throw Error("video_unreadable", "no video stream with a frame size", site);
+    throw PermanentError("video_unreadable", "no video stream with a frame size", site);
   }
   if (!(info.fps > 0) || !std::isfinite(info.fps)) {
-    throw Error("video_unreadable", "no frame rate in the container", {.file = path.string(),
-                                                                       .field = "fps"});
+    throw PermanentError("video_unreadable", "no frame rate in the container",
+                         {.file = path.string(), .field = "fps"});
   }
+  const std::int64_t declared = stream->nb_frames;
   info.frame_count = declared;
   if (config.count_frames) {
-    std::int64_t decoded = 0;
-    double previous_ms = -1;
-    const double expected_ms = 1000.0 / info.fps;
-    while (cap.grab()) {
-      const double ms = cap.get(cv::CAP_PROP_POS_MSEC);
-      if (previous_ms >= 0 &&
-          std::abs((ms - previous_ms) - expected_ms) > config.vfr_tolerance * expected_ms) {
-        info.variable_frame_rate = true;
+    // Packets, not frames: every video packet of these containers is one
+    // frame, and reading them costs no decoding.
+    std::vector<std::int64_t> pts;
+    AVPacket* packet = av_packet_alloc();
+    while (av_read_frame(c.format, packet) >= 0) {
+      if (packet->stream_index == index && packet->size > 0) {
+        pts.push_back(packet->pts != AV_NOPTS_VALUE ? packet->pts : packet->dts);
       }
-      previous_ms = ms;
-      ++decoded;
+      av_packet_unref(packet);
     }
-    if (decoded == 0) throw Error("video_unreadable", "no frame could be decoded", site);
-    if (declared > 0 && decoded < declared &&
-        static_cast<double>(declared - decoded) > config.max_missing_fraction * declared) {
-      throw Error("video_truncated",
-                  "decoded " + std::to_string(decoded) + " of the " + std::to_string(declared) +
-                      " frames the container declares (truncated or corrupt file)",
-                  {.file = path.string(), .field = "frame_count"});
+    av_packet_free(&packet);
+    const auto counted = static_cast<std::int64_t>(pts.size());
+    if (counted == 0) throw PermanentError("video_unreadable", "the video stream has no frames", site);
+    const auto allowed = std::max(
+        MissingFramesAllowed(declared),
+        static_cast<std::int64_t>(std::ceil(config.max_missing_fraction * static_cast<double>(declared))));
+    if (declared > 0 && counted < declared - allowed) {
+      throw PermanentError(kVideoTruncated,
+                           "holds " + std::to_string(counted) + " of the " +
+                               std::to_string(declared) +
+                               " frames the container declares (truncated or corrupt file)",
+                           {.file = path.string(), .field = "frame_count"});
     }
-    info.frame_count = decoded;
+    info.frame_count = counted;
+    info.variable_frame_rate =
+        VariableRate(std::move(pts), av_q2d(stream->time_base), info.fps, config.vfr_tolerance);
   }
   info.duration_s = static_cast<double>(info.frame_count) / info.fps;
   return info;

@@ -1,5 +1,6 @@
-// Probing a video: size, frame rate, frame count, duration, rotation and
-// codec through OpenCV's FFmpeg backend.
+// Probing a video from its container (libavformat), without decoding: size,
+// frame rate, frame count (the video packets), duration, variable frame rate
+// (from the packets' presentation times), display rotation and codec.
 #pragma once
 
 #include <filesystem>
@@ -13,14 +14,16 @@ namespace doasido::video {
 inline constexpr const char* kProbeStageName = "probe";
 
 struct ProbeConfig {
-  // Decode every frame to count them (exact, and catches truncated files)
-  // rather than trusting the container's declared count.
+  // Read every video packet to count the frames (exact, catches truncated
+  // files, gives the frame intervals) rather than trusting the container's
+  // declared count. No frame is decoded either way.
   bool count_frames = true;
-  // A video is variable-frame-rate when a frame interval differs from 1/fps
-  // by more than this fraction.
+  // A video is variable-frame-rate when an interval between consecutive
+  // presentation times differs from 1/fps by more than this fraction.
   double vfr_tolerance = 0.25;
-  // With count_frames, fail when fewer frames decode than the container
-  // declares by more than this fraction (a truncated or corrupt file).
+  // With count_frames, fail when the file holds fewer frames than the
+  // container declares by more than this fraction, or by more than the
+  // shared allowance of video/frame_count.h, whichever is larger.
   double max_missing_fraction = 0.02;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProbeConfig, count_frames, vfr_tolerance,
@@ -28,9 +31,10 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProbeConfig, count_frames, vfr_t
 // Tolerances are fractions in [0, 1]; throws Error("bad_config").
 void CheckConfig(const ProbeConfig& c, const std::string& section);
 
-// Throws Error naming the file: "video_missing", "video_unreadable" (cannot
-// be opened or has no frames), "video_truncated" (decodes fewer frames than
-// declared).
+// Throws Error naming the file: "video_missing" (may appear later: retried),
+// and PermanentError for what a retry cannot change: "video_unreadable"
+// (cannot be opened or has no frames), "video_truncated" (holds fewer
+// frames than declared, beyond the allowance).
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config = {});
 
 // The first queue stage: probes the clip's video and checks that the clip's

@@ -5,6 +5,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/permanent_error.h"
+#include "video/frame_count.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -138,7 +140,7 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
   while (next_index_ < options_.first_frame) {
     if (!DecodeNext()) {
       if (geometry_.declared_frames > 0 &&
-          next_index_ < geometry_.declared_frames - options_.frame_count_tolerance) {
+          next_index_ < geometry_.declared_frames - Tolerance()) {
         ThrowTruncated(next_index_, "decoding stopped before the clip's first frame");
       }
       done_ = true;
@@ -231,14 +233,18 @@ void VideoDecoder::Convert(cv::Mat* bgr) {
   }
 }
 
+std::int64_t VideoDecoder::Tolerance() const {
+  return std::max(options_.frame_count_tolerance, MissingFramesAllowed(geometry_.declared_frames));
+}
+
 void VideoDecoder::ThrowTruncated(std::int64_t frame, const std::string& why) const {
   std::string message = why + " (could not decode frame " + std::to_string(frame);
   if (geometry_.declared_frames > 0) {
     message += " of " + std::to_string(geometry_.declared_frames) + " declared";
   }
   message += "); the file is truncated or corrupt";
-  throw Error(
-      "truncated_video", message,
+  throw PermanentError(
+      kVideoTruncated, message,
       {.clip = options_.clip, .file = path_.string(), .field = "frame " + std::to_string(frame)});
 }
 
@@ -251,7 +257,7 @@ bool VideoDecoder::Next(AnalysisFrame* frame) {
   if (!pending_ && !DecodeNext()) {
     done_ = true;
     if (geometry_.declared_frames > 0 &&
-        next_index_ < geometry_.declared_frames - options_.frame_count_tolerance) {
+        next_index_ < geometry_.declared_frames - Tolerance()) {
       ThrowTruncated(next_index_, "decoding stopped early");
     }
     if (geometry_.declared_frames == 0 && delivered_ == 0) {

@@ -25,9 +25,11 @@
 // it first (frame indices then come from timestamps, which needs a constant
 // frame rate; a stream without one is decoded from the start). A decode
 // that ends before the number of frames the container declares, or before
-// the requested span ends, is a truncated or corrupt file: Next() throws
-// Error("truncated_video") naming the file and the first frame it could not
-// decode.
+// the requested span ends, by more than the shared allowance of
+// video/frame_count.h, is a truncated or corrupt file: Next() throws
+// PermanentError("video_truncated") naming the file and the first frame it
+// could not decode. A span that runs into an allowed short tail just ends
+// early (delivered() tells how many frames came).
 #pragma once
 
 #include <cstdint>
@@ -52,7 +54,8 @@ struct DecoderOptions {
   double first_s = -1;
   double last_s = -1;
   // How many frames short of the container's declared count the decode may
-  // end without being called truncated (some containers round their count).
+  // end without being called truncated, beyond the shared rule of
+  // video/frame_count.h (which always applies).
   std::int64_t frame_count_tolerance = 0;
   // Clip label used in error messages (may be empty).
   std::string clip;
@@ -90,7 +93,7 @@ class VideoDecoder {
  public:
   // Opens `path` and positions at options.first_frame. Throws
   // Error("video_open_failed") when the file is missing or not a video, and
-  // Error("truncated_video") when the span starts past the decodable end.
+  // Error("video_truncated") when the span starts past the decodable end.
   VideoDecoder(const std::filesystem::path& path, const DecoderOptions& options);
   ~VideoDecoder();
   VideoDecoder(const VideoDecoder&) = delete;
@@ -100,7 +103,7 @@ class VideoDecoder {
   const std::filesystem::path& path() const { return path_; }
 
   // Decodes the next frame of the span into `frame`. Returns false once the
-  // span (or the file) has ended normally; throws Error("truncated_video")
+  // span (or the file) has ended normally; throws Error("video_truncated")
   // when decoding stops early (see the file comment).
   bool Next(AnalysisFrame* frame);
 
@@ -113,6 +116,8 @@ class VideoDecoder {
   struct Codec;  // libav state (video/video_decoder.cc)
 
   [[noreturn]] void ThrowTruncated(std::int64_t frame, const std::string& why) const;
+  // Frames the decode may end short of the declared count (video/frame_count.h).
+  std::int64_t Tolerance() const;
   // Decodes the next frame of the file into the codec's frame; false at the
   // end of the stream.
   bool DecodeNext();

@@ -414,8 +414,18 @@ std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
                   c.blend_max_unexplained, c.blend_min_run, c.min_scene_len);
     all.insert(all.end(), blends.begin(), blends.end());
     std::sort(all.begin(), all.end());
+    // A hard cut also changes every pixel against the frame a window back:
+    // what the long-window test sees then is the cut, not a cross-fade.
+    const std::vector<std::int64_t> hard = AdaptiveCuts(
+        ContentScores(s, c), c.adaptive_threshold, c.min_content_val, c.window_width, c.min_scene_len);
+    auto near_hard_cut = [&](std::int64_t cut) {
+      return std::any_of(hard.begin(), hard.end(), [&](std::int64_t h) {
+        return std::abs(h - cut) <= std::max<std::int64_t>(s.long_window, 1);
+      });
+    };
     std::vector<std::int64_t> cuts;
     for (std::int64_t cut : all) {
+      if (near_hard_cut(cut)) continue;
       if (cut - (cuts.empty() ? 0 : cuts.back()) >= c.min_scene_len) cuts.push_back(cut);
     }
     return cuts;

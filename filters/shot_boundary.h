@@ -61,8 +61,11 @@
 //     changing) and the cut is at least min_scene_len frames after the
 //     previous cut (or the first frame).
 //   - dissolve also takes the cuts of BlendCuts (linear-blend runs); the
-//     two lists are merged in frame order, dropping a cut closer than
-//     min_scene_len to the previous kept one.
+//     two lists are merged in frame order, dropping a cut within
+//     long_window frames of a hard cut (the adaptive detector's: a hard cut
+//     changes every pixel against the frame a window back too, which put a
+//     spurious dissolve a few frames before each real cut) and a cut closer
+//     than min_scene_len to the previous kept one.
 //   - fade: a frame is dark when its mean intensity < threshold; on the
 //     first bright frame after a dark run that started at frame `out` (the
 //     first frame counts as a fade-out when dark) the cut is the midpoint

@@ -2,6 +2,7 @@
 // test videos (../shared/data/shots/goldens/<video>.<Detector>.<variant>.json).
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -52,6 +53,15 @@ TEST_P(ShotGoldens, EveryDetectorMatchesPySceneDetect) {
   ShotBoundaryConfig t5;
   t5.adaptive_threshold = 5;
   EXPECT_EQ(CutsOf("adaptive", s, t5), Golden(video + ".AdaptiveDetector.t5.json"));
+
+  // The cross-fade test stays quiet next to a known hard cut (it used to
+  // add a boundary a few frames before each one: testvideo's 25 and 173).
+  for (std::int64_t dissolve : CutsOf("dissolve", s, c)) {
+    for (std::int64_t hard : Golden(video + ".AdaptiveDetector.default.json")) {
+      EXPECT_GT(std::abs(dissolve - hard), s.long_window)
+          << video << ": dissolve at " << dissolve << " beside the cut at " << hard;
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Shots, ShotGoldens,

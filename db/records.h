@@ -17,13 +17,13 @@ using VideoId = std::int64_t;
 
 // What the probe stage learns about a video file.
 struct VideoInfo {
-  int width = 0;
+  int width = 0;   // as displayed (after rotation_deg), like decoded frames
   int height = 0;
   double fps = 0;
   std::int64_t frame_count = 0;  // frames actually decoded (or declared, see probe)
   double duration_s = 0;
   bool variable_frame_rate = false;
-  int rotation_deg = 0;  // display rotation from container metadata
+  int rotation_deg = 0;  // display rotation from container metadata (video/display_rotation.h)
   std::string codec;     // FourCC, e.g. "avc1"
 };
 

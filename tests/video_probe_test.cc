@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "core/permanent_error.h"
@@ -162,7 +164,37 @@ TEST(Probe, RotationFromTheDisplayMatrix) {
   cv::VideoCapture cap((dir / "rotated.mp4").string(), cv::CAP_FFMPEG);
   EXPECT_EQ(info.rotation_deg, static_cast<int>(cap.get(cv::CAP_PROP_ORIENTATION_META)));
   EXPECT_EQ(info.rotation_deg, 90);
+  EXPECT_EQ(info.width, 48);  // the size as displayed, as the decoder delivers it
+  EXPECT_EQ(info.height, 64);
   EXPECT_EQ(ProbeVideo(dir / "plain.mp4").rotation_deg, 0);
+
+  // Decoding turns the frames as players do: display size, and the same
+  // pixels as ffmpeg's own (auto-rotating) decode of the first frame.
+  Shell("ffmpeg -v error -i " + (dir / "rotated.mp4").string() + " -frames:v 1 " +
+        (dir / "first.png").string());
+  const cv::Mat expected = cv::imread((dir / "first.png").string());
+  ASSERT_EQ(expected.cols, 48);
+  ASSERT_EQ(expected.rows, 64);
+  DecoderOptions options;
+  options.analysis_size = 0;
+  options.exact_scaling = true;
+  options.skip_loop_filter = false;
+  VideoDecoder decoder(dir / "rotated.mp4", options);
+  EXPECT_EQ(decoder.geometry().full_width, 48);
+  EXPECT_EQ(decoder.geometry().full_height, 64);
+  AnalysisFrame frame;
+  ASSERT_TRUE(decoder.Next(&frame));
+  ASSERT_EQ(frame.bgr.size(), expected.size());
+  cv::Mat diff;
+  cv::absdiff(frame.bgr, expected, diff);
+  EXPECT_LT(cv::mean(diff)[0], 3.0) << "turned the wrong way?";
+  // And at analysis size.
+  DecoderOptions small;
+  small.analysis_size = 32;
+  VideoDecoder scaled(dir / "rotated.mp4", small);
+  ASSERT_TRUE(scaled.Next(&frame));
+  EXPECT_EQ(frame.bgr.cols, 24);
+  EXPECT_EQ(frame.bgr.rows, 32);
 }
 
 // A faststart MP4 (index first) cut at `offset` bytes.

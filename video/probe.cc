@@ -6,11 +6,11 @@
 
 extern "C" {
 #include <libavformat/avformat.h>
-#include <libavutil/display.h>
 }
 
 #include "core/config_check.h"
 #include "core/permanent_error.h"
+#include "video/display_rotation.h"
 #include "video/frame_count.h"
 
 namespace doasido::video {
@@ -21,18 +21,6 @@ struct Container {
   AVFormatContext* format = nullptr;
   ~Container() { avformat_close_input(&format); }
 };
-
-// Display rotation as OpenCV reports it (CAP_PROP_ORIENTATION_META) and
-// as the `rotate` tag wrote it: the display matrix's angle in [0, 360).
-int RotationOf(const AVStream* stream) {
-  const uint8_t* matrix = av_stream_get_side_data(stream, AV_PKT_DATA_DISPLAYMATRIX, nullptr);
-  if (!matrix) return 0;
-  const double theta = av_display_rotation_get(reinterpret_cast<const int32_t*>(matrix));
-  if (!std::isfinite(theta)) return 0;
-  int deg = static_cast<int>(std::lround(theta));
-  deg %= 360;
-  return deg < 0 ? deg + 360 : deg;
-}
 
 std::string CodecOf(const AVCodecParameters* par) {
   std::string tag;
@@ -82,11 +70,12 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   const AVStream* stream = c.format->streams[index];
   const AVCodecParameters* par = stream->codecpar;
   VideoInfo info;
-  info.width = par->width;
-  info.height = par->height;
+  info.rotation_deg = DisplayRotation(stream);
+  const bool sideways = info.rotation_deg == 90 || info.rotation_deg == 270;
+  info.width = sideways ? par->height : par->width;  // as displayed, like the decoder
+  info.height = sideways ? par->width : par->height;
   const AVRational rate = stream->r_frame_rate.num > 0 ? stream->r_frame_rate : stream->avg_frame_rate;
   info.fps = rate.den > 0 ? av_q2d(rate) : 0;
-  info.rotation_deg = RotationOf(stream);
   info.codec = CodecOf(par);
   if (info.width <= 0 || info.height <= 0) {
     throw PermanentError("video_unreadable", "no video stream with a frame size", site);

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/permanent_error.h"
+#include "video/display_rotation.h"
 #include "video/frame_count.h"
 
 extern "C" {
@@ -94,8 +95,12 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
   c.time_base = Rational(stream->time_base);
   c.start_pts = stream->start_time != AV_NOPTS_VALUE ? stream->start_time : 0;
 
-  geometry_.full_width = c.context->width;
-  geometry_.full_height = c.context->height;
+  rotation_ = DisplayRotation(stream);
+  const bool sideways = rotation_ == 90 || rotation_ == 270;
+  // Geometry is in display orientation (what players show); the coded
+  // frames are turned in Convert.
+  geometry_.full_width = sideways ? c.context->height : c.context->width;
+  geometry_.full_height = sideways ? c.context->width : c.context->height;
   geometry_.fps = Rational(stream->avg_frame_rate);
   if (geometry_.fps <= 0) geometry_.fps = Rational(stream->r_frame_rate);
   geometry_.declared_frames = stream->nb_frames;
@@ -205,12 +210,27 @@ bool VideoDecoder::DecodeNext() {
   }
 }
 
-void VideoDecoder::Convert(cv::Mat* bgr) {
+void VideoDecoder::Convert(cv::Mat* out) {
+  if (rotation_ != 90 && rotation_ != 180 && rotation_ != 270) {
+    ConvertCoded(out);
+    return;
+  }
+  ConvertCoded(&coded_);
+  cv::rotate(coded_, *out,
+             rotation_ == 90    ? cv::ROTATE_90_COUNTERCLOCKWISE
+             : rotation_ == 180 ? cv::ROTATE_180
+                                : cv::ROTATE_90_CLOCKWISE);
+}
+
+void VideoDecoder::ConvertCoded(cv::Mat* bgr) {
   Codec& c = *codec_;
   const AVFrame* f = c.frame;
+  const bool sideways = rotation_ == 90 || rotation_ == 270;
+  const int width = sideways ? geometry_.height : geometry_.width;  // analysis size, coded
+  const int height = sideways ? geometry_.width : geometry_.height;
   const bool resize_here = options_.exact_scaling;
-  const int out_w = resize_here ? f->width : geometry_.width;
-  const int out_h = resize_here ? f->height : geometry_.height;
+  const int out_w = resize_here ? f->width : width;
+  const int out_h = resize_here ? f->height : height;
   c.sws = sws_getCachedContext(c.sws, f->width, f->height, static_cast<AVPixelFormat>(f->format),
                                out_w, out_h, AV_PIX_FMT_BGR24, SWS_BILINEAR, nullptr, nullptr,
                                nullptr);
@@ -224,10 +244,10 @@ void VideoDecoder::Convert(cv::Mat* bgr) {
   const int strides[1] = {static_cast<int>(target.step[0])};
   sws_scale(c.sws, f->data, f->linesize, 0, f->height, planes, strides);
   if (resize_here) {
-    if (out_w == geometry_.width && out_h == geometry_.height) {
+    if (out_w == width && out_h == height) {
       *bgr = full_;
     } else {
-      cv::resize(full_, *bgr, cv::Size(geometry_.width, geometry_.height), 0, 0,
+      cv::resize(full_, *bgr, cv::Size(width, height), 0, 0,
                  cv::INTER_LINEAR);
     }
   }
@@ -272,12 +292,14 @@ bool VideoDecoder::Next(AnalysisFrame* frame) {
     done_ = true;
     return false;
   }
-  if (f->width != geometry_.full_width || f->height != geometry_.full_height) {
+  const bool sideways = rotation_ == 90 || rotation_ == 270;
+  const int coded_w = sideways ? geometry_.full_height : geometry_.full_width;
+  const int coded_h = sideways ? geometry_.full_width : geometry_.full_height;
+  if (f->width != coded_w || f->height != coded_h) {
     throw Error("corrupt_video",
                 "frame " + std::to_string(index) + " is " + std::to_string(f->width) + "x" +
                     std::to_string(f->height) + ", the stream declares " +
-                    std::to_string(geometry_.full_width) + "x" +
-                    std::to_string(geometry_.full_height),
+                    std::to_string(coded_w) + "x" + std::to_string(coded_h),
                 {.clip = options_.clip,
                  .file = path_.string(),
                  .field = "frame " + std::to_string(index)});

@@ -69,6 +69,8 @@ struct DecoderOptions {
   std::int64_t seek_after_frames = 300;
 };
 
+// Sizes are in display orientation: a file whose display matrix turns it by
+// 90 or 270 degrees has its frames delivered turned, as players show them.
 struct VideoGeometry {
   int full_width = 0, full_height = 0;  // decoded frame size
   int width = 0, height = 0;            // analysis size
@@ -124,13 +126,18 @@ class VideoDecoder {
   // Index of the decoded frame: counted, or from its timestamp after a seek.
   std::int64_t DecodedIndex() const;
   void SeekBefore(std::int64_t frame);
+  // The decoded frame at analysis size in display orientation.
   void Convert(cv::Mat* bgr);
+  // The same in the coded (unrotated) orientation.
+  void ConvertCoded(cv::Mat* bgr);
 
   std::filesystem::path path_;
   DecoderOptions options_;
   VideoGeometry geometry_;
   std::unique_ptr<Codec> codec_;
   cv::Mat full_;
+  cv::Mat coded_;     // a rotated file's frame before turning
+  int rotation_ = 0;  // video/display_rotation.h
   std::int64_t next_index_ = 0;  // index of the next decoded frame
   std::int64_t delivered_ = 0;
   bool index_from_pts_ = false;

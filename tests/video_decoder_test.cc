@@ -58,6 +58,33 @@ TEST(VideoDecoder, DecodesEveryFrameAtAnalysisSize) {
   EXPECT_NEAR(last_t, 299 * 1001.0 / 30000.0, 1e-3);
 }
 
+// libswscale stores up to a few dozen bytes past its last output row (24
+// behind yoga.mp4's 568-pixel rows: heap corruption that aborted one run in
+// two). Every frame the scaler writes (analysis size; full size on the exact
+// path), for every real video, is a
+// continuous image with room behind it.
+TEST(VideoDecoder, FramesLeaveRoomForTheScalersOverrun) {
+  for (const auto& entry : std::filesystem::directory_iterator(testing::SharedData() / "videos")) {
+    const auto ext = entry.path().extension();
+    if (ext != ".mp4" && ext != ".avi") continue;
+    for (const bool exact : {false, true}) {
+      DecoderOptions options;
+      options.exact_scaling = exact;
+      if (exact) options.analysis_size = 0;  // the frame is the scaler's full-size output
+      options.last_frame = 1;
+      VideoDecoder decoder(entry.path(), options);
+      AnalysisFrame frame;
+      int frames = 0;
+      while (decoder.Next(&frame)) {
+        ++frames;
+        EXPECT_TRUE(frame.bgr.isContinuous()) << entry.path();
+        EXPECT_GE(frame.bgr.datalimit - (frame.bgr.data + frame.bgr.total() * 3), 64) << entry.path() << " exact " << exact;
+      }
+      EXPECT_EQ(frames, 2) << entry.path();
+    }
+  }
+}
+
 TEST(VideoDecoder, DeliversOnlyTheSpan) {
   DecoderOptions options;
   options.first_frame = 100;

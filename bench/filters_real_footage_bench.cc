@@ -6,9 +6,11 @@
 //             filter should pass it.
 //   negative: the filter named in the label should reject it; the others
 //             are not scored on it.
-// Usage: filters_real_footage_bench [videos folder]
+// Usage: filters_real_footage_bench [videos folder] [learned|builtin]
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
@@ -49,12 +51,45 @@ const Label kLabels[] = {
     {"pool_cleaning.mp4", kCameraMotionStageName, "pans and tilts"},
 };
 
+// One line on the learned detector's samples: how many had a hand, and the
+// object evidence at the fingertips (median over hands).
+std::string Found(const char* file, const Json& analysis) {
+  char line[256];
+  if (!analysis.contains(kHandsMeasurement)) {
+    std::snprintf(line, sizeof line, "%-20s %s", file,
+                  analysis.at("clip").value("detection_source", "?").c_str());
+    return line;
+  }
+  const Json& hands = analysis.at(kHandsMeasurement);
+  int samples = 0, with_hand = 0, in_contact = 0, total = 0;
+  std::vector<double> edges;
+  for (const Json& sample : hands.at("samples")) {
+    ++samples;
+    with_hand += !sample.at("hands").empty();
+    for (const Json& h : sample.at("hands")) {
+      ++total;
+      edges.push_back(h.at("object_edges").get<double>());
+      in_contact += h.at("object_edges").get<double>() >= AnalyzeConfig{}.learned_detector.min_object_edges;
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  std::snprintf(line, sizeof line,
+                "%-20s %2d samples, %4.2f with a hand, %2d hands, %2d touching (median edges %.3f), %.0f ms/sample",
+                file, samples, samples ? static_cast<double>(with_hand) / samples : 0.0, total,
+                in_contact, edges.empty() ? 0.0 : edges[edges.size() / 2],
+                hands.at("ms_per_sample").get<double>());
+  return line;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   InitLogging("warn");
   const std::filesystem::path dir =
       argc > 1 ? std::filesystem::path(argv[1]) : std::filesystem::path(DOASIDO_SHARED_DATA) / "videos";
+  AnalyzeConfig config;
+  if (argc > 2) config.hand_detector = argv[2];
+  std::vector<std::string> found;
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<ShotBoundaryStage>());
   stages.push_back(std::make_unique<InteractionStage>());
@@ -73,8 +108,9 @@ int main(int argc, char** argv) {
     context.clip.external_id = label.file;
     context.video.path = (dir / label.file).string();
     context.measurements[kAnalyzeStageName] =
-        AnalyzeClip(dir / label.file, DecoderOptions{}, {}, AnalyzeConfig{}).measurements;
+        AnalyzeClip(dir / label.file, DecoderOptions{}, {}, config).measurements;
     analysis_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    found.push_back(Found(label.file, context.measurements[kAnalyzeStageName]));
     const bool positive = label.rejected_by[0] == '\0';
     std::printf("%-20s %-16s", label.file, positive ? "positive" : label.rejected_by);
     bool kept = true;
@@ -91,6 +127,10 @@ int main(int argc, char** argv) {
         cell += ok ? " ok" : " WRONG";
       }
       std::printf(" %-19.19s", cell.c_str());
+      if (std::getenv("DOASIDO_BENCH_VERBOSE") && r.measurements.contains("summary")) {
+        std::fprintf(stderr, "%s %s %s\n", label.file, stage->Name().c_str(),
+                     r.measurements.at("summary").dump().c_str());
+      }
     }
     std::printf("\n");
     positives += positive;
@@ -104,6 +144,8 @@ int main(int argc, char** argv) {
     total += scored[s->Name()];
     total_ok += agree[s->Name()];
   }
+  std::printf("\nwhat the hand detector found (%s):\n", config.hand_detector.c_str());
+  for (const std::string& line : found) std::printf("  %s\n", line.c_str());
   std::printf("all filters: %d/%d decisions agree; %d of %d positives pass every filter; "
               "analysis %.1f s for %zu videos\n",
               total_ok, total, positives_kept, positives, analysis_s, std::size(kLabels));

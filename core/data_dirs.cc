@@ -17,4 +17,10 @@ std::filesystem::path DataDir(const std::string& name, const char* env_var) {
   return (ExecutableDir() / ".." / "share" / "doasido" / name).lexically_normal();
 }
 
+std::filesystem::path NpmDir() {
+  if (const char* dir = std::getenv("DOASIDO_NPM_DIR"); dir != nullptr && *dir != '\0') return dir;
+  const char* home = std::getenv("HOME");
+  return std::filesystem::path(home ? home : "/root") / ".cache/doasido/npm";
+}
+
 }  // namespace doasido

@@ -17,4 +17,9 @@ std::filesystem::path ExecutableDir();
 // Not checked for existence.
 std::filesystem::path DataDir(const std::string& name, const char* env_var);
 
+// The npm packages scripts/setup.sh installs (three.js for the review app,
+// DuckDB for Parquet, MediaPipe Hands and the TFLite runtime for the hand
+// detector): $DOASIDO_NPM_DIR when set, else ~/.cache/doasido/npm.
+std::filesystem::path NpmDir();
+
 }  // namespace doasido

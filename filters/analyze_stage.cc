@@ -1,5 +1,7 @@
 #include "filters/analyze_stage.h"
 
+#include <memory>
+
 #include "core/error.h"
 #include "filters/stage_support.h"
 
@@ -17,7 +19,17 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   decode.exact_scaling = config.decode == "exact";
   decode.skip_loop_filter = config.decode == "fast";
 
-  const bool builtin = detections.empty() && config.use_builtin_detector;
+  const bool detect = detections.empty() && config.use_builtin_detector;
+  std::string note;
+  std::unique_ptr<LearnedHandDetector> learned;
+  if (detect && config.hand_detector == "learned") {
+    if (HandLandmarkerAvailable(&note)) {
+      learned = std::make_unique<LearnedHandDetector>(config.learned_detector, options.clip);
+    } else {
+      note = "learned detector unavailable: " + note;
+    }
+  }
+  const bool builtin = detect && !learned;
   BuiltinHandObjectDetector detector(config.detector);
   InteractionExtractor interaction;
   OutOfFrameExtractor out_of_frame(config.out_of_frame);
@@ -25,6 +37,7 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   ActivityExtractor activity(config.activity);
   CameraMotionExtractor camera(config.camera_motion);
   std::vector<FrameConsumer*> consumers;
+  if (learned) consumers.push_back(learned.get());
   if (builtin) consumers.push_back(&detector);
   for (FrameConsumer* c : std::initializer_list<FrameConsumer*>{&interaction, &out_of_frame, &shots,
                                                                 &activity, &camera}) {
@@ -44,12 +57,19 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
         {"full_width", g.full_width},
         {"full_height", g.full_height},
         {"downscale", g.downscale},
-        {"detection_source", builtin ? "builtin" : (detections.empty() ? "none" : "clip")}}},
+        {"detection_source", learned   ? "learned"
+                             : builtin ? "builtin"
+                                       : (detections.empty() ? "none" : "clip")}}},
       {kShotBoundaryStageName, ToJson(shots.signals())},
       {kActivityStageName, ToJson(activity.signals())},
       {kCameraMotionStageName, ToJson(camera.signals())},
       {kOutOfFrameStageName, ToJson(out_of_frame.signals())},
       {kInteractionStageName, ToJson(interaction.signals())}};
+  if (!note.empty()) out.measurements["clip"]["detector_note"] = note;
+  if (learned) {
+    out.measurements[kHandsMeasurement] = learned->Measurements();
+    out.builtin_detections = learned->detections();
+  }
   if (builtin) out.builtin_detections = detector.detections();
   return out;
 }

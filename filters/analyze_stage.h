@@ -1,19 +1,22 @@
 // Stage "filters_analyze": the one decode of a clip that every filter needs.
 //
 // It decodes the clip's span once at analysis resolution and runs, per
-// frame and in this order: the built-in hand/object detector (only when the
-// clip has no detections and use_builtin_detector is set), then the signal
+// frame and in this order: a hand/object detector (only when the clip has no
+// detections and use_builtin_detector is set: the learned one, or the
+// built-in one, see hand_detector), then the signal
 // extractors of the interaction, out-of-frame, shot-boundary, activity and
 // camera-motion filters. Its measurements are
 //   {"clip": {first_frame, frames, fps, width, height, full_width,
-//             full_height, downscale, detection_source},
+//             full_height, downscale, detection_source (clip, learned,
+//             builtin or none), detector_note (why not learned)},
+//    "hands": {...} (the learned detector's samples with keypoints, when it ran),
 //    "shot_boundary": {...}, "activity": {...}, "camera_motion": {...},
 //    "out_of_frame": {...}, "interaction": {...}}
 // and its verdict is always pass: the verdict stages (ShotBoundaryStage,
 // ActivityStage, CameraMotionStage, OutOfFrameStage, InteractionStage) run
 // after it and decide from these measurements without decoding.
-// Detections found by the built-in detector are returned in
-// StageResult::detections (source "detector:builtin").
+// Detections found by the detector are returned in StageResult::detections
+// (source "detector:learned" or "detector:builtin").
 //
 // The clip span is ClipRecord start_frame/end_frame (inclusive), else
 // start_s/end_s converted at the stream's frame rate, else the whole file.
@@ -28,6 +31,7 @@
 #include "filters/activity.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
+#include "filters/learned_hand_detector.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
 
@@ -41,18 +45,25 @@ struct AnalyzeConfig {
   // scores move by a few per cent, which can move cuts whose score sits at
   // a threshold (testvideo: 211 and 691).
   std::string decode = "exact";
-  bool use_builtin_detector = true;
+  bool use_builtin_detector = true;  // false: no detector runs on clips without boxes
+  // Which detector a clip without boxes gets: "learned" (MediaPipe Hands,
+  // filters/learned_hand_detector.h; falls back to "builtin", saying why in
+  // clip.detector_note, when node or its npm packages are missing) or
+  // "builtin" (the skin-and-motion detector of filters/interaction.h).
+  std::string hand_detector = "learned";
   std::int64_t frame_count_tolerance = 0;
   ShotSignalConfig shot;
   ActivitySignalConfig activity;
   CameraMotionSignalConfig camera_motion;
   OutOfFrameSignalConfig out_of_frame;
   BuiltinDetectorConfig detector;
+  LearnedDetectorConfig learned_detector;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, decode,
-                                                use_builtin_detector,
+                                                use_builtin_detector, hand_detector,
                                                 frame_count_tolerance, shot, activity,
-                                                camera_motion, out_of_frame, detector)
+                                                camera_motion, out_of_frame, detector,
+                                                learned_detector)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const AnalyzeConfig& c, const std::string& section);
 
@@ -60,7 +71,7 @@ void CheckConfig(const AnalyzeConfig& c, const std::string& section);
 // such as benchmarks and tests).
 struct ClipAnalysis {
   Json measurements;                          // as stored by AnalyzeStage
-  std::vector<Detection> builtin_detections;  // empty when the detector did not run
+  std::vector<Detection> builtin_detections;  // the detector's boxes; empty when none ran
 };
 
 // Decodes `video` over the span in `options` once and computes every

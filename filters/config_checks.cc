@@ -8,6 +8,7 @@
 #include "filters/analyze_stage.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
+#include "filters/learned_hand_detector.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
 
@@ -148,7 +149,20 @@ void CheckConfig(const AnalyzeConfig& c, const std::string& section) {
   CheckConfig(c.activity, section + ".activity");
   CheckConfig(c.camera_motion, section + ".camera_motion");
   CheckConfig(c.out_of_frame, section + ".out_of_frame");
+  RequireOneOf(section, "hand_detector", c.hand_detector, {"learned", "builtin"});
   CheckConfig(c.detector, section + ".detector");
+  CheckConfig(c.learned_detector, section + ".learned_detector");
+}
+
+void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
+  RequireInRange(section, "sample_fps", c.sample_fps, 0.1, 1000);
+  RequireInRange(section, "max_hands", c.max_hands, 1, 8);
+  RequireFraction(section, "min_score", c.min_score);
+  RequireInRange(section, "fingertip_reach", c.fingertip_reach, 0.01, 5);
+  RequireInRange(section, "hand_thickness", c.hand_thickness, 0.01, 5);
+  RequireFraction(section, "min_object_edges", c.min_object_edges);
+  RequireInRange(section, "hold_samples", c.hold_samples, 0, 100);
+  RequireFraction(section, "border_reach", c.border_reach);
 }
 
 }  // namespace doasido::filters

@@ -27,6 +27,7 @@ struct FrameBoxes {
   std::vector<cv::Rect2d> objects;
   std::vector<int> hand_contact;  // contact state per hand (-1 unknown)
   bool known = false;             // false: no detector covered this frame
+  bool complete = true;           // false: the source can miss a visible hand
 };
 
 struct FrameContext {

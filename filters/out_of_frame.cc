@@ -11,12 +11,14 @@
 namespace doasido::filters {
 
 Json ToJson(const OutOfFrameSignals& s) {
-  return Json{{"covered", s.covered},
+  Json j{{"covered", s.covered},
               {"hands", s.hands},
               {"hand_cut", s.hand_cut},
               {"object_needed", s.object_needed},
               {"object_missing", s.object_missing},
               {"object_cut", s.object_cut}};
+  if (!s.hands_complete) j["hands_complete"] = false;
+  return j;
 }
 
 OutOfFrameSignals OutOfFrameSignalsFromJson(const Json& j) {
@@ -27,6 +29,7 @@ OutOfFrameSignals OutOfFrameSignalsFromJson(const Json& j) {
   s.object_needed = IntArray(j, "object_needed");
   s.object_missing = IntArray(j, "object_missing");
   s.object_cut = IntArray(j, "object_cut");
+  s.hands_complete = j.value("hands_complete", true);
   const size_t n = s.covered.size();
   if (s.hands.size() != n || s.hand_cut.size() != n || s.object_needed.size() != n ||
       s.object_missing.size() != n || s.object_cut.size() != n) {
@@ -79,6 +82,7 @@ void OutOfFrameExtractor::Consume(FrameContext& context) {
     }
   }
   signals_.covered.push_back(boxes.known ? 1 : 0);
+  if (boxes.known && !boxes.complete) signals_.hands_complete = false;
   signals_.hands.push_back(static_cast<int>(boxes.hands.size()));
   signals_.hand_cut.push_back(hand_cut);
   signals_.object_needed.push_back(needed);
@@ -109,7 +113,7 @@ OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t f
       object_cut = 0;
   for (std::int64_t i = first; i <= last; ++i) {
     if (!s.covered[i]) continue;
-    const bool hm = s.hands[i] < out.expected_hands;
+    const bool hm = s.hands_complete && s.hands[i] < out.expected_hands;
     const bool m = hm || s.object_missing[i];
     const bool c = s.hand_cut[i] || s.object_cut[i];
     missing += m;

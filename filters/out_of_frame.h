@@ -18,7 +18,11 @@
 // the shot filter trimmed the clip):
 //   expected hands  the largest hand count seen in >= 20% of those frames
 //   missing         fewer hands than expected (a hand left the picture), or
-//                   a needed object missing
+//                   a needed object missing; hand counts are only trusted
+//                   from sources that see every visible hand (annotations,
+//                   ground truth, an external detector's output), not from
+//                   the learned detector, which keeps a hand it lost and
+//                   marks one lost at the border as cut instead
 //   cut             a hand or the touched object reaches the border
 // Reject "out_of_frame" when missing_fraction >= reject_missing_fraction or
 // cut_fraction >= reject_cut_fraction; flag "out_of_frame" when
@@ -58,6 +62,9 @@ void CheckConfig(const OutOfFrameSignalConfig& c, const std::string& section);
 
 struct OutOfFrameSignals {
   std::vector<int> covered, hands, hand_cut, object_needed, object_missing, object_cut;
+  // False when the boxes came from a source that can miss a visible hand
+  // (FrameBoxes::complete): then fewer hands than expected is not "missing".
+  bool hands_complete = true;
 };
 Json ToJson(const OutOfFrameSignals& s);
 OutOfFrameSignals OutOfFrameSignalsFromJson(const Json& j);  // throws Error("bad_measurements")

@@ -23,6 +23,9 @@ namespace doasido::filters {
 
 // Name of the stage that decodes each clip once (filters/analyze_stage.h).
 inline constexpr const char* kAnalyzeStageName = "filters_analyze";
+// Its section with the learned hand detector's samples and keypoints
+// (filters/learned_hand_detector.h).
+inline constexpr const char* kHandsMeasurement = "hands";
 
 // {"clip": analysis["clip"], "signals": analysis[section], "shot": ...} from
 // the analysis stage's measurements in `context` (and the shot-boundary

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "core/data_dirs.h"
 #include "core/error.h"
 #include "deploy/trajectory_source.h"
 #include "retarget/embodiment.h"
@@ -108,12 +109,6 @@ std::string ReadFileText(const std::filesystem::path& p) {
 }
 
 }  // namespace
-
-std::filesystem::path NpmDir() {
-  if (const char* dir = std::getenv("DOASIDO_NPM_DIR")) return dir;
-  const char* home = std::getenv("HOME");
-  return std::filesystem::path(home ? home : "/root") / ".cache/doasido/npm";
-}
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
   std::optional<deploy::TrajectoryFiles> files;

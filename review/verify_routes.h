@@ -41,10 +41,6 @@ struct VerifyHooks {
   std::string reviewer;
 };
 
-// $DOASIDO_NPM_DIR, else ~/.cache/doasido/npm (scripts/setup.sh installs
-// three@0.160.0 there).
-std::filesystem::path NpmDir();
-
 // The geometry and replay of a trajectory (the /api/verify/scene answer).
 // Throws Error("no_trajectory") when neither stage wrote one.
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage);

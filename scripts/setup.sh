@@ -29,8 +29,13 @@ PACKAGES=(
 # for the review app's 3D view (served by review/verify_routes.cc), DuckDB's
 # C library for the Parquet files of the LeRobot export (linked by
 # cmake/Dependencies.cmake), and hyparquet, the independent Parquet reader
-# the tests read those files back with. Nothing is fetched at build or run time.
-NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1 hyparquet@1.31.5)
+# the tests read those files back with; MediaPipe Hands' models and the
+# TFLite WebAssembly runtime that runs them for the learned hand detector
+# (filters/hand_landmarker.h; tfjs-core at the version tfjs-tflite asks for).
+# Nothing is fetched at build or run time.
+NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1 hyparquet@1.31.5
+  @mediapipe/hands@0.4.1675469240 @tensorflow/tfjs-tflite@0.0.1-alpha.10
+  @tensorflow/tfjs-core@4.9.0 @tensorflow/tfjs-backend-cpu@4.9.0)
 install_npm() {
   local dir=${DOASIDO_NPM_DIR:-$HOME/.cache/doasido/npm}
   local todo=()

@@ -1,0 +1,175 @@
+#include "filters/learned_hand_detector.h"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "filters/out_of_frame.h"
+
+namespace doasido::filters {
+namespace {
+
+// The 21-keypoint skeleton's bones, palm edges included.
+constexpr int kBones[][2] = {{0, 1},   {1, 2},   {2, 3},   {3, 4},   {0, 5},   {5, 6},
+                             {6, 7},   {7, 8},   {0, 9},   {9, 10},  {10, 11}, {11, 12},
+                             {0, 13},  {13, 14}, {14, 15}, {15, 16}, {0, 17},  {17, 18},
+                             {18, 19}, {19, 20}, {5, 9},   {9, 13},  {13, 17}, {1, 5}};
+
+cv::Point2d At(const LandmarkedHand& hand, int k) { return {hand.keypoints[k].x, hand.keypoints[k].y}; }
+
+double Round(double v, double unit) { return std::round(v / unit) * unit; }
+
+Json PointsJson(const std::array<cv::Point3d, kHandKeypoints>& points, double scale, double unit) {
+  Json out = Json::array();
+  for (const cv::Point3d& p : points) {
+    out.push_back({Round(p.x * scale, unit), Round(p.y * scale, unit), Round(p.z * scale, unit)});
+  }
+  return out;
+}
+
+}  // namespace
+
+FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedHand& hand,
+                                          const LearnedDetectorConfig& config) {
+  const double palm = cv::norm(At(hand, 0) - At(hand, 9));
+  if (!(palm > 1.0)) return {};
+  const int reach = std::max(2, static_cast<int>(std::lround(config.fingertip_reach * palm)));
+  cv::Rect roi(cv::Point(static_cast<int>(hand.box.x) - reach, static_cast<int>(hand.box.y) - reach),
+               cv::Point(static_cast<int>(hand.box.br().x) + reach + 1,
+                         static_cast<int>(hand.box.br().y) + reach + 1));
+  roi &= cv::Rect(0, 0, gray.cols, gray.rows);
+  if (roi.area() == 0) return {};
+  const cv::Point2d origin(roi.x, roi.y);
+  cv::Mat hand_mask = cv::Mat::zeros(roi.size(), CV_8U), discs = hand_mask.clone();
+  const int thickness = std::max(1, static_cast<int>(std::lround(config.hand_thickness * palm)));
+  for (const auto& bone : kBones) {
+    cv::line(hand_mask, At(hand, bone[0]) - origin, At(hand, bone[1]) - origin, 255, thickness,
+             cv::LINE_8);
+  }
+  std::vector<cv::Point> palm_polygon;
+  for (int k : {0, 1, 5, 9, 13, 17}) palm_polygon.push_back(At(hand, k) - origin);
+  cv::fillConvexPoly(hand_mask, palm_polygon, 255);
+  for (int tip : kFingertips) cv::circle(discs, At(hand, tip) - origin, reach, 255, cv::FILLED);
+  const cv::Mat around = discs & ~hand_mask;
+  const int area = cv::countNonZero(around);
+  if (area < 4) return {};
+  cv::Mat edges;
+  cv::Canny(gray(roi), edges, 50, 150);
+  const cv::Mat touched = edges & around;
+  FingertipEvidence evidence;
+  evidence.density = static_cast<double>(cv::countNonZero(touched)) / area;
+  if (evidence.density > 0) {
+    const cv::Rect box = cv::boundingRect(touched) + roi.tl();
+    evidence.box = cv::Rect2d(box.x, box.y, box.width, box.height);
+  }
+  return evidence;
+}
+
+LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip)
+    : config_(config),
+      landmarker_(HandLandmarkerOptions{.max_hands = config.max_hands, .clip = clip}) {}
+
+void LearnedHandDetector::Begin(const VideoGeometry& geometry) {
+  geometry_ = geometry;
+  const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
+  every_ = std::max<std::int64_t>(1, std::llround(fps / config_.sample_fps));
+  landmarker_.Reset();
+}
+
+void LearnedHandDetector::Consume(FrameContext& context) {
+  if (context.ordinal % every_ != 0) {
+    context.boxes = last_;
+    return;
+  }
+  const std::vector<LandmarkedHand> hands = landmarker_.Detect(context.frame->bgr);
+  total_ms_ += landmarker_.last_ms();
+  FrameBoxes found;
+  found.known = true;
+  found.complete = false;
+  std::vector<int> age;
+  Json sample_hands = Json::array();
+  for (const LandmarkedHand& hand : hands) {
+    if (hand.score < config_.min_score) continue;
+    const FingertipEvidence evidence = ObjectEdgesAtFingertips(context.gray, hand, config_);
+    const bool touching = evidence.density >= config_.min_object_edges;
+    found.hands.push_back(hand.box);
+    found.hand_contact.push_back(touching ? 3 : 0);
+    if (touching) found.objects.push_back(evidence.box);
+    age.push_back(0);
+    AddDetection(hand.box, "hand", hand.score, touching ? 3 : 0, context.frame->index);
+    if (touching) AddDetection(evidence.box, "object", 1.0, -1, context.frame->index);
+    const double s = geometry_.downscale;
+    sample_hands.push_back({{"score", Round(hand.score, 1e-3)},
+                            {"right", Round(hand.right, 1e-3)},
+                            {"object_edges", Round(evidence.density, 1e-4)},
+                            {"box", {Round(hand.box.x * s, 0.1), Round(hand.box.y * s, 0.1),
+                                     Round(hand.box.br().x * s, 0.1),
+                                     Round(hand.box.br().y * s, 0.1)}},
+                            {"keypoints", PointsJson(hand.keypoints, s, 0.1)},
+                            {"world", PointsJson(hand.world, 1.0, 1e-4)}});
+  }
+  HoldMissedHands(&found, &age);
+  samples_.push_back({{"frame", context.frame->index},
+                      {"ms", Round(landmarker_.last_ms(), 0.1)},
+                      {"hands", std::move(sample_hands)}});
+  last_ = found;
+  last_age_ = age;
+  context.boxes = found;
+}
+
+// A hand of the last sample that no hand of this one overlaps is still
+// there: hidden behind something or missed by the models when it was lost
+// inside the picture, partly past the border when it was lost next to one
+// (its box then reaches that border, which the out-of-frame filter counts
+// as cut). Its contact is trusted for hold_samples samples, then unknown
+// is taken as none.
+void LearnedHandDetector::HoldMissedHands(FrameBoxes* found, std::vector<int>* age) const {
+  const double w = geometry_.width, h = geometry_.height;
+  const double near_x = config_.border_reach * w, near_y = config_.border_reach * h;
+  for (size_t i = 0; i < last_.hands.size(); ++i) {
+    if (static_cast<int>(found->hands.size()) >= config_.max_hands) break;
+    bool seen = false;
+    for (const cv::Rect2d& other : found->hands) seen |= (other & last_.hands[i]).area() > 0;
+    if (seen) continue;
+    cv::Rect2d box = last_.hands[i];
+    double x1 = box.x, y1 = box.y, x2 = box.br().x, y2 = box.br().y;
+    if (x1 <= near_x) x1 = 0;
+    if (y1 <= near_y) y1 = 0;
+    if (x2 >= w - near_x) x2 = w;
+    if (y2 >= h - near_y) y2 = h;
+    found->hands.emplace_back(cv::Point2d(x1, y1), cv::Point2d(x2, y2));
+    const int held = last_age_[i] + 1;
+    const bool trusted = held <= config_.hold_samples && last_.hand_contact[i] == 3;
+    found->hand_contact.push_back(trusted ? 3 : 0);
+    if (trusted) {
+      const int o = TouchedObject(last_.hands[i], last_.objects);
+      if (o >= 0) found->objects.push_back(last_.objects[o]);
+    }
+    age->push_back(held);
+  }
+}
+
+void LearnedHandDetector::AddDetection(const cv::Rect2d& box, const char* kind, double score,
+                                       int contact, std::int64_t frame) {
+  const double s = geometry_.downscale;
+  Detection d;
+  d.frame = frame;
+  d.kind = kind;
+  d.x1 = box.x * s;
+  d.y1 = box.y * s;
+  d.x2 = box.br().x * s;
+  d.y2 = box.br().y * s;
+  d.score = score;
+  d.contact_state = contact;
+  d.source = "detector:learned";
+  detections_.push_back(d);
+}
+
+Json LearnedHandDetector::Measurements() const {
+  const double n = static_cast<double>(samples_.size());
+  return {{"model", "mediapipe_hands_full"},
+          {"sample_every", every_},
+          {"ms_per_sample", n > 0 ? Round(total_ms_ / n, 0.1) : 0.0},
+          {"samples", samples_}};
+}
+
+}  // namespace doasido::filters

@@ -1,0 +1,99 @@
+// The learned hand detector inside the analysis pass (HandLandmarker:
+// MediaPipe Hands through Node), for clips without annotations.
+//
+// It samples `sample_fps` frames per second of the span, finds up to
+// `max_hands` hands with 21 keypoints each, and holds a sample's hands
+// until the next sample (the landmarker itself tracks a hand from one
+// sample to the next). A hand detector says where hands are, not that they
+// hold something; the object evidence is what the hand touches: edges in
+// discs around the fingertips that are not the hand's own outline (the hand
+// is masked by its skeleton drawn thick). A hand against an empty
+// background (a raised hand signing, a hand in the air) has none; fingers on
+// a pencil, a cup, a trackpad or a guitar neck have some. A hand with
+// evidence at or above `min_object_edges` is in contact with a portable
+// object (100DOH state 3), and the box of those edges is that object's box;
+// else it has no contact (state 0).
+//
+// A hand the models lose is kept where it was last seen (a hand behind a
+// cup, or one the models miss for a moment, is still there); one lost
+// within `border_reach` of the border is taken to be partly past it, and
+// its box is extended to that border. So with this detector a lost hand
+// makes a clip's frames "cut" (the out-of-frame filter flags them for a
+// person), never "missing": the models cannot tell a hand that left from
+// one they no longer see. A kept hand's contact counts for `hold_samples`
+// samples, then as none.
+//
+// What it writes: each frame's hands into FrameContext::boxes (later
+// consumers see them), Detection rows at full resolution (source
+// "detector:learned"), and per sample the hands' boxes, scores, keypoints
+// (pixels at full resolution) and world keypoints (metres) for the clip's
+// measurements, where reconstruction and retargeting can use them.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/config.h"
+#include "db/records.h"
+#include "filters/frame_analyzer.h"
+#include "filters/hand_landmarker.h"
+
+namespace doasido::filters {
+
+struct LearnedDetectorConfig {
+  double sample_fps = 5;        // frames per second sent to the models
+  int max_hands = 2;
+  double min_score = 0.5;       // hand presence
+  double fingertip_reach = 0.35;   // disc radius around a fingertip, in palm lengths
+  double hand_thickness = 0.45;    // skeleton line width masking the hand, in palm lengths
+  double min_object_edges = 0.04;  // edge pixels per disc pixel outside the hand
+  int hold_samples = 1;
+  double border_reach = 0.05;  // fraction of the width / height
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
+                                                min_score, fingertip_reach, hand_thickness,
+                                                min_object_edges, hold_samples, border_reach)
+// Valid ranges (filters/config_checks.cc); throws Error("bad_config").
+void CheckConfig(const LearnedDetectorConfig& c, const std::string& section);
+
+// The object evidence above for `hand` in `gray` (keypoints in its pixels):
+// the density of edges around the fingertips outside the hand, and the box
+// of those edges (the part of the touched object the fingers reach; empty
+// when there are none).
+struct FingertipEvidence {
+  double density = 0;
+  cv::Rect2d box;
+};
+FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedHand& hand,
+                                          const LearnedDetectorConfig& config);
+
+class LearnedHandDetector : public FrameConsumer {
+ public:
+  // Starts the landmarker (throws what HandLandmarker throws).
+  LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip);
+  void Begin(const VideoGeometry& geometry) override;
+  void Consume(FrameContext& context) override;
+
+  const std::vector<Detection>& detections() const { return detections_; }
+  // {"sample_every", "samples": [{"frame", "ms", "hands": [{"score",
+  //  "right", "object_edges", "box", "keypoints", "world"}]}],
+  //  "ms_per_sample"}: pixels at full resolution.
+  Json Measurements() const;
+
+ private:
+  void HoldMissedHands(FrameBoxes* found, std::vector<int>* age) const;
+  void AddDetection(const cv::Rect2d& box, const char* kind, double score, int contact,
+                    std::int64_t frame);
+
+  LearnedDetectorConfig config_;
+  HandLandmarker landmarker_;
+  VideoGeometry geometry_;
+  std::int64_t every_ = 1;
+  FrameBoxes last_;
+  std::vector<int> last_age_;  // samples since each of last_'s hands was seen
+  std::vector<Detection> detections_;
+  Json samples_ = Json::array();
+  double total_ms_ = 0;
+};
+
+}  // namespace doasido::filters

@@ -33,7 +33,10 @@ void AddIngestOptions(CLI::App& cmd, IngestOptions& opt) {
 }
 
 bool IngestLists(Database& db, const IngestOptions& opt) {
-  if (db.Pipeline().empty()) db.SetPipeline(pipeline::DefaultPipeline());
+  if (db.Pipeline().empty()) {
+    const auto stages = pipeline::DefaultPipeline();
+    db.SetPipeline(stages, pipeline::FlagContinuingStages(stages));
+  }
   Json all = Json::array();
   bool ok = true;
   for (const auto& list : opt.lists) {

@@ -35,7 +35,7 @@ void AddInitCommand(CLI::App& app) {
     if (opt->pipeline.empty() && !db.Pipeline().empty()) {
       pipeline = db.Pipeline();  // re-running init keeps an existing pipeline
     }
-    db.SetPipeline(pipeline);
+    db.SetPipeline(pipeline, pipeline::FlagContinuingStages(pipeline));
     std::string joined;
     for (const auto& s : pipeline) joined += (joined.empty() ? "" : " -> ") + s;
     std::printf("%s: schema %d, pipeline %s\n", db.path().c_str(), db.SchemaVersion(),

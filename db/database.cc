@@ -169,7 +169,8 @@ void Database::Transaction::Commit() {
 
 // ---- Pipeline ---------------------------------------------------------------
 
-void Database::SetPipeline(const std::vector<std::string>& stages) {
+void Database::SetPipeline(const std::vector<std::string>& stages,
+                           const std::set<std::string>& flag_continues) {
   Transaction tx(*this);
   const auto current = Pipeline();
   if (QueryInt("SELECT COUNT(*) FROM stage_runs") > 0) {
@@ -183,23 +184,34 @@ void Database::SetPipeline(const std::vector<std::string>& stages) {
   }
   Prepare("DELETE FROM pipeline").Run();
   for (size_t i = 0; i < stages.size(); ++i) {
-    Prepare("INSERT INTO pipeline (position, stage) VALUES (?, ?)")
+    Prepare("INSERT INTO pipeline (position, stage, flag_continues) VALUES (?, ?, ?)")
         .Bind(1, static_cast<std::int64_t>(i))
         .Bind(2, stages[i])
+        .Bind(3, flag_continues.count(stages[i]) ? 1 : 0)
         .Run();
   }
   LogEvent(std::nullopt, "", "pipeline", "", Json(stages).dump());
   tx.Commit();
-  pipeline_cache_ = stages;
+  Pipeline();
 }
 
 std::vector<std::string> Database::Pipeline() {
   std::vector<std::string> stages;
-  auto& q = Prepare("SELECT stage FROM pipeline ORDER BY position");
-  while (q.Step()) stages.push_back(q.Text(0));
+  std::set<std::string> continues;
+  auto& q = Prepare("SELECT stage, flag_continues FROM pipeline ORDER BY position");
+  while (q.Step()) {
+    stages.push_back(q.Text(0));
+    if (q.Int(1) != 0) continues.insert(q.Text(0));
+  }
   q.Reset();
   pipeline_cache_ = stages;
+  flag_continues_cache_ = continues;
   return stages;
+}
+
+std::set<std::string> Database::FlagContinuing() {
+  Pipeline();
+  return flag_continues_cache_;
 }
 
 int Database::StagePosition(const std::string& stage) {

@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -129,8 +130,14 @@ class Database {
   // ---- Pipeline -----------------------------------------------------------
   // The ordered stages every clip goes through. Setting it on a database
   // that already has stage runs is allowed only to append stages.
-  void SetPipeline(const std::vector<std::string>& stages);
+  // `flag_continues`: stages where a flag does not stop the clip: it goes on
+  // to the next stage (the filters: a person then sees every filter's
+  // verdict), and waits for a person only before the first stage that is
+  // not in this set's reach (see MoveOn).
+  void SetPipeline(const std::vector<std::string>& stages,
+                   const std::set<std::string>& flag_continues = {});
   std::vector<std::string> Pipeline();
+  std::set<std::string> FlagContinuing();
 
   // ---- Ingest -------------------------------------------------------------
   VideoId UpsertVideo(const std::string& path_or_url);
@@ -294,7 +301,9 @@ class Database {
     std::optional<double> answered_at;
   };
 
-  // Done runs whose verdict is flag, in clip then pipeline order.
+  // Done runs whose verdict is flag, in clip then pipeline order, of clips
+  // that wait for a person: every stage they went on to has finished and
+  // none rejected them.
   std::vector<FlaggedRun> ListFlagged();
   std::int64_t CountFlagged();
   // A person's decision on a flagged run, in one transaction: a `reviews`
@@ -459,6 +468,14 @@ class Database {
   void Migrate();
   void QueueNextStage(ClipId clip, const std::string& stage);
   void DropLaterStages(ClipId clip, const std::string& stage);
+  // Moves a clip on after `stage` gave `verdict`: a pass, or a flag where
+  // flags continue, queues the next stage, except that a clip with a flag at
+  // or before `stage` waits for a person before a stage past the flags'
+  // reach; a reject, or a flag that stops, drops the later runs.
+  void MoveOn(ClipId clip, const std::string& stage, Verdict verdict);
+  // After a person's pass: when no flag or reject of the clip is left, the
+  // clip goes on from its furthest finished stage.
+  void Release(ClipId clip);
   int StagePosition(const std::string& stage);
 
   std::filesystem::path path_;
@@ -467,6 +484,7 @@ class Database {
   double busy_timeout_s_;
   std::map<std::string, std::unique_ptr<db::Statement>> statements_;
   std::vector<std::string> pipeline_cache_;
+  std::set<std::string> flag_continues_cache_;
   int transaction_depth_ = 0;
 };
 

@@ -143,11 +143,7 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
         .Bind(10, claim.clip_id)
         .Run();
   }
-  if (result.verdict == Verdict::kPass) {
-    QueueNextStage(claim.clip_id, claim.stage);
-  } else {
-    DropLaterStages(claim.clip_id, claim.stage);
-  }
+  MoveOn(claim.clip_id, claim.stage, result.verdict);
   LogEvent(claim.clip_id, claim.stage, "done", worker,
            std::string(ToString(result.verdict)) +
                (result.reason.empty() ? "" : " " + result.reason));
@@ -182,6 +178,39 @@ void Database::QueueNextStage(ClipId clip, const std::string& stage) {
       .Bind(2, pipeline_cache_[position + 1])
       .Bind(3, position + 1)
       .Run();
+}
+
+void Database::MoveOn(ClipId clip, const std::string& stage, Verdict verdict) {
+  const int position = StagePosition(stage);
+  const bool continues = flag_continues_cache_.count(stage) > 0;
+  if (verdict == Verdict::kReject || (verdict == Verdict::kFlag && !continues)) {
+    DropLaterStages(clip, stage);
+    return;
+  }
+  if (!continues) {
+    auto& flagged = Prepare("SELECT COUNT(*) FROM stage_runs WHERE clip_id = ? AND position <= ?"
+                            " AND state = 'done' AND verdict = 'flag'");
+    flagged.Bind(1, clip).Bind(2, position);
+    const bool waits = flagged.Step() && flagged.Int(0) > 0;
+    flagged.Reset();
+    if (waits) return;  // the review queue lists it (ListFlagged)
+  }
+  QueueNextStage(clip, stage);
+}
+
+void Database::Release(ClipId clip) {
+  auto& q = Prepare(
+      "SELECT stage, state, IFNULL(verdict, ''),"
+      " (SELECT COUNT(*) FROM stage_runs o WHERE o.clip_id = r.clip_id"
+      "  AND o.verdict IN ('flag', 'reject'))"
+      " FROM stage_runs r WHERE clip_id = ? ORDER BY position DESC LIMIT 1");
+  q.Bind(1, clip);
+  const bool found = q.Step();
+  const std::string stage = found ? q.Text(0) : "", state = found ? q.Text(1) : "";
+  const std::string verdict = found ? q.Text(2) : "";
+  const bool held = found && q.Int(3) > 0;
+  q.Reset();
+  if (found && !held && state == "done" && verdict == "pass") QueueNextStage(clip, stage);
 }
 
 void Database::DropLaterStages(ClipId clip, const std::string& stage) {

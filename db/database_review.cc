@@ -6,12 +6,23 @@
 #include "db/statement.h"
 
 namespace doasido {
+namespace {
+
+// A flagged clip waits for a person once every stage it went on to has
+// finished and none rejected it (flags do not stop the filters, so a later
+// filter may still reject it, and then nobody needs to look).
+constexpr const char* kClipSettled =
+    "NOT EXISTS (SELECT 1 FROM stage_runs o WHERE o.clip_id = r.clip_id"
+    " AND (o.verdict = 'reject' OR o.state IN ('pending', 'running', 'failed')))";
+
+}  // namespace
 
 std::vector<Database::FlaggedRun> Database::ListFlagged() {
   auto& q = Prepare(
       "SELECT r.clip_id, IFNULL(c.external_id, ''), r.stage, IFNULL(r.reason, '')"
       " FROM stage_runs r JOIN clips c ON c.id = r.clip_id"
-      " WHERE r.state = 'done' AND r.verdict = 'flag' ORDER BY r.clip_id, r.position");
+      " WHERE r.state = 'done' AND r.verdict = 'flag' AND " + std::string(kClipSettled) +
+      " ORDER BY r.clip_id, r.position");
   std::vector<FlaggedRun> out;
   while (q.Step()) out.push_back({q.Int(0), q.Text(1), q.Text(2), q.Text(3)});
   q.Reset();
@@ -19,7 +30,8 @@ std::vector<Database::FlaggedRun> Database::ListFlagged() {
 }
 
 std::int64_t Database::CountFlagged() {
-  return QueryInt("SELECT COUNT(*) FROM stage_runs WHERE state = 'done' AND verdict = 'flag'");
+  return QueryInt("SELECT COUNT(*) FROM stage_runs r WHERE state = 'done' AND verdict = 'flag'"
+                  " AND " + std::string(kClipSettled));
 }
 
 void Database::RecordReview(ClipId clip, const std::string& stage, const std::string& reviewer,

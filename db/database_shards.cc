@@ -190,7 +190,7 @@ void Database::ExportShard(const ShardSpec& spec) {
 void Database::WriteShard(const ShardSpec& spec) {
   {
     Database shard(spec.path, busy_timeout_s_);  // creates the schema
-    shard.SetPipeline(Pipeline());
+    shard.SetPipeline(Pipeline(), FlagContinuing());
     shard.SetMeta("parent_uuid", Uuid());
     shard.SetMeta("parent_path", path_.string());
     shard.SetMeta("shard_name", spec.name);

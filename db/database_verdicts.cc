@@ -33,7 +33,7 @@ void Database::SetVerdict(ClipId clip, const std::string& stage, Verdict verdict
       .Bind(6, Now())
       .Run();
   if (verdict == Verdict::kPass) {
-    QueueNextStage(clip, stage);
+    Release(clip);
   } else {
     DropLaterStages(clip, stage);
   }
@@ -83,7 +83,7 @@ bool Database::StoreRedecision(ClipId clip, const std::string& stage,
         .Bind(6, now)
         .Run();
     DropLaterStages(clip, stage);
-    if (result.verdict == Verdict::kPass) QueueNextStage(clip, stage);
+    MoveOn(clip, stage, result.verdict);
     LogEvent(clip, stage, "rethreshold", "",
              std::string(ToString(result.verdict)) + " " + result.reason);
   }

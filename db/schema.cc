@@ -205,6 +205,11 @@ CREATE TABLE shard_clips (
 );
 CREATE INDEX shard_clips_shard ON shard_clips(shard_id);
 )sql",
+      // 6: a flag at a stage whose next stage also judges stored
+      // measurements (inside the filters) lets the clip go on to it.
+      R"sql(
+ALTER TABLE pipeline ADD COLUMN flag_continues INTEGER NOT NULL DEFAULT 0;
+)sql",
   };
   return kMigrations;
 }

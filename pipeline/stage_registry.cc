@@ -118,6 +118,18 @@ std::vector<std::string> DefaultPipeline() {
   return names;
 }
 
+std::set<std::string> FlagContinuingStages(const std::vector<std::string>& pipeline) {
+  std::set<std::string> out;
+  for (size_t i = 0; i + 1 < pipeline.size(); ++i) {
+    for (const auto& entry : StageTable()) {
+      if (entry.name == pipeline[i + 1] && entry.decides_from_measurements) {
+        out.insert(pipeline[i]);
+      }
+    }
+  }
+  return out;
+}
+
 void CheckStageConfig(const Json& config, const std::vector<std::string>& other_sections) {
   if (!config.is_object()) throw Error("bad_config", "the configuration is not a table");
   std::vector<std::string> known = other_sections;

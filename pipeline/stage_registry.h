@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ const std::vector<StageEntry>& StageTable();
 // Throws Error("unknown_stage") listing the known names.
 std::unique_ptr<Stage> MakeStage(const std::string& name, const Json& config);
 std::vector<std::string> DefaultPipeline();
+// The stages of `pipeline` where a flag lets the clip go on: those followed
+// by a stage that decides from stored measurements (the filters), so that
+// a flagged clip is judged by every filter before a person sees it.
+std::set<std::string> FlagContinuingStages(const std::vector<std::string>& pipeline);
 
 // Refuses a configuration before any clip runs: every section must name a
 // stage of the table or one of `other_sections` (tables read outside the

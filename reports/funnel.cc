@@ -71,14 +71,20 @@ Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
       }
     }
   }
-  if (!pipeline.empty()) funnel.survivors = funnel.stages[pipeline.size() - 1].passed;
+  // Passed the last stage with no flag still waiting (flags do not stop
+  // the filters, so a flagged clip can pass the last one).
+  for (const auto& [clip, o] : ComputeOutcomes(pipeline, runs)) {
+    funnel.survivors += o.outcome == Outcome::kSurvived;
+  }
   funnel.without_runs = clips - static_cast<std::int64_t>(has_run.size());
   return funnel;
 }
 
 std::map<ClipId, ClipOutcome> ComputeOutcomes(const std::vector<std::string>& pipeline,
                                               const std::vector<Database::ReportRun>& runs) {
-  std::map<ClipId, const Database::ReportRun*> furthest;
+  // Per clip: the furthest run, and the first flag (flags do not stop the
+  // filters, so a clip flagged early may have passed or been rejected later).
+  std::map<ClipId, const Database::ReportRun*> furthest, first_flag;
   for (const auto& r : runs) {
     // Stages run outside the pipeline do not move a clip along it.
     if (!pipeline.empty() &&
@@ -87,22 +93,29 @@ std::map<ClipId, ClipOutcome> ComputeOutcomes(const std::vector<std::string>& pi
     }
     auto& slot = furthest[r.clip_id];
     if (!slot || r.position > slot->position) slot = &r;
+    if (r.state == "done" && r.verdict == "flag") {
+      auto& flag = first_flag[r.clip_id];
+      if (!flag || r.position < flag->position) flag = &r;
+    }
   }
   std::map<ClipId, ClipOutcome> out;
   for (const auto& [clip, r] : furthest) {
     ClipOutcome o{.clip = clip, .stage = r->stage};
     o.human = r->verdict_source == kHumanVerdictSource;
+    const auto flag = first_flag.find(clip);
     if (r->state == "failed") {
       o.outcome = Outcome::kFailed;
       o.reason = r->error;
     } else if (r->state != "done" || r->verdict.empty()) {
       o.outcome = Outcome::kInProgress;
     } else if (r->verdict == "reject") {
-      o.outcome = Outcome::kRejected;
+      o.outcome = Outcome::kRejected;  // its first reject: later stages did not run
       o.reason = ReasonKey(r->reason);
-    } else if (r->verdict == "flag") {
-      o.outcome = Outcome::kFlagged;
-      o.reason = ReasonKey(r->reason);
+    } else if (flag != first_flag.end()) {
+      o.outcome = Outcome::kFlagged;  // waits for a person at its first flag
+      o.stage = flag->second->stage;
+      o.human = flag->second->verdict_source == kHumanVerdictSource;
+      o.reason = ReasonKey(flag->second->reason);
     } else {
       const bool last = !pipeline.empty() && r->stage == pipeline.back();
       o.outcome = last ? Outcome::kSurvived : Outcome::kInProgress;

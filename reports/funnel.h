@@ -37,11 +37,12 @@ struct FunnelStage {
 struct Funnel {
   std::int64_t pool = 0;  // clips in the database
   std::vector<FunnelStage> stages;
-  std::int64_t survivors = 0;  // passed the last stage
+  std::int64_t survivors = 0;  // passed the last stage, no flag waiting for a person
   std::int64_t without_runs = 0;  // clips that never entered the first stage
 };
 
-// Where one clip stands: its furthest stage run decides.
+// Where one clip stands: its first reject, else its first flag (waiting
+// for a person), else its furthest stage run.
 enum class Outcome { kSurvived, kRejected, kFlagged, kFailed, kInProgress };
 const char* ToString(Outcome o);
 

@@ -85,6 +85,7 @@ const char* kBody = R"html(
   <aside>
     <section><h2>Clip</h2><div id="info"></div></section>
     <section><h2>Scores</h2><table id="scores"></table></section>
+    <section><h2>Every stage</h2><table id="stages"></table></section>
     <section><h2>Measurements</h2><pre id="summary"></pre></section>
     <section id="help"><h2>Keys</h2>
       <table>
@@ -188,6 +189,21 @@ function renderPanel(c) {
   }
   const summary = Object.assign({}, c.summary || {}); delete summary.scores;
   $('summary').textContent = JSON.stringify(summary, null, 1);
+  renderStages(c);
+}
+
+// One row per finished stage: its verdict and its scores, value / reject at.
+function renderStages(c) {
+  const t = $('stages'); t.replaceChildren();
+  for (const s of c.stages || []) {
+    const tr = el('tr');
+    if (s.stage === c.stage) tr.className = 'current';
+    tr.appendChild(el('th', s.stage));
+    tr.appendChild(el('td', s.verdict + (s.reason ? ' ' + s.reason : ''), 'verdict-' + s.verdict));
+    tr.appendChild(el('td', s.scores.map((x) => x.name + ' ' + fmt(x.value) +
+        (x.reject != null ? ' / ' + fmt(x.reject) : '')).join(', ')));
+    t.appendChild(tr);
+  }
 }
 
 function frameCount(c) {

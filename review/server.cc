@@ -163,6 +163,19 @@ Json ClipJson(Database& d, ClipId id, const std::string& stage) {
                        {"at", v.created_at}});
   }
   out["history"] = history;
+  // Every stage the clip went through: flags do not stop the filters, so a
+  // person sees what each of them made of the clip.
+  Json stages = Json::array();
+  for (const auto& run : d.ListRuns({.clip = id})) {
+    if (run.state != RunState::kDone) continue;
+    const auto rm = d.GetMeasurements(id, run.stage);
+    const Json scores = rm && rm->contains("summary") && rm->at("summary").contains("scores")
+                            ? rm->at("summary").at("scores")
+                            : Json::array();
+    stages.push_back({{"stage", run.stage}, {"verdict", run.verdict}, {"reason", run.reason},
+                      {"scores", scores}});
+  }
+  out["stages"] = stages;
   return out;
 }
 

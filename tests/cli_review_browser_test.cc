@@ -53,7 +53,9 @@ class BrowserTest : public ::testing::Test {
 };
 
 // The clips probed for real, then flagged by `interaction` with a score
-// summary and one hand box per frame, as a filter stage would leave them.
+// summary and one hand box per frame, as a filter stage would leave them,
+// and passed by `out_of_frame` (a flag does not stop the filters; a clip
+// waits for a person once they have all judged it).
 std::vector<ClipId> FlagAll(Database& db) {
   auto probe = pipeline::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
@@ -81,6 +83,9 @@ std::vector<ClipId> FlagAll(Database& db) {
     EXPECT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
     flagged.push_back(claim->clip_id);
   }
+  while (auto claim = db.ClaimNext("test", {"out_of_frame"}, 60, 3)) {
+    EXPECT_TRUE(db.Complete(*claim, "test", "h", StageResult{}, 0.0));
+  }
   return flagged;
 }
 
@@ -88,7 +93,7 @@ TEST_F(BrowserTest, ReviewPagePlaysAClipAndTheKeyboardDecides) {
   Synth();
   const auto db_path = dir_ / "work" / "d.db";
   ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline",
-                        "probe,interaction,out_of_frame"}).exit_code, 0);
+                        "probe,interaction,out_of_frame,noop"}).exit_code, 0);
   const auto ingest = RunDoasido({"ingest", "--db", db_path.string(),
                                   (dir_ / "synth" / "clips.csv").string()});
   ASSERT_EQ(ingest.exit_code, 0) << ingest.err;
@@ -111,6 +116,17 @@ TEST_F(BrowserTest, ReviewPagePlaysAClipAndTheKeyboardDecides) {
   EXPECT_EQ(session.WaitFor("document.body.dataset.ready === '1' && "
                             "window.doasidoState.queue.length", "the queue"),
             5);
+  // Every stage the clip went through is on the page with its verdict: the
+  // flagging filter and the one after it.
+  EXPECT_EQ(session.WaitFor(
+                "(() => { const rows = [...document.querySelectorAll('#stages tr')]"
+                ".map(r => r.textContent); return rows.length === 3 &&"
+                " rows[1].includes('interaction') && rows[1].includes('flag no_detections') &&"
+                " rows[1].includes('contact_share 0.1') && rows[2].includes('out_of_frame') &&"
+                " rows[2].includes('pass') && rows.join('|'); })()",
+                "every stage's verdict"),
+            Json("probepass|interactionflag no_detectionscontact_share 0.1000 / 0.05000|"
+                 "out_of_framepass"));
 
   // The late clip (last in the queue) starts playing at frame 15 = 0.5 s.
   session.PressKeys({"j", "j", "j", "j"});
@@ -182,7 +198,9 @@ TEST_F(BrowserTest, ReviewPagePlaysAClipAndTheKeyboardDecides) {
   EXPECT_EQ(std::to_string(reviews[1].clip_id), second);
   EXPECT_EQ(reviews[1].decision, "reject");
   EXPECT_EQ(reviews[1].reason, "no_interaction");
-  const auto next = db.ListRuns({.stage = "out_of_frame"});
+  // The accepted clip goes on past the filters; the rejected one lost its
+  // later runs.
+  const auto next = db.ListRuns({.stage = "noop"});
   ASSERT_EQ(next.size(), 1u);
   EXPECT_EQ(std::to_string(next[0].clip_id), first);
   EXPECT_EQ(next[0].state, "pending");

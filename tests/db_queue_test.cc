@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <thread>
 
 #include "db/database.h"
@@ -97,6 +98,76 @@ TEST(DbQueue, ClipAdvancesThroughStagesOnlyWhenItPasses) {
   const auto context = db.LoadContext(pass, "b");
   EXPECT_EQ(context.measurements.count("a"), 1u);
   EXPECT_EQ(context.measurements.at("a")["brightness"], 100);
+}
+
+// Runs every claimable stage, giving the verdict `decide` names for each
+// (clip, stage); returns the stages run, in order, as "clip:stage".
+template <typename F>
+std::vector<std::string> RunAll(Database& db, F decide) {
+  std::vector<std::string> ran;
+  while (const auto claim = db.ClaimNext("w", {}, 60, 3)) {
+    StageResult result;
+    result.verdict = decide(claim->clip_id, claim->stage);
+    if (result.verdict != Verdict::kPass) result.reason = "why_" + claim->stage;
+    EXPECT_TRUE(db.Complete(*claim, "w", "h", result, 0.1));
+    ran.push_back(std::to_string(claim->clip_id) + ":" + claim->stage);
+  }
+  return ran;
+}
+
+// Filters a, b, c (a flag at a or b lets the clip go on), then d past them.
+TEST(DbQueue, AFlagDoesNotStopTheFiltersAndWaitsForAPersonBeforeTheNextStage) {
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"a", "b", "c", "d"}, {"a", "b"});
+  const ClipId flagged = AddClip(db, "/v.mp4", 0, 1);        // flag at a, pass after
+  const ClipId rejected_later = AddClip(db, "/v.mp4", 2, 3); // flag at a, reject at b
+  const ClipId clean = AddClip(db, "/v.mp4", 4, 5);          // passes everything
+  const auto ran = RunAll(db, [&](ClipId clip, const std::string& stage) {
+    if (stage == "a" && clip != clean) return Verdict::kFlag;
+    if (stage == "b" && clip == rejected_later) return Verdict::kReject;
+    return Verdict::kPass;
+  });
+  const auto count = [&](ClipId clip, const std::string& stage) {
+    return std::count(ran.begin(), ran.end(), std::to_string(clip) + ":" + stage);
+  };
+  // The flagged clip was judged by every filter but went no further.
+  EXPECT_EQ(count(flagged, "b"), 1);
+  EXPECT_EQ(count(flagged, "c"), 1);
+  EXPECT_EQ(count(flagged, "d"), 0);
+  EXPECT_EQ(count(rejected_later, "b"), 1);
+  EXPECT_EQ(count(rejected_later, "c"), 0);
+  EXPECT_EQ(count(clean, "d"), 1);
+  // Only the clip no later filter rejected waits for a person.
+  const auto waiting = db.ListFlagged();
+  ASSERT_EQ(waiting.size(), 1u);
+  EXPECT_EQ(waiting[0].clip_id, flagged);
+  EXPECT_EQ(waiting[0].stage, "a");
+  EXPECT_EQ(db.CountFlagged(), 1);
+  // A person's accept lets it go on past the filters.
+  db.RecordReview(flagged, "a", "ann", true, "");
+  EXPECT_EQ(RunAll(db, [](ClipId, const std::string&) { return Verdict::kPass; }),
+            (std::vector<std::string>{std::to_string(flagged) + ":d"}));
+  EXPECT_EQ(db.CountFlagged(), 0);
+}
+
+TEST(DbQueue, TwoFlagsNeedTwoAcceptsAndAFlagWhereFlagsStopStillStops) {
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"a", "b", "c"}, {"a"});
+  const ClipId clip = AddClip(db, "/v.mp4", 0, 1);
+  const auto ran = RunAll(db, [](ClipId, const std::string& stage) {
+    return stage == "c" ? Verdict::kPass : Verdict::kFlag;
+  });
+  // b's flag stops (b is not in the set): c never ran.
+  EXPECT_EQ(ran.size(), 2u);
+  EXPECT_EQ(db.ListFlagged().size(), 2u);
+  db.RecordReview(clip, "a", "ann", true, "");
+  EXPECT_FALSE(db.ClaimNext("w", {}, 60, 3)) << "b's flag still waits";
+  db.RecordReview(clip, "b", "ann", true, "");
+  const auto next = db.ClaimNext("w", {}, 60, 3);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->stage, "c");
 }
 
 TEST(DbQueue, ExpiredLeaseIsReclaimedAndTheOldOwnerCannotComplete) {

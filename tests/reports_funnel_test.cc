@@ -466,3 +466,46 @@ TEST_F(ReportsFunnel, RunStatisticsMatchTheQueue) {
 
 }  // namespace
 }  // namespace doasido
+
+namespace doasido::reports {
+namespace {
+
+Database::ReportRun DoneRun(ClipId clip, const std::string& stage, int position,
+                        const std::string& verdict) {
+  Database::ReportRun r;
+  r.clip_id = clip;
+  r.stage = stage;
+  r.position = position;
+  r.state = "done";
+  r.verdict = verdict;
+  r.reason = verdict == "pass" ? "" : "why_" + stage;
+  return r;
+}
+
+// Flags do not stop the filters: a clip counts by its first reject, else
+// as flagged at its first flag while it waits for a person.
+TEST(ReportsOutcomes, FirstRejectElseFirstFlag) {
+  const std::vector<std::string> pipeline = {"a", "b", "c", "d"};
+  const std::vector<Database::ReportRun> runs = {
+      DoneRun(1, "a", 0, "flag"), DoneRun(1, "b", 1, "flag"),   DoneRun(1, "c", 2, "pass"),
+      DoneRun(2, "a", 0, "flag"), DoneRun(2, "b", 1, "reject"),
+      DoneRun(3, "a", 0, "pass"), DoneRun(3, "b", 1, "pass"),   DoneRun(3, "c", 2, "pass"),
+      DoneRun(3, "d", 3, "pass"),
+      DoneRun(4, "a", 0, "flag"), DoneRun(4, "b", 1, "pass"), DoneRun(4, "c", 2, "pass"),
+      DoneRun(4, "d", 3, "pass")};
+  const auto outcomes = ComputeOutcomes(pipeline, runs);
+  EXPECT_EQ(outcomes.at(1).outcome, Outcome::kFlagged);
+  EXPECT_EQ(outcomes.at(1).stage, "a");
+  EXPECT_EQ(outcomes.at(1).reason, "why_a");
+  EXPECT_EQ(outcomes.at(2).outcome, Outcome::kRejected);
+  EXPECT_EQ(outcomes.at(2).stage, "b");
+  EXPECT_EQ(outcomes.at(3).outcome, Outcome::kSurvived);
+  // Through every stage with its flag still waiting: not a survivor.
+  EXPECT_EQ(outcomes.at(4).outcome, Outcome::kFlagged);
+  const Funnel funnel = ComputeFunnel(pipeline, runs, 4);
+  EXPECT_EQ(funnel.stages[3].passed, 2);
+  EXPECT_EQ(funnel.survivors, 1);
+}
+
+}  // namespace
+}  // namespace doasido::reports

@@ -59,10 +59,7 @@ std::string SplitCounts(const Manifest& m) {
 }
 
 void Create(const Options& o) {
-  if (!fs::exists(o.db.db)) {
-    throw Error("database", "no database file (create one with `doasido init`)", {.file = o.db.db});
-  }
-  Database db(o.db.db);
+  Database db(o.db.db, Database::OpenMode::kExisting);
   CreateOptions c;
   c.name = o.name;
   c.selection = ParseSelection(o.select);

@@ -1,3 +1,5 @@
+#include <filesystem>
+
 #include "cli/commands.h"
 #include "core/config_check.h"
 #include "pipeline/stage_registry.h"
@@ -10,7 +12,19 @@ void AddDbOptions(CLI::App& cmd, DbOptions& options) {
       ->capture_default_str();
   cmd.add_option("--config", options.config,
                  "TOML or JSON file with one table per stage (checked before any work; a bad "
-                 "file exits with code 2)");
+                 "file exits with code 2)")
+      ->each([](const std::string& path) {
+        // Every command that takes --config refuses a missing file, also
+        // the ones that read no section of it.
+        std::error_code ec;
+        const auto status = std::filesystem::status(path, ec);
+        if (!std::filesystem::is_regular_file(status)) {
+          throw Error("bad_config",
+                      std::filesystem::exists(status) ? "the config is not a regular file"
+                                                      : "no such config file",
+                      {.file = path});
+        }
+      });
 }
 
 Json LoadConfig(const DbOptions& options) {

@@ -56,7 +56,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   if (!a.trajectory.empty()) {
     files = deploy::FilesBeside(a.trajectory);
   } else {
-    Database db(a.db.db);
+    Database db(a.db.db, Database::OpenMode::kExisting);
     auto found = deploy::FindTrajectoryFiles(db, a.clip);
     if (!found) {
       throw Error("no_trajectory", "no trajectory.json from the retarget or retarget_kinematic stage",

@@ -50,6 +50,13 @@ bool IngestLists(Database& db, const IngestOptions& opt) {
                   list.c_str(), s.format.c_str(), static_cast<long long>(s.rows),
                   static_cast<long long>(s.inserted), static_cast<long long>(s.already_present),
                   s.errors.size());
+      if (!s.errors.empty()) {
+        std::string fields;
+        for (const auto& [field, n] : s.RefusedByField()) {
+          fields += (fields.empty() ? "" : ", ") + field + " " + std::to_string(n);
+        }
+        std::printf(" (%s)", fields.c_str());
+      }
       if (s.detections > 0) std::printf(", %lld detections", static_cast<long long>(s.detections));
       std::printf(" (%.1fs)\n", s.seconds);
       for (size_t i = 0; i < s.errors.size(); ++i) {

@@ -16,13 +16,20 @@ void AddInitCommand(CLI::App& app) {
   AddDbOptions(*cmd, opt->db);
   std::string stages;
   for (const auto& entry : pipeline::StageTable()) {
+    const double limit = entry.timeout_s;
+    const std::string limit_text =
+        limit >= 3600 ? std::to_string(static_cast<int>(limit / 3600)) + " h"
+                      : std::to_string(static_cast<int>(limit / 60)) + " min";
     stages += "\n  " + entry.name + std::string(14 - std::min<size_t>(13, entry.name.size()), ' ') +
-              entry.summary;
+              entry.summary + " [limit " + limit_text + "]";
   }
   cmd->add_option("--pipeline", opt->pipeline,
                   "Ordered stages every clip goes through (default: every stage marked default)")
       ->delimiter(',');
   cmd->footer("Stages:" + stages +
+              "\n\nEach stage run has a wall-clock limit; a run past it fails as stage_timeout "
+              "(not retried, except for download). Change limits by stage in --config:\n"
+              "  [timeouts]\n  probe = 30      # seconds\n  bundle = 14400"
               "\n\nExample:\n  doasido init --db work/doasido.db\n"
               "  doasido init --db work/queue-test.db --pipeline noop");
   cmd->callback([opt] {

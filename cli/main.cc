@@ -40,7 +40,11 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const doasido::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
-    return e.code() == "bad_config" ? 2 : 1;
+    // Exit 2: the command was pointed at the wrong thing (a bad config, a
+    // missing or foreign database); nothing ran.
+    const bool wrong_target = e.code() == "bad_config" || e.code() == "no_database" ||
+                              e.code() == "foreign_database";
+    return wrong_target ? 2 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

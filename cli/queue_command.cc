@@ -31,7 +31,7 @@ void AddQueueCommand(CLI::App& app) {
   list->add_option("--limit", opt->limit, "At most this many rows (0: all)")->capture_default_str();
   list->add_flag("--json", opt->json, "Print JSON");
   list->callback([opt] {
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     const auto rows = db.ListRuns({opt->stage, opt->state, opt->clip, opt->limit});
     if (opt->json) {
       Json out = Json::array();
@@ -58,7 +58,7 @@ void AddQueueCommand(CLI::App& app) {
   retry->add_option("--stage", opt->stage, "Only this stage (default: all)");
   retry->add_option("--clip", opt->clip, "Only this clip id");
   retry->callback([opt] {
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     std::printf("%lld failed runs queued again\n",
                 static_cast<long long>(db.Retry(opt->stage, opt->clip)));
   });
@@ -72,7 +72,7 @@ void AddQueueCommand(CLI::App& app) {
   clip->excludes(all);
   reset->callback([opt] {
     if (!opt->clip && !opt->all) throw Error("usage", "give --clip ID or --all");
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     std::printf("%lld runs of %s reset\n",
                 static_cast<long long>(db.Reset(opt->stage, opt->clip)), opt->stage.c_str());
   });
@@ -85,7 +85,7 @@ void AddQueueCommand(CLI::App& app) {
       "cancelled or preempted (its array script runs this before `doasido run`).\n\n"
       "Example:\n  doasido queue release --db work/shards/shard-000/doasido.db");
   release->callback([opt] {
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     std::printf("%lld running runs released\n", static_cast<long long>(db.ReleaseLeases()));
   });
 }

@@ -32,12 +32,7 @@ void AddReportCommand(CLI::App& app) {
               "The [report] table of --config sets the rest (histogram_bins, max_failures,\n"
               "thumbnail.panel_height, thumbnail.jpeg_quality, ...).");
   cmd->callback([opt, cmd] {
-    // Reading must not create an empty database where a path was mistyped.
-    if (!std::filesystem::exists(opt->db.db)) {
-      throw Error("database", "no database file (create one with `doasido init`)",
-                  {.file = opt->db.db});
-    }
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     reports::ReportOptions options;
     ReadCheckedSection(LoadConfig(opt->db), reports::kReportSection, options);
     // Given on the command line, it wins over the config file.

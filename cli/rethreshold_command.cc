@@ -38,7 +38,7 @@ void AddRethresholdCommand(CLI::App& app) {
       "  doasido rethreshold --db work/doasido.db --config strict.toml");
   cmd->callback([opt] {
     const Json config = LoadConfig(opt->db);  // refuses a bad file before any change
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     const std::vector<std::string> names = pipeline::RethresholdStages(db, opt->stages);
     std::printf("%-16s %10s %10s %10s %10s\n", "stage", "re-decided", "unchanged", "person",
                 "judged");

@@ -102,7 +102,7 @@ void AddReviewCommand(CLI::App& app) {
       "  doasido review study create --db work/doasido.db --name tracking --items items.csv\n"
       "  # then: doasido review serve --db work/doasido.db; open /study/tracking?rater=ann");
   c->callback([create] {
-    Database db(create->db.db);
+    Database db(create->db.db, Database::OpenMode::kExisting);
     review::CreateStudyFromCsv(db, create->name, create->items, create->raters, create->seed);
     const auto s = db.GetStudy(create->name);
     std::printf("study %s: %zu items, %d raters per item\n", create->name.c_str(),
@@ -122,7 +122,7 @@ void AddReviewCommand(CLI::App& app) {
   m->add_flag("--json", summary->json, "Print JSON");
   m->footer("Example:\n  doasido review study summary --db work/doasido.db --name tracking --json");
   m->callback([summary] {
-    Database db(summary->db.db);
+    Database db(summary->db.db, Database::OpenMode::kExisting);
     const auto s = review::SummarizeStudy(db, summary->name);
     if (summary->json) {
       std::printf("%s\n", review::ToJson(s).dump(2).c_str());

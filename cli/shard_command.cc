@@ -77,7 +77,7 @@ void AddShard(CLI::App& app) {
       "  doasido run   --db /scratch/shards/shard-000/doasido.db --jobs 8   # on any machine\n"
       "  doasido merge --db work/doasido.db /scratch/shards/shard-*/doasido.db");
   cmd->callback([o] {
-    Database db(o->db.db);
+    Database db(o->db.db, Database::OpenMode::kExisting);
     MakeShards(db, *o);
   });
 }
@@ -99,7 +99,7 @@ void AddMerge(CLI::App& app) {
       "shards still merge, and the exit code is 1.\n\n"
       "Example:\n  doasido merge --db work/doasido.db work/shards/shard-*/doasido.db");
   cmd->callback([o] {
-    Database db(o->db.db);
+    Database db(o->db.db, Database::OpenMode::kExisting);
     int refused = 0;
     for (const auto& path : o->shards) {
       try {
@@ -192,7 +192,7 @@ void AddSlurm(CLI::App& app) {
       "      --cpus-per-task 8 --mem 16G --time 08:00:00 --scratch\n"
       "  doasido slurm submit --db work/doasido.db --shards 4 --dry-run   # scripts only");
   submit->callback([o] {
-    Database db(o->shard.db.db);
+    Database db(o->shard.db.db, Database::OpenMode::kExisting);
     MakeShards(db, o->shard);
     std::vector<Database::ShardRow> fresh;
     for (const auto& row : db.ListShards()) {
@@ -218,7 +218,7 @@ void AddSlurm(CLI::App& app) {
       "task is still queued or running are left alone.\n\n"
       "Example:\n  doasido slurm resume --db work/doasido.db --time 04:00:00");
   resume->callback([r] {
-    Database db(r->shard.db.db);
+    Database db(r->shard.db.db, Database::OpenMode::kExisting);
     const auto shards = db.ListShards();
     if (shards.empty()) throw Error("no_shards", "this database has no shards", {.file = db.path().string()});
     std::vector<std::string> jobs;

@@ -60,7 +60,7 @@ void AddStatusCommand(CLI::App& app) {
   cmd->footer("Example:\n  doasido status --db work/doasido.db\n"
               "  doasido status --db work/doasido.db --json | jq '.counts'");
   cmd->callback([opt] {
-    Database db(opt->db.db);
+    Database db(opt->db.db, Database::OpenMode::kExisting);
     if (!opt->json) return PrintStatusTable(db);
     Json counts = Json::array();
     for (const auto& c : db.Counts()) {

@@ -14,6 +14,11 @@ endif()
 
 function(doasido_apply_options target)
   target_compile_options(${target} PRIVATE ${DOASIDO_WARNINGS})
+  if(DOASIDO_FUZZ)
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link,address,undefined
+                           -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
   if(DOASIDO_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)

@@ -2,10 +2,13 @@
 #include "core/config_check.h"
 
 #include <cmath>
+#include <iterator>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+
+#include "core/json_input.h"
 
 #include <toml++/toml.h>
 
@@ -36,10 +39,11 @@ Json LoadConfigFile(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw Error("bad_config", "cannot open config file", {.file = path.string()});
   if (path.extension() == ".json") {
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     try {
-      return Json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw Error("bad_config", e.what(), {.file = path.string()});
+      return ParseJsonInput(text, {.file = path.string()}, {.max_bytes = 16u << 20});
+    } catch (const Error& e) {
+      throw Error("bad_config", e.message(), e.site());
     }
   }
   try {
@@ -71,7 +75,9 @@ void RequireOneOf(const std::string& section, const std::string& key, const std:
 
 void RequireSameShape(const std::string& section, const Json& defaults, const Json& given) {
   if (!defaults.is_object() || !given.is_object()) return;  // ReadSection names these
-  for (const auto& [key, value] : given.items()) {
+  for (const auto& item : given.items()) {
+    const std::string& key = item.key();
+    const Json& value = item.value();  // a plain reference: lambdas below capture it
     const std::string field = section + "." + key;
     if (!defaults.contains(key)) throw Error("bad_config", "unknown key", {.field = field});
     const Json& def = defaults.at(key);

@@ -58,15 +58,21 @@ RunState ParseRunState(std::string_view text) {
   throw Error("database", "unknown stage-run state '" + std::string(text) + "'");
 }
 
-Database::Database(const std::filesystem::path& path, double busy_timeout_s)
+Database::Database(const std::filesystem::path& path, double busy_timeout_s, OpenMode mode)
     : busy_timeout_s_(busy_timeout_s) {
   path_ = std::filesystem::absolute(path).lexically_normal();
   root_ = path_.parent_path();
   if (!std::filesystem::exists(root_)) {
     throw Error("database", "folder does not exist", {.file = path_.string()});
   }
-  if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
-                      nullptr) != SQLITE_OK) {
+  if (mode == OpenMode::kExisting && !std::filesystem::is_regular_file(path_)) {
+    throw Error("no_database",
+                "no doasido database here (doasido init or doasido ingest creates one)",
+                {.file = path_.string()});
+  }
+  const int flags =
+      SQLITE_OPEN_READWRITE | (mode == OpenMode::kCreate ? SQLITE_OPEN_CREATE : 0);
+  if (sqlite3_open_v2(path_.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
@@ -76,6 +82,7 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s)
   busy_state.timeout_s = busy_timeout_s_;
   sqlite3_busy_handler(db_, BusyHandler, &busy_state);
   try {
+    RefuseForeign();
     // WAL lets readers and one writer work at once; NORMAL sync is durable
     // against process crashes (a killed worker), which is what the queue
     // must survive. Reads go through mmap to spare a copy per page.
@@ -104,6 +111,30 @@ int Database::LatestSchemaVersion() { return static_cast<int>(db::Migrations().s
 
 int Database::SchemaVersion() {
   return static_cast<int>(QueryInt("SELECT version FROM schema_version"));
+}
+
+void Database::RefuseForeign() {
+  int id = 0;
+  try {
+    id = static_cast<int>(QueryInt("PRAGMA application_id"));
+  } catch (const Error&) {
+    if (sqlite3_errcode(db_) != SQLITE_NOTADB) throw;
+    throw Error("foreign_database", "not a doasido database (not an SQLite file at all)");
+  }
+  const bool empty = QueryInt("SELECT COUNT(*) FROM sqlite_master") == 0;
+  const bool ours_before_the_mark =
+      id == 0 &&
+      QueryInt("SELECT COUNT(*) FROM sqlite_master WHERE name = 'schema_version'") > 0;
+  if (id == kApplicationId) return;
+  if (id != 0 || (!empty && !ours_before_the_mark)) {
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%08x", static_cast<unsigned>(id));
+    throw Error("foreign_database",
+                std::string("not a doasido database (SQLite application_id ") + hex +
+                    (id == 0 ? ", tables of another program" : "") +
+                    "); nothing was written to it");
+  }
+  db::Exec(db_, "PRAGMA application_id = " + std::to_string(kApplicationId));
 }
 
 void Database::Migrate() {

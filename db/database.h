@@ -93,8 +93,18 @@ class Database {
   // Opens or creates the file and upgrades its schema. Throws Error
   // ("database") naming the file when it cannot, or when the schema is
   // newer than this program understands.
-  explicit Database(const std::filesystem::path& path, double busy_timeout_s = 60.0);
+  // kCreate makes the file when it is missing (init, ingest, run and the
+  // worker); kExisting refuses a missing file with Error("no_database")
+  // (the commands that only look: status, queue, report, review). Either
+  // refuses another program's SQLite file with Error("foreign_database")
+  // without writing to it: doasido marks its files with SQLite's
+  // application_id (kApplicationId).
+  enum class OpenMode { kCreate, kExisting };
+  static constexpr int kApplicationId = 0x646f6173;  // "doas"
+  explicit Database(const std::filesystem::path& path, double busy_timeout_s = 60.0,
+                    OpenMode mode = OpenMode::kCreate);
   ~Database();
+  Database(const std::filesystem::path& path, OpenMode mode) : Database(path, 60.0, mode) {}
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
@@ -178,8 +188,9 @@ class Database {
   bool Complete(const Claim& claim, const std::string& worker, const std::string& param_hash,
                 const StageResult& result, double duration_s);
   // Records a failed attempt: back to pending while attempts < max_attempts,
-  // else failed. The error text is kept either way.
-  void Fail(const Claim& claim, const std::string& worker, const std::string& error,
+  // else failed. The error text is kept either way. Returns false (nothing
+  // recorded) when `worker` no longer holds the run.
+  bool Fail(const Claim& claim, const std::string& worker, const std::string& error,
             int max_attempts);
   // Done or failed runs of `stage` whose parameters differ from
   // `param_hash` go back to pending (new parameters: re-run; same: no-op).
@@ -466,6 +477,9 @@ class Database {
   // The first column of the first row of a query, or 0 without rows.
   std::int64_t QueryInt(const std::string& sql);
   void Migrate();
+  // Throws Error("foreign_database") unless the file is empty, marked as
+  // ours, or a doasido database from before the mark (then marks it).
+  void RefuseForeign();
   void QueueNextStage(ClipId clip, const std::string& stage);
   void DropLaterStages(ClipId clip, const std::string& stage);
   // Moves a clip on after `stage` gave `verdict`: a pass, or a flag where

@@ -151,7 +151,7 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
   return true;
 }
 
-void Database::Fail(const Claim& claim, const std::string& worker, const std::string& error,
+bool Database::Fail(const Claim& claim, const std::string& worker, const std::string& error,
                     int max_attempts) {
   Transaction tx(*this);
   const bool final = claim.attempts >= max_attempts;
@@ -163,10 +163,10 @@ void Database::Fail(const Claim& claim, const std::string& worker, const std::st
       .Bind(4, claim.run_id)
       .Bind(5, worker)
       .Run();
-  if (sqlite3_changes(db_) > 0) {
-    LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, error);
-  }
+  const bool held = sqlite3_changes(db_) > 0;
+  if (held) LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, error);
   tx.Commit();
+  return held;
 }
 
 void Database::QueueNextStage(ClipId clip, const std::string& stage) {

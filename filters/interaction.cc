@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/json_input.h"
 #include "core/shell_words.h"
 #include "filters/out_of_frame.h"
 #include "filters/stage_support.h"
@@ -275,9 +276,9 @@ std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, dou
     const ErrorSite site{.file = path.string(), .line = number};
     Json row;
     try {
-      row = Json::parse(line);
-    } catch (const Json::exception& e) {
-      throw Error("bad_detections", std::string("not JSON: ") + e.what(), site);
+      row = ParseJsonInput(line, site, {.max_depth = 8, .max_bytes = 16u << 20});
+    } catch (const Error& e) {
+      throw Error("bad_detections", e.code() + ": " + e.message(), site);
     }
     if (!row.is_object() || !row.contains("frame") || !row.at("frame").is_number_integer()) {
       throw Error("bad_detections", "row lacks an integer \"frame\"",

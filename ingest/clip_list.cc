@@ -12,6 +12,8 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/error_codes.h"
+#include "core/json_input.h"
 
 namespace doasido::ingest {
 namespace {
@@ -19,6 +21,10 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr std::int64_t kMaxFrame = 1'000'000'000;  // ~1 year at 30 fps
+// A clip object is a flat record with a little nested metadata; a list of
+// JSON is at most the size of a large dataset's index.
+constexpr JsonLimits kRowLimits{.max_depth = 32, .max_bytes = 1u << 20};
+constexpr JsonLimits kDocumentLimits{.max_depth = 32, .max_bytes = 1u << 30};
 constexpr double kMaxSeconds = 1e7;                 // ~115 days
 
 std::string ReadAll(const fs::path& path) {
@@ -73,6 +79,16 @@ std::string VideoUrl(std::string url_template, const std::string& id) {
     url_template.replace(pos, 4, id);
   }
   return url_template;
+}
+
+// Only white space (or nothing): the same empty list in every format.
+bool IsBlank(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char c = 0;
+  while (in.get(c)) {
+    if (!std::isspace(static_cast<unsigned char>(c))) return false;
+  }
+  return true;
 }
 
 [[noreturn]] void NotAList(const fs::path& path, const std::string& what) {
@@ -199,8 +215,10 @@ class RowBuilder {
       fs::path p(row.video);
       if (p.is_relative()) p = base_ / p;
       row.video = fs::absolute(p).lexically_normal().string();
-      if (options_.check_files && !Exists(row.video)) {
-        return Bad(line, "video", "file not found: " + row.video);
+      if (options_.check_files) {
+        if (const std::string why = Unreachable(row.video); !why.empty()) {
+          return Bad(line, "video", why);
+        }
       }
     }
     const auto& c = row.clip;
@@ -234,10 +252,29 @@ class RowBuilder {
   }
 
  private:
-  bool Exists(const std::string& path) {
-    auto [it, fresh] = exists_.emplace(path, false);
-    if (fresh) it->second = fs::exists(path);
+  // "" when the video file is there, else why not: a missing file, and the
+  // file-system errors that must stay this row's (a symlink loop, a name
+  // too long, no permission) rather than end the whole list.
+  std::string Unreachable(const std::string& path) {
+    auto [it, fresh] = unreachable_.emplace(path, "");
+    if (!fresh) return it->second;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec == std::errc::no_such_file_or_directory || (!ec && !fs::exists(st))) {
+      it->second = "file not found: " + ShortPath(path);
+    } else if (ec) {
+      it->second = "cannot reach file (" + ec.message() + "): " + ShortPath(path);
+    } else if (fs::is_directory(st)) {
+      it->second = "a folder, not a video file: " + ShortPath(path);
+    }
     return it->second;
+  }
+
+  // Keeps a message readable when a row names an absurdly long path.
+  static std::string ShortPath(const std::string& path) {
+    if (path.size() <= 300) return path;
+    return path.substr(0, 120) + "...(" + std::to_string(path.size()) + " characters)..." +
+           path.substr(path.size() - 60);
   }
 
   bool Frame(const std::string& text, const std::string& field, long line,
@@ -275,7 +312,7 @@ class RowBuilder {
   ListReadResult& out_;
   std::unordered_map<std::string, long> seen_;
   std::unordered_map<std::string, Role> roles_;
-  std::unordered_map<std::string, bool> exists_;
+  std::unordered_map<std::string, std::string> unreachable_;
 };
 
 void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& options,
@@ -353,9 +390,9 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
     }
     Json obj;
     try {
-      obj = Json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-      builder.Bad(line, "", std::string("not JSON: ") + e.what());
+      obj = ParseJsonInput(text, {}, kRowLimits);
+    } catch (const Error& e) {
+      builder.Bad(line, "", e.code() + ": " + e.message());
       continue;
     }
     if (!obj.is_object()) {
@@ -374,9 +411,10 @@ void ReadJsonLines(const fs::path& path, const ListOptions& options, ListReadRes
 bool ReadJsonDocument(const fs::path& path, const ListOptions& options, ListReadResult& out) {
   Json doc;
   try {
-    doc = Json::parse(ReadAll(path));
-  } catch (const nlohmann::json::parse_error&) {
-    return false;
+    doc = ParseJsonInput(ReadAll(path), {.file = path.string()}, kDocumentLimits);
+  } catch (const Error& e) {
+    if (e.code() == kJsonTooLarge) throw;
+    return false;  // JSON Lines, perhaps; its reader names the bad lines
   }
   RowBuilder builder(path, options, out);
   Cells cells;
@@ -531,6 +569,31 @@ double Number(const tinyxml2::XMLElement* parent, const char* name, bool* ok) {
   return v.value_or(0);
 }
 
+// Why a VOC box cannot be true ("" when it can): empty or reversed, or
+// reaching past the image (given by the file's <size>, when it has one) by
+// more than annotators' rounding.
+struct ImageSize {
+  double width = 0, height = 0;  // 0 when the file does not say
+};
+
+std::string ImpossibleBox(const Detection& d, const ImageSize& image) {
+  char text[160];
+  const auto say = [&](const char* what) {
+    std::snprintf(text, sizeof text, "%s: xmin %g ymin %g xmax %g ymax %g (image %gx%g)", what,
+                  d.x1 + 1, d.y1 + 1, d.x2, d.y2, image.width, image.height);
+    return std::string(text);
+  };
+  if (d.x2 <= d.x1 || d.y2 <= d.y1) return say("empty or reversed box");
+  if (image.width <= 0 || image.height <= 0) return "";
+  const double slack_x = std::max(2.0, 0.01 * image.width);
+  const double slack_y = std::max(2.0, 0.01 * image.height);
+  if (d.x1 < -slack_x || d.y1 < -slack_y || d.x2 > image.width + slack_x ||
+      d.y2 > image.height + slack_y) {
+    return say("box outside the image");
+  }
+  return "";
+}
+
 // Adds the rows of grouped frames (VOC folders and frame-name lists).
 void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::path& list,
                     const fs::path& video_dir, const ListOptions& options, ListReadResult& out) {
@@ -541,7 +604,8 @@ void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::p
     ListRow row;
     row.line = group.first_index;
     row.video = (video_dir / (video + ".mp4")).string();
-    if (!options.video_url_template.empty() && !fs::exists(row.video)) {
+    std::error_code ec;
+    if (!options.video_url_template.empty() && !fs::exists(row.video, ec)) {
       row.video = VideoUrl(options.video_url_template, video);
     }
     row.clip.external_id = group.genre.empty() ? video : group.genre + "_v_" + video;
@@ -559,11 +623,16 @@ void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::p
 }
 
 void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult& out) {
+  std::error_code ec;
   const fs::path annotations =
-      fs::exists(folder / "Annotations") ? folder / "Annotations" : folder;
+      fs::is_directory(folder / "Annotations", ec) ? folder / "Annotations" : folder;
   std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(annotations)) {
-    if (entry.path().extension() == ".xml") files.push_back(entry.path());
+  for (fs::directory_iterator it(annotations, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().extension() == ".xml") files.push_back(it->path());
+  }
+  if (ec) {
+    throw Error("bad_list", "cannot read the annotation folder: " + ec.message(),
+                {.file = annotations.string()});
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) {
@@ -598,6 +667,11 @@ void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult&
     group.genre = name->genre;
     auto& dets = group.frames[frame];
     bool ok = true;
+    bool size_ok = true;
+    const auto* size = root->FirstChildElement("size");
+    const ImageSize image_size =
+        size ? ImageSize{Number(size, "width", &size_ok), Number(size, "height", &size_ok)}
+             : ImageSize{};
     for (const auto* obj = root->FirstChildElement("object"); obj;
          obj = obj->NextSiblingElement("object")) {
       const auto* kind = obj->FirstChildElement("name");
@@ -625,9 +699,11 @@ void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult&
         d.dy = Number(obj, "unitdy", &numbers_ok);
         d.magnitude = Number(obj, "magnitude", &numbers_ok);
       }
-      if (!numbers_ok || d.x2 <= d.x1 || d.y2 <= d.y1) {
+      const std::string why = !numbers_ok ? "box numbers are missing or not numbers"
+                                          : ImpossibleBox(d, image_size);
+      if (!why.empty()) {
         ok = false;
-        bad("bndbox", "box numbers are missing, not numbers, or empty");
+        bad("bndbox", why);
         break;
       }
       dets.push_back(d);
@@ -780,11 +856,23 @@ ListReadResult ReadClipList(const fs::path& given, const ListOptions& options) {
   // the list itself first keeps that true from any working directory.
   const fs::path path = fs::absolute(given).lexically_normal();
   ListReadResult out;
-  if (!fs::exists(path)) throw Error("bad_list", "no such file or folder", {.file = path.string()});
-  if (fs::is_directory(path)) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) {
+    throw Error("bad_list", ec ? ec.message() : "no such file or folder", {.file = path.string()});
+  }
+  if (fs::is_directory(status)) {
     out.format = "voc";
     ReadVoc(path, options, out);
     return out;
+  }
+  if (!fs::is_regular_file(status)) {
+    throw Error(kNotARegularFile, "a list is a file or a VOC folder; this one may never end",
+                {.file = path.string()});
+  }
+  if (IsBlank(path)) {
+    throw Error(kEmptyList, "the list is empty (no header, no rows): nothing to ingest",
+                {.file = path.string()});
   }
   const std::string ext = Lower(path.extension().string());
   if (ext == ".json" && ReadJsonDocument(path, options, out)) return out;

@@ -32,7 +32,9 @@
 //    read as one whole-video clip per id, video = the URL template applied
 //    to the id (default https://www.youtube.com/watch?v={id}), the id as
 //    external id and the object's fields as metadata.
-//  A file that is not a clip list at all (a JSON scalar or an object of
+//  An empty file (or only white space) is refused whole as kEmptyList, the
+//  same for every format. A FIFO or other non-regular file is refused as
+//  kNotARegularFile without being read. A file that is not a clip list at all (a JSON scalar or an object of
 //  scalars, a JSON/JSONL file none of whose lines is an object, a text file
 //  none of whose lines is a frame name) is refused whole with an Error
 //  saying what was expected, never read as one bad row.
@@ -46,6 +48,9 @@
 #include "db/records.h"
 
 namespace doasido::ingest {
+
+// An empty (or all white space) list file of any format: refused whole.
+inline constexpr const char* kEmptyList = "empty_list";
 
 struct ListRow {
   long line = 0;             // 1-based line (or file index for VOC) in the list

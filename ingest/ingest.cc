@@ -6,6 +6,12 @@
 
 namespace doasido::ingest {
 
+std::map<std::string, std::int64_t> IngestSummary::RefusedByField() const {
+  std::map<std::string, std::int64_t> counts;
+  for (const auto& e : errors) ++counts[e.field.empty() ? "row" : e.field];
+  return counts;
+}
+
 Json IngestSummary::ToJson() const {
   Json bad = Json::array();
   for (const auto& e : errors) {
@@ -18,6 +24,7 @@ Json IngestSummary::ToJson() const {
           {"already_present", already_present},
           {"detections", detections},
           {"bad_rows", errors.size()},
+          {"bad_rows_by_field", RefusedByField()},
           {"errors", bad},
           {"seconds", seconds}};
 }

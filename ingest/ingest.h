@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct IngestSummary {
   std::int64_t detections = 0;
   std::vector<RowError> errors;      // refused rows, each named
   double seconds = 0;
+  // Refused rows counted by the field at fault ("row" for a whole row:
+  // not JSON, wrong column count, empty line).
+  std::map<std::string, std::int64_t> RefusedByField() const;
   Json ToJson() const;
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/config_check.h"
+#include "pipeline/stage_timeouts.h"
 #include "filters/activity.h"
 #include "filters/analyze_stage.h"
 #include "filters/camera_motion.h"
@@ -24,7 +25,7 @@ namespace {
 // `name`.
 template <typename StageT, typename ConfigT>
 StageEntry Entry(const std::string& name, std::string summary, bool in_default_pipeline,
-                 bool decides_from_measurements = false) {
+                 double timeout_s, bool decides_from_measurements = false) {
   static_assert(HasConfigCheck<ConfigT>, "every stage config states its valid ranges");
   return {.name = name,
           .summary = std::move(summary),
@@ -39,64 +40,72 @@ StageEntry Entry(const std::string& name, std::string summary, bool in_default_p
                 ConfigT c;
                 ReadCheckedSection(config, name, c);
               },
-          .decides_from_measurements = decides_from_measurements};
+          .decides_from_measurements = decides_from_measurements,
+          .timeout_s = timeout_s};
 }
 
 }  // namespace
 
 const std::vector<StageEntry>& StageTable() {
   using namespace filters;
-  static const std::vector<StageEntry> kTable = {
+  constexpr double kMinute = 60, kHour = 3600;
+  static const std::vector<StageEntry> kTable = [&] {
+    std::vector<StageEntry> table = {
       Entry<ingest::DownloadStage, ingest::DownloadConfig>(
           ingest::kDownloadStageName,
           "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
           "template for sites); local videos pass at once",
-          true),
+          true, 4 * kHour),
       Entry<video::ProbeStage, video::ProbeConfig>(
           video::kProbeStageName,
-          "size, fps, frame count, rotation and codec; rejects spans outside the video", true),
+          "size, fps, frame count, rotation and codec; rejects spans outside the video", true,
+          kMinute),
       Entry<ExternalDetectorStage, ExternalDetectorConfig>(
           kExternalDetectorStageName,
           "runs an external hand-object detector command and stores its 100DOH-format boxes",
-          false),
+          false, kHour),
       Entry<AnalyzeStage, AnalyzeConfig>(
           kAnalyzeStageName,
-          "decodes the clip once at ~256 px and records every filter's per-frame signals", true),
+          "decodes the clip once at ~256 px and records every filter's per-frame signals", true,
+          kHour),
       Entry<ShotBoundaryStage, ShotBoundaryConfig>(
           kShotBoundaryStageName, "trims a clip to its longest shot, or rejects it across a cut",
-          true, true),
+          true, kMinute, true),
       Entry<InteractionStage, InteractionConfig>(
-          kInteractionStageName, "rejects clips without hand-object contact", true, true),
+          kInteractionStageName, "rejects clips without hand-object contact", true, kMinute, true),
       Entry<OutOfFrameStage, OutOfFrameConfig>(
           kOutOfFrameStageName, "rejects clips whose hand or touched object leaves the frame",
-          true, true),
+          true, kMinute, true),
       Entry<ActivityStage, ActivityConfig>(
-          kActivityStageName, "rejects clips with no motion in the hand region", true, true),
+          kActivityStageName, "rejects clips with no motion in the hand region", true, kMinute, true),
       Entry<CameraMotionStage, CameraMotionConfig>(
           kCameraMotionStageName, "rejects (or flags) clips whose camera pans, shakes or zooms",
-          true, true),
+          true, kMinute, true),
       Entry<recon::BundleStage, recon::BundleStageConfig>(
           recon::kBundleStageName,
           "runs the model command that writes the clip bundle (or checks the bundle the list "
           "names)",
-          false),
+          false, 2 * kHour),
       Entry<recon::ReconStage, recon::ReconStageConfig>(
           recon::kReconStageName,
           "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction",
-          false),
+          false, 30 * kMinute),
       Entry<retarget::KinematicStage, retarget::KinematicStageConfig>(
           retarget::kKinematicStageName,
           "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)",
-          false),
+          false, 30 * kMinute),
       Entry<retarget::DynamicRetargetStage, retarget::DynamicRetargetConfig>(
           retarget::kRetargetStageName,
           "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed "
           "3.2)",
-          false),
+          false, 2 * kHour),
       Entry<NoopStage, NoopConfig>(kNoopStageName,
                                    "does nothing for work_ms milliseconds (queue diagnostics)",
-                                   false),
-  };
+                                   false, kMinute),
+    };
+    table[0].deterministic = false;  // the download stage: the network may answer next time
+    return table;
+  }();
   return kTable;
 }
 
@@ -133,6 +142,7 @@ std::set<std::string> FlagContinuingStages(const std::vector<std::string>& pipel
 void CheckStageConfig(const Json& config, const std::vector<std::string>& other_sections) {
   if (!config.is_object()) throw Error("bad_config", "the configuration is not a table");
   std::vector<std::string> known = other_sections;
+  known.push_back(kTimeoutsSection);
   for (const auto& entry : StageTable()) known.push_back(entry.name);
   for (const auto& [section, value] : config.items()) {
     if (std::find(known.begin(), known.end(), section) != known.end()) continue;
@@ -142,6 +152,7 @@ void CheckStageConfig(const Json& config, const std::vector<std::string>& other_
                 {.field = section});
   }
   for (const auto& entry : StageTable()) entry.check(config);
+  CheckStageTimeouts(config);
 }
 
 }  // namespace doasido::pipeline

@@ -26,6 +26,12 @@ struct StageEntry {
   // Run() only reads stored measurements (no decoding), so `doasido
   // rethreshold` may re-decide and re-run it in process.
   bool decides_from_measurements = false;
+  // Wall-clock limit of one run unless the config's [timeouts] says
+  // otherwise (pipeline/stage_timeouts.h).
+  double timeout_s = 600;
+  // The same input gives the same outcome: a timeout is not retried. The
+  // network stage is the one that is not.
+  bool deterministic = true;
 };
 
 const std::vector<StageEntry>& StageTable();

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "core/error_codes.h"
 #include "core/log.h"
 #include "core/permanent_error.h"
 
@@ -33,6 +34,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
     permanent = true;
   } catch (const Error& e) {
     report.error = e.what();
+    permanent = IsPermanentError(e.code());
   } catch (const std::exception& e) {
     report.error = std::string("unexpected: ") + e.what();
   }

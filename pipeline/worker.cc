@@ -1,6 +1,7 @@
 #include "pipeline/worker.h"
 
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -13,9 +14,12 @@
 #include <mutex>
 #include <thread>
 
+#include "core/child_groups.h"
+#include "core/error_codes.h"
 #include "core/log.h"
 #include "db/database.h"
 #include "pipeline/stage_registry.h"
+#include "pipeline/stage_timeouts.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -24,20 +28,26 @@ std::atomic<bool> g_stop{false};
 
 void OnStopSignal(int) { g_stop = true; }
 
+// "host:<pid of the command>/<pid of the worker>": the command is the
+// process a person started (and may kill), the worker its child.
 std::string WorkerName() {
   char host[256] = {0};
   gethostname(host, sizeof host - 1);
-  return std::string(host) + ":" + std::to_string(getpid());
+  return std::string(host) + ":" + std::to_string(getppid()) + "/" + std::to_string(getpid());
 }
 
-// Keeps the lease of the run in progress alive from a second connection, so
-// a long stage is not mistaken for a dead worker.
-class Heartbeat {
+// Watches the run in progress from a second thread with its own
+// connection: renews its lease while the run is within its wall-clock limit
+// (so a long stage is not mistaken for a dead worker), and once it is past
+// the limit fails it as a stage timeout and ends this worker process, since
+// a hung read or a stuck library call cannot be cancelled in place. The
+// supervisor starts another worker (kTimedOutExitCode).
+class RunWatch {
  public:
-  Heartbeat(const std::string& db_path, std::string worker, double lease_s)
-      : worker_(std::move(worker)), lease_s_(lease_s),
+  RunWatch(const std::string& db_path, std::string worker, const WorkerOptions& options)
+      : worker_(std::move(worker)), options_(options),
         thread_([this, db_path] { Loop(db_path); }) {}
-  ~Heartbeat() {
+  ~RunWatch() {
     {
       std::lock_guard lock(mutex_);
       quit_ = true;
@@ -45,31 +55,83 @@ class Heartbeat {
     cv_.notify_all();
     thread_.join();
   }
-  void Set(std::int64_t run_id) { run_id_ = run_id; }
+  // Starts watching `claim` (nullopt: nothing is running).
+  void Set(const std::optional<Claim>& claim) {
+    std::lock_guard lock(mutex_);
+    claim_ = claim;
+    if (!claim) return;
+    started_ = std::chrono::steady_clock::now();
+    limit_s_ = StageTimeout(options_.config, claim->stage);
+    permanent_ = IsDeterministic(claim->stage);
+  }
 
  private:
+  static bool IsDeterministic(const std::string& stage) {
+    for (const auto& entry : StageTable()) {
+      if (entry.name == stage) return entry.deterministic;
+    }
+    return true;
+  }
+
   void Loop(const std::string& db_path) {
     Database db(db_path);
+    const auto renew_every = std::chrono::duration<double>(options_.lease_s / 3);
+    auto renewed = std::chrono::steady_clock::now();
     std::unique_lock lock(mutex_);
-    while (!cv_.wait_for(lock, std::chrono::duration<double>(lease_s_ / 3),
-                         [this] { return quit_; })) {
-      const std::int64_t run = run_id_;
-      if (run != 0) {
-        try {
-          db.Heartbeat(run, worker_, lease_s_);
-        } catch (const std::exception& e) {
-          spdlog::warn("heartbeat failed: {}", e.what());
-        }
+    while (!cv_.wait_for(lock, std::chrono::milliseconds(200), [this] { return quit_; })) {
+      if (!claim_) continue;
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - started_).count() > limit_s_) {
+        TimeOut(db);
+        continue;
+      }
+      if (now - renewed < renew_every) continue;
+      renewed = now;
+      try {
+        db.Heartbeat(claim_->run_id, worker_, options_.lease_s);
+      } catch (const std::exception& e) {
+        spdlog::warn("heartbeat failed: {}", e.what());
       }
     }
   }
 
+  void TimeOut(Database& db) {
+    char limit[32];
+    std::snprintf(limit, sizeof limit, "%g", limit_s_);
+    std::string clip = std::to_string(claim_->clip_id);
+    try {
+      const std::string external = db.GetClip(claim_->clip_id).external_id;
+      if (!external.empty()) clip = external;
+    } catch (const std::exception&) {
+    }
+    const Error error(kStageTimeout,
+                      claim_->stage + " ran past its limit of " + limit + " s (" +
+                          kTimeoutsSection + "." + claim_->stage + " in the config)",
+                      {.clip = clip});
+    bool recorded = false;
+    try {
+      recorded = db.Fail(*claim_, worker_, error.what(),
+                         permanent_ ? claim_->attempts : options_.max_attempts);
+    } catch (const std::exception& e) {
+      spdlog::error("cannot record the timeout: {}", e.what());
+    }
+    claim_.reset();
+    if (!recorded) return;  // the run finished (or moved on) meanwhile
+    spdlog::error("{}; ending this worker", error.what());
+    KillChildGroups();
+    std::fflush(nullptr);
+    _exit(kTimedOutExitCode);
+  }
+
   std::string worker_;
-  double lease_s_;
-  std::atomic<std::int64_t> run_id_{0};
+  const WorkerOptions& options_;
   std::mutex mutex_;
   std::condition_variable cv_;
   bool quit_ = false;
+  std::optional<Claim> claim_;
+  std::chrono::steady_clock::time_point started_;
+  double limit_s_ = 0;
+  bool permanent_ = true;
   std::thread thread_;
 };
 
@@ -86,7 +148,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
     stages[name] = MakeStage(name, options.config);
     hashes[name] = ParamHash(stages[name]->Params());
   }
-  Heartbeat heartbeat(options.db, worker, options.lease_s);
+  RunWatch watch(options.db, worker, options);
   WorkerStats stats;
   auto claim_next = [&]() -> std::optional<Claim> {
     if (g_stop) return std::nullopt;
@@ -103,7 +165,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       claim = claim_next();
       continue;
     }
-    heartbeat.Set(claim->run_id);
+    watch.Set(claim);
     const Claim current = *claim;
     const StageRunReport report =
         RunClaimedStage(db, *stages.at(current.stage), current, worker,
@@ -114,7 +176,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       case RunOutcome::kFailed: ++stats.failed_attempts; break;
       case RunOutcome::kLeaseLost: ++stats.lost_leases; break;
     }
-    heartbeat.Set(claim ? claim->run_id : 0);
+    watch.Set(claim);
   }
   return stats;
 }
@@ -140,13 +202,15 @@ int RunWorkers(const WorkerOptions& options) {
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
 
-  if (options.jobs <= 1 && !options.progress) {
-    RunWorkerLoop(options);
-  } else {
+  {
     std::map<pid_t, int> children;
-    auto spawn = [&options, &children](int slot) {
+    const pid_t parent = getpid();
+    auto spawn = [&options, &children, parent](int slot) {
       const pid_t pid = fork();
       if (pid == 0) {
+        // A worker does not outlive its command, even one killed with SIGKILL.
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(0);  // the command died before the line above
         int code = 0;
         try {
           RunWorkerLoop(options);
@@ -167,9 +231,12 @@ int RunWorkers(const WorkerOptions& options) {
       if (pid > 0) {
         const int slot = children[pid];
         children.erase(pid);
-        if (WIFSIGNALED(status) && !g_stop) {
+        const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == kTimedOutExitCode;
+        if ((WIFSIGNALED(status) || timed_out) && !g_stop) {
           const auto s = db.Summary();
-          spdlog::warn("worker {} died from signal {}; {}", pid, WTERMSIG(status),
+          const std::string why = timed_out ? std::string("ended after a stage timeout")
+                                            : "died from signal " + std::to_string(WTERMSIG(status));
+          spdlog::warn("worker {} {}; {}", pid, why,
                        s.pending + s.running > 0 ? "starting another" : "no work left");
           if (s.pending + s.running > 0) spawn(slot);
         }

@@ -24,8 +24,7 @@ struct WorkerOptions {
   double lease_s = kDefaultLeaseSeconds;  // a dead worker's run is reclaimed after this
   int max_attempts = kDefaultMaxAttempts;
   double poll_s = 0.5;              // idle wait between claims
-  // Called about five times a second while workers run in child processes
-  // (jobs > 1, or when set); empty: run one worker in this process.
+  // Called about five times a second while the workers run; may be empty.
   QueueProgress progress;
   // Called once when the workers have stopped.
   std::function<void()> progress_done;
@@ -37,15 +36,23 @@ struct WorkerStats {
   std::int64_t lost_leases = 0;  // results dropped because the lease had moved on
 };
 
-// One worker loop in this process (with a heartbeat thread keeping the
-// current lease alive). Returns when the queue is empty (until_empty) or on
+// The exit code of a worker process whose stage run went past its limit
+// (pipeline/stage_timeouts.h): the run is recorded as failed, the
+// supervisor starts another worker.
+inline constexpr int kTimedOutExitCode = 75;
+
+// One worker loop in this process, with a watch thread that keeps the
+// current lease alive and ends the process (kTimedOutExitCode) when a run
+// passes its time limit. Returns when the queue is empty (until_empty) or on
 // SIGINT/SIGTERM after the current clip.
 WorkerStats RunWorkerLoop(const WorkerOptions& options);
 
 // Re-queues runs whose stage parameters changed, then runs options.jobs
-// worker processes, restarting any that dies from a signal while work
-// remains. Clips that fail are recorded in the queue, not fatal: returns 0
-// unless the workers themselves could not run.
+// worker processes (children of this one, also for jobs = 1, so a run that
+// hangs past its limit cannot take the command with it), restarting any
+// that dies from a signal or a timeout while work remains. Clips that fail
+// are recorded in the queue, not fatal: returns 0 unless the workers
+// themselves could not run.
 int RunWorkers(const WorkerOptions& options);
 
 }  // namespace doasido::pipeline

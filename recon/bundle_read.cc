@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_input.h"
 #include "recon/bundle_layout.h"
 #include "recon/exr_io.h"
 #include "recon/mask_io.h"
@@ -101,10 +103,11 @@ class Reader {
     if (!fs::exists(path)) Fail(rel, "", "meta.json is missing");
     Json meta;
     try {
-      std::ifstream in(path);
-      meta = Json::parse(in);
-    } catch (const std::exception& e) {
-      Fail(rel, "", std::string("not valid JSON: ") + e.what());
+      std::ifstream in(path, std::ios::binary);
+      const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+      meta = ParseJsonInput(text, {}, {.max_depth = 16, .max_bytes = 1u << 20});
+    } catch (const Error& e) {
+      Fail(rel, "", e.code() + ": " + e.message());
     }
     if (!meta.is_object()) Fail(rel, "", "top level is not an object");
     auto positive_int = [&](const char* key) {

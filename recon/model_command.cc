@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include "core/child_groups.h"
 #include "core/error.h"
 
 namespace doasido::recon {
@@ -49,6 +50,7 @@ CommandOutcome RunModelCommand(const std::string& command, const std::filesystem
     ::_exit(127);
   }
   ::setpgid(pid, pid);  // also from here: no race with the child's own call
+  AddChildGroup(pid);
   ::close(fd);
   CommandOutcome out;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
@@ -70,6 +72,7 @@ CommandOutcome RunModelCommand(const std::string& command, const std::filesystem
   }
   // Descendants that outlived a finished shell would hold the folder open.
   ::kill(-pid, SIGKILL);
+  RemoveChildGroup(pid);
   out.log_tail = Tail(log, tail_lines);
   return out;
 }

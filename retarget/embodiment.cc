@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <map>
 
 #include <Eigen/SVD>
@@ -11,6 +12,7 @@
 
 #include "core/data_dirs.h"
 #include "core/error.h"
+#include "core/json_input.h"
 #include "retarget/mjcf_text.h"
 #include "retarget/urdf_import.h"
 
@@ -228,8 +230,11 @@ Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
   if (!in) throw Error("bad_embodiment", "cannot read embodiment description", {.file = file});
   Embodiment e;
   try {
-    Json j = Json::parse(in);
-    e = j.get<Embodiment>();
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    e = ParseJsonInput(text, {.file = file}, {.max_depth = 16, .max_bytes = 16u << 20})
+            .get<Embodiment>();
+  } catch (const Error& ex) {
+    throw Error("bad_embodiment", ex.code() + ": " + ex.message(), {.file = file});
   } catch (const nlohmann::json::exception& ex) {
     throw Error("bad_embodiment", std::string("invalid JSON: ") + ex.what(), {.file = file});
   }

@@ -17,6 +17,7 @@
 #include "filters/kept_shot.h"
 #include "filters/shot_boundary.h"
 #include "review/http_range.h"
+#include "review/request_body.h"
 #include "review/pages.h"
 #include "review/study.h"
 #include "review/verify_routes.h"
@@ -321,7 +322,7 @@ struct ReviewServer::Impl {
 
   // A person's decision on a flagged run (POST /api/decision).
   void Decide(Database& d, const Json& body, httplib::Response& res) {
-    const ClipId clip = body.at("clip_id").get<ClipId>();
+    const ClipId clip = RequireId(body, "clip_id");
     const std::string stage = body.at("stage").get<std::string>();
     const std::string decision = body.at("decision").get<std::string>();
     const std::string reviewer = body.value("reviewer", std::string());
@@ -419,14 +420,14 @@ void ReviewServer::Impl::ReviewRoutes() {
 
   http.Get(R"(/api/clip/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
     WithDb(res, [&](Database& d) {
-      SendJson(res, 200, ClipJson(d, std::stoll(req.matches[1].str()), req.get_param_value("stage")));
+      SendJson(res, 200, ClipJson(d, PathId(req.matches[1].str()), req.get_param_value("stage")));
     });
   });
 
   http.Get(R"(/video/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
     std::filesystem::path path;
     WithDb(res, [&](Database& d) {
-      path = d.GetVideo(d.GetClip(std::stoll(req.matches[1].str())).video_id).path;
+      path = d.GetVideo(d.GetClip(PathId(req.matches[1].str())).video_id).path;
     });
     if (path.empty()) return;  // WithDb answered with the error
     if (path.string().find("://") != std::string::npos) {
@@ -436,7 +437,7 @@ void ReviewServer::Impl::ReviewRoutes() {
   });
 
   http.Post("/api/decision", [this](const httplib::Request& req, httplib::Response& res) {
-    WithDb(res, [&](Database& d) { Decide(d, Json::parse(req.body), res); });
+    WithDb(res, [&](Database& d) { Decide(d, ParseRequestBody(req.body), res); });
   });
 }
 
@@ -505,8 +506,8 @@ void ReviewServer::Impl::StudyApi() {
   http.Post(R"(/api/study/([A-Za-z0-9_.\-]+)/answer)", [this](const httplib::Request& req,
                                                             httplib::Response& res) {
     WithDb(res, [&](Database& d) {
-      const Json body = Json::parse(req.body);
-      const std::int64_t trial_id = body.at("trial_id").get<std::int64_t>();
+      const Json body = ParseRequestBody(req.body);
+      const std::int64_t trial_id = RequireId(body, "trial_id");
       const std::string rater = body.at("rater").get<std::string>();
       const std::string side = body.at("choice").get<std::string>();
       const auto study = d.GetStudy(req.matches[1].str());
@@ -529,7 +530,7 @@ void ReviewServer::Impl::StudyApi() {
                                                              httplib::Response& res) {
     std::filesystem::path path;
     WithDb(res, [&](Database& d) {
-      const auto trial = d.GetStudyTrial(std::stoll(req.matches[1].str()));
+      const auto trial = d.GetStudyTrial(PathId(req.matches[1].str()));
       const auto item = trial ? d.GetStudyItem(trial->item) : std::nullopt;
       if (!item) return SendError(res, 404, "no such trial");
       // Left and right are resolved here so that the page never learns
@@ -562,7 +563,7 @@ ReviewServer::ReviewServer(const std::filesystem::path& db_path, const ServeOpti
                 {.field = "host"});
   }
   impl_->options = options;
-  impl_->db = std::make_unique<Database>(db_path);
+  impl_->db = std::make_unique<Database>(db_path, Database::OpenMode::kExisting);
   impl_->Routes();
 }
 

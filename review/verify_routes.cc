@@ -1,5 +1,7 @@
 #include "review/verify_routes.h"
 
+#include "review/request_body.h"
+
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -193,15 +195,15 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
         res.set_content(Json({{"error", "stage must be a trajectory stage"}}).dump(), "application/json");
         return;
       }
-      res.set_content(TrajectoryScene(d, std::stoll(req.matches[1].str()), stage).dump(),
+      res.set_content(TrajectoryScene(d, PathId(req.matches[1].str()), stage).dump(),
                       "application/json");
     });
   });
 
   http.Post("/api/verify/decision", [hooks](const httplib::Request& req, httplib::Response& res) {
     hooks.with_db(res, [&](Database& d) {
-      const Json body = Json::parse(req.body);
-      const ClipId clip = body.at("clip_id").get<ClipId>();
+      const Json body = ParseRequestBody(req.body);
+      const ClipId clip = RequireId(body, "clip_id");
       const std::string stage = body.at("stage").get<std::string>();
       const std::string decision = body.at("decision").get<std::string>();
       const std::string reviewer = body.value("reviewer", std::string());

@@ -23,6 +23,7 @@ PACKAGES=(
   chromium chromium-driver
   nodejs
   slurm-wlm munge
+  clang libclang-rt-14-dev
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js

@@ -41,6 +41,7 @@ TEST(ReviewCommand, StudyCreateAndEmptySummary) {
             "two,ours,base,\"s.mp4\",a.mp4,b.mp4\n");
   WriteFile(dir / "m" / "bad.csv", "item_id,source_video,a_video,b_video,a_label\n");
   const std::string db = (dir / "d.db").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", db}).exit_code, 0);  // review only opens a database
   const auto bad = RunDoasido({"review", "study", "create", "--db", db, "--name", "x", "--items",
                                (dir / "m" / "bad.csv").string()});
   EXPECT_EQ(bad.exit_code, 1);

@@ -18,22 +18,13 @@ namespace doasido::dataset {
 namespace {
 
 namespace fs = std::filesystem;
+using doasido::testing::ShellOk;
 using doasido::testing::TempDir;
 using doasido::testing::WriteFile;
 
 fs::path NpmDir() {
   if (const char* dir = std::getenv("DOASIDO_NPM_DIR")) return dir;
   return fs::path(std::getenv("HOME")) / ".cache/doasido/npm";
-}
-
-std::string Shell(const std::string& command) {
-  std::string out;
-  FILE* p = popen(command.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  EXPECT_EQ(pclose(p), 0) << command;
-  return out;
 }
 
 // Every row and the row-group sizes of a Parquet file, through hyparquet.
@@ -48,7 +39,7 @@ const big = (k, v) => typeof v === 'bigint' ? Number(v) : v;
 const kv = Object.fromEntries((meta.key_value_metadata || []).map(e => [e.key, e.value]));
 process.stdout.write(JSON.stringify({ rows, kv, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
 )JS");
-  return Json::parse(Shell("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
+  return Json::parse(ShellOk("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
                          file.string()));
 }
 
@@ -60,7 +51,7 @@ struct Made {
 };
 
 Made MakeVersion(const fs::path& dir) {
-  Shell("ffmpeg -v error -f lavfi -i testsrc=size=96x64:rate=30 -frames:v 90 -pix_fmt yuv420p " +
+  ShellOk("ffmpeg -v error -f lavfi -i testsrc=size=96x64:rate=30 -frames:v 90 -pix_fmt yuv420p " +
       (dir / "src.mp4").string());
   Made made;
   Manifest& m = made.manifest;
@@ -191,7 +182,7 @@ TEST(LeRobotExport, ParquetAndVideoReadBackByIndependentReaders) {
   EXPECT_EQ(stats["index"]["count"], Json{45});
   EXPECT_EQ(stats["index"]["q50"][0].get<double>(), 22.0);
 
-  const Json probe = Json::parse(Shell(
+  const Json probe = Json::parse(ShellOk(
       "ffprobe -v error -count_frames -show_entries stream=nb_read_frames,width,height,codec_name "
       "-of json " + (dir / "out/videos/observation.images.source/chunk-000/file-000.mp4").string()));
   EXPECT_EQ(probe["streams"][0]["nb_read_frames"], std::to_string(45));

@@ -20,6 +20,8 @@ inline std::vector<std::string> QueryRows(const std::filesystem::path& db, const
     sqlite3_close(raw);
     throw std::runtime_error("cannot open " + db.string());
   }
+  // A worker may be creating or writing the file right now.
+  sqlite3_busy_timeout(raw, 10000);
   sqlite3_stmt* stmt = nullptr;
   if (sqlite3_prepare_v2(raw, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) {
     const std::string message = sqlite3_errmsg(raw);

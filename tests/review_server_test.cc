@@ -189,6 +189,38 @@ TEST_F(ReviewServerTest, WritesNeedTheTokenAndTheSameOrigin) {
   EXPECT_EQ(ok->status, 200) << ok->body;
 }
 
+// Ids are whole numbers in range: 14.7 is not clip 14, 1e30 does not
+// overflow into some clip, and a body nested without end is refused before
+// it is parsed. Nothing is recorded for any of them.
+TEST_F(ReviewServerTest, RequestBodiesNeedWholeIdsAndAFewLevels) {
+  const std::string first = std::to_string(clips_[0]);
+  for (const std::string& id : std::vector<std::string>{first + ".7", "1e30", "-" + first, "0", "\"" + first + "\"",
+                               "true", "null", "[" + first + "]", "18446744073709551615",
+                               "9007199254740992"}) {
+    const std::string body = R"({"clip_id": )" + id +
+                             R"(, "stage": "interaction", "decision": "accept", "reviewer": "ann"})";
+    auto r = client_->Post("/api/decision", WriteHeaders(), body, "application/json");
+    ASSERT_TRUE(r) << id;
+    EXPECT_EQ(r->status, 400) << id << " -> " << r->body;
+    EXPECT_NE(r->body.find("clip_id"), std::string::npos) << id << " -> " << r->body;
+  }
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  for (const std::string& body : std::vector<std::string>{
+           deep, R"({"clip_id": )" + deep + "}", "[1, 2]", std::string(70000, ' ') + "{}"}) {
+    auto r = client_->Post("/api/decision", WriteHeaders(), body, "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << r->body.substr(0, 200);
+  }
+  auto huge = client_->Get("/api/clip/99999999999999999999?stage=interaction");
+  ASSERT_TRUE(huge);
+  EXPECT_EQ(huge->status, 404) << huge->body;
+  Database db(dir_ / "d.db");
+  EXPECT_TRUE(db.ListReviews().empty());
+  EXPECT_EQ(db.ListFlagged().size(), 3u);
+  // The same request with a whole id is taken.
+  EXPECT_EQ(Decide(WriteHeaders(), clips_[0], "accept", "")->status, 200);
+}
+
 TEST_F(ReviewServerTest, AcceptQueuesTheNextStageAndRejectIsAHumanVerdict) {
   auto accept = Decide(WriteHeaders(), clips_[0], "accept", "");
   ASSERT_TRUE(accept);
@@ -267,6 +299,7 @@ TEST_F(ReviewServerTest, ThePageCarriesTheTokenUnderAStrictPolicy) {
 
 TEST(ReviewServerBind, NonLoopbackNeedsTheExplicitFlag) {
   TempDir dir;
+  { Database created(dir / "d.db"); }  // the server only opens an existing database
   EXPECT_TRUE(IsLoopbackHost("127.0.0.1"));
   EXPECT_TRUE(IsLoopbackHost("127.8.9.10"));
   EXPECT_TRUE(IsLoopbackHost("::1"));

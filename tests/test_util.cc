@@ -1,6 +1,7 @@
 #include "tests/test_util.h"
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -91,6 +92,16 @@ std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path)
     rows.push_back(cells);
   }
   return rows;
+}
+
+std::string ShellOk(const std::string& command) {
+  std::string out;
+  FILE* p = popen(command.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while (p && (n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  EXPECT_EQ(p ? pclose(p) : -1, 0) << command;
+  return out;
 }
 
 }  // namespace doasido::testing

@@ -39,6 +39,10 @@ struct CommandResult {
 // Runs the doasido binary with `args` (no shell), capturing both streams.
 CommandResult RunDoasido(const std::vector<std::string>& args);
 
+// Runs `command` through /bin/sh and returns its standard output; a
+// non-zero exit status is a test failure (EXPECT).
+std::string ShellOk(const std::string& command);
+
 // Writes `text` to `path`, creating parent folders.
 void WriteFile(const std::filesystem::path& path, const std::string& text);
 std::string ReadFile(const std::filesystem::path& path);

@@ -18,6 +18,7 @@ namespace doasido::video {
 namespace {
 
 using doasido::testing::SharedData;
+using doasido::testing::ShellOk;
 
 struct FfprobeInfo {
   int width = 0, height = 0;
@@ -106,16 +107,6 @@ TEST(Probe, TruncatedAndGarbageFilesFailWithNamedErrors) {
   }
 }
 
-std::string Shell(const std::string& command) {
-  std::string out;
-  FILE* p = popen(command.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  EXPECT_EQ(pclose(p), 0) << command;
-  return out;
-}
-
 TEST(Probe, EveryRealVideoMatchesFfprobeCountFrames) {
   int checked = 0;
   for (const char* folder : {"videos", "shots"}) {
@@ -141,9 +132,9 @@ TEST(Probe, EveryRealVideoMatchesFfprobeCountFrames) {
 TEST(Probe, ConstantRateIsNotVariableAndVariableIs) {
   doasido::testing::TempDir dir;
   // libx264 with B-frames: packets arrive out of presentation order.
-  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 -c:v libx264 "
+  ShellOk("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 -c:v libx264 "
         "-bf 3 " + (dir / "cfr.mp4").string());
-  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 "
+  ShellOk("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 90 "
         "-vf \"setpts='if(lt(N,45),N,45+2*(N-45))/30/TB'\" -fps_mode vfr -c:v libx264 " +
         (dir / "vfr.mp4").string());
   EXPECT_FALSE(ProbeVideo(dir / "cfr.mp4").variable_frame_rate);
@@ -156,9 +147,9 @@ TEST(Probe, ConstantRateIsNotVariableAndVariableIs) {
 
 TEST(Probe, RotationFromTheDisplayMatrix) {
   doasido::testing::TempDir dir;
-  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 10 " +
+  ShellOk("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 10 " +
         (dir / "plain.mp4").string());
-  Shell("ffmpeg -v error -i " + (dir / "plain.mp4").string() +
+  ShellOk("ffmpeg -v error -i " + (dir / "plain.mp4").string() +
         " -c copy -metadata:s:v:0 rotate=90 " + (dir / "rotated.mp4").string());
   const VideoInfo info = ProbeVideo(dir / "rotated.mp4");
   cv::VideoCapture cap((dir / "rotated.mp4").string(), cv::CAP_FFMPEG);
@@ -170,7 +161,7 @@ TEST(Probe, RotationFromTheDisplayMatrix) {
 
   // Decoding turns the frames as players do: display size, and the same
   // pixels as ffmpeg's own (auto-rotating) decode of the first frame.
-  Shell("ffmpeg -v error -i " + (dir / "rotated.mp4").string() + " -frames:v 1 " +
+  ShellOk("ffmpeg -v error -i " + (dir / "rotated.mp4").string() + " -frames:v 1 " +
         (dir / "first.png").string());
   const cv::Mat expected = cv::imread((dir / "first.png").string());
   ASSERT_EQ(expected.cols, 48);
@@ -206,12 +197,12 @@ std::filesystem::path Cut(const doasido::testing::TempDir& dir, const std::strin
 
 TEST(Probe, ShortTailPassesProbeAndDecodeTruncationFailsBothOnce) {
   doasido::testing::TempDir dir;
-  Shell("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 60 -c:v libx264 -bf 0 "
+  ShellOk("ffmpeg -v error -f lavfi -i testsrc=size=64x48:rate=30 -frames:v 60 -c:v libx264 -bf 0 "
         "-movflags +faststart " + (dir / "whole.mp4").string());
   const std::string bytes = doasido::testing::ReadFile(dir / "whole.mp4");
   // The last packet's offset: the file ends just before it, so the index
   // declares one frame more than the file holds.
-  const std::string last = Shell("ffprobe -v error -select_streams v:0 -show_entries packet=pos "
+  const std::string last = ShellOk("ffprobe -v error -select_streams v:0 -show_entries packet=pos "
                                  "-of csv=p=0 " + (dir / "whole.mp4").string() + " | tail -1");
   const auto tail = Cut(dir, "tail.mp4", bytes, std::stoul(last));
   const VideoInfo info = ProbeVideo(tail);

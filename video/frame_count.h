@@ -8,10 +8,9 @@
 
 #include <cstdint>
 
-namespace doasido {
+#include "core/error_codes.h"  // kVideoTruncated
 
-// The error code of a file that holds fewer frames than it should.
-inline constexpr const char* kVideoTruncated = "video_truncated";
+namespace doasido {
 
 inline constexpr double kMissingFramesFraction = 0.02;
 inline constexpr std::int64_t kMissingFramesMin = 2;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 extern "C" {
@@ -9,6 +10,7 @@ extern "C" {
 }
 
 #include "core/config_check.h"
+#include "core/error_codes.h"
 #include "core/permanent_error.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
@@ -43,6 +45,51 @@ bool VariableRate(std::vector<std::int64_t> pts, double time_base, double fps, d
   return false;
 }
 
+const char* FileKind(std::filesystem::file_type type) {
+  switch (type) {
+    case std::filesystem::file_type::fifo: return "FIFO (named pipe)";
+    case std::filesystem::file_type::directory: return "folder";
+    case std::filesystem::file_type::block:
+    case std::filesystem::file_type::character: return "device";
+    case std::filesystem::file_type::socket: return "socket";
+    default: return "special file";
+  }
+}
+
+// Image demuxers (png_pipe, image2, ...) open a picture as a one-frame
+// stream; a picture renamed .mp4 is one of them.
+bool IsStillImage(const AVFormatContext* format, const AVStream* stream) {
+  const std::string name = format->iformat->name;
+  const bool image_demuxer =
+      name == "image2" || (name.size() > 5 && name.compare(name.size() - 5, 5, "_pipe") == 0);
+  return image_demuxer || (stream->disposition & AV_DISPOSITION_ATTACHED_PIC) != 0;
+}
+
+// Limits of a video a stage can judge: a hand needs some pixels, and sizes
+// or rates past any camera's are a broken header, not footage.
+constexpr int kMinSide = 16;
+constexpr int kMaxSide = 16384;
+constexpr double kMaxFps = 1000;
+constexpr std::int64_t kMinFrames = 2;
+
+// Why no stage could judge this video ("" when one can), in words.
+std::string CannotBeJudged(const VideoInfo& info) {
+  const std::string size = std::to_string(info.width) + "x" + std::to_string(info.height);
+  if (info.width < kMinSide || info.height < kMinSide) {
+    return size + " pixels is too small to show a hand (at least " + std::to_string(kMinSide) +
+           " pixels a side)";
+  }
+  if (info.width > kMaxSide || info.height > kMaxSide) {
+    return size + " pixels is larger than any camera makes (at most " +
+           std::to_string(kMaxSide) + " a side): a broken header";
+  }
+  if (info.fps > kMaxFps) {
+    return std::to_string(info.fps) + " frames per second is past any camera's rate (at most " +
+           std::to_string(static_cast<int>(kMaxFps)) + "): a broken header";
+  }
+  return "";
+}
+
 }  // namespace
 
 void CheckConfig(const ProbeConfig& c, const std::string& section) {
@@ -53,20 +100,38 @@ void CheckConfig(const ProbeConfig& c, const std::string& section) {
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
   const ErrorSite site{.file = path.string()};
   if (path.string().find("://") != std::string::npos) {
-    throw PermanentError("video_not_downloaded",
+    throw PermanentError(kVideoNotDownloaded,
                          "the video is a URL that was not downloaded (put the `download` stage "
                          "before probe in the pipeline)",
                          site);
   }
-  if (!std::filesystem::exists(path)) throw Error("video_missing", "no such file", site);
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) throw Error("video_missing", "no such file", site);
+  if (!std::filesystem::is_regular_file(status)) {
+    throw PermanentError(kNotARegularFile,
+                         std::string("a ") + FileKind(status.type()) +
+                             ", not a regular file: it may never end, so it is not opened",
+                         site);
+  }
   Container c;
   if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
       avformat_find_stream_info(c.format, nullptr) < 0) {
-    throw PermanentError("video_unreadable",
+    throw PermanentError(kVideoUnreadable,
                          "FFmpeg cannot open it (corrupt, truncated or not a video)", site);
   }
   const int index = av_find_best_stream(c.format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
-  if (index < 0) throw PermanentError("video_unreadable", "no video stream", site);
+  if (index < 0) {
+    const bool audio = av_find_best_stream(c.format, AVMEDIA_TYPE_AUDIO, -1, -1, nullptr, 0) >= 0;
+    if (audio) throw PermanentError(kUnsupportedVideo, "audio only: no video stream", site);
+    throw PermanentError(kVideoUnreadable, "no video stream", site);
+  }
+  if (IsStillImage(c.format, c.format->streams[index])) {
+    throw PermanentError(kUnsupportedVideo,
+                         std::string("a still image (") + c.format->iformat->name +
+                             "), not a video, whatever its name says",
+                         site);
+  }
   const AVStream* stream = c.format->streams[index];
   const AVCodecParameters* par = stream->codecpar;
   VideoInfo info;
@@ -78,11 +143,14 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   info.fps = rate.den > 0 ? av_q2d(rate) : 0;
   info.codec = CodecOf(par);
   if (info.width <= 0 || info.height <= 0) {
-    throw PermanentError("video_unreadable", "no video stream with a frame size", site);
+    throw PermanentError(kVideoUnreadable, "no video stream with a frame size", site);
   }
   if (!(info.fps > 0) || !std::isfinite(info.fps)) {
-    throw PermanentError("video_unreadable", "no frame rate in the container",
+    throw PermanentError(kVideoUnreadable, "no frame rate in the container",
                          {.file = path.string(), .field = "fps"});
+  }
+  if (const std::string why = CannotBeJudged(info); !why.empty()) {
+    throw PermanentError(kUnsupportedVideo, why, site);
   }
   const std::int64_t declared = stream->nb_frames;
   info.frame_count = declared;
@@ -99,7 +167,12 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
     }
     av_packet_free(&packet);
     const auto counted = static_cast<std::int64_t>(pts.size());
-    if (counted == 0) throw PermanentError("video_unreadable", "the video stream has no frames", site);
+    if (counted < kMinFrames) {
+      throw PermanentError(kUnsupportedVideo,
+                           counted == 0 ? "the video stream holds no frames"
+                                        : "a single frame: no motion to judge",
+                           {.file = path.string(), .field = "frame_count"});
+    }
     const auto allowed = std::max(
         MissingFramesAllowed(declared),
         static_cast<std::int64_t>(std::ceil(config.max_missing_fraction * static_cast<double>(declared))));

@@ -32,9 +32,12 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProbeConfig, count_frames, vfr_t
 void CheckConfig(const ProbeConfig& c, const std::string& section);
 
 // Throws Error naming the file: "video_missing" (may appear later: retried),
-// and PermanentError for what a retry cannot change: "video_unreadable"
-// (cannot be opened or has no frames), "video_truncated" (holds fewer
-// frames than declared, beyond the allowance).
+// and PermanentError for what a retry cannot change (core/error_codes.h):
+// kNotARegularFile (a FIFO, device or folder: refused without opening it),
+// kVideoUnreadable (FFmpeg cannot open it), kUnsupportedVideo (no stage
+// could judge it: under 16 or over 16384 pixels a side, over 1000 fps,
+// fewer than 2 frames, audio only, a still image), kVideoTruncated (holds
+// fewer frames than declared, beyond the allowance).
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config = {});
 
 // The first queue stage: probes the clip's video and checks that the clip's

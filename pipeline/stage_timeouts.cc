@@ -1,0 +1,51 @@
+#include "pipeline/stage_timeouts.h"
+
+#include <algorithm>
+
+#include "core/config_check.h"
+#include "pipeline/stage_registry.h"
+
+namespace doasido::pipeline {
+namespace {
+
+constexpr double kMaxTimeoutSeconds = 30 * 24 * 3600.0;
+
+const StageEntry* Find(const std::string& stage) {
+  const auto& table = StageTable();
+  const auto it = std::find_if(table.begin(), table.end(),
+                               [&](const StageEntry& e) { return e.name == stage; });
+  return it == table.end() ? nullptr : &*it;
+}
+
+}  // namespace
+
+void CheckStageTimeouts(const Json& config) {
+  if (!config.is_object() || !config.contains(kTimeoutsSection)) return;
+  const Json& section = config.at(kTimeoutsSection);
+  if (!section.is_object()) {
+    throw Error("bad_config", "[timeouts] is a table of stage = seconds",
+                {.field = kTimeoutsSection});
+  }
+  for (const auto& [stage, value] : section.items()) {
+    const std::string key = std::string(kTimeoutsSection) + "." + stage;
+    if (Find(stage) == nullptr) {
+      throw Error("bad_config", "timeouts." + stage + " names no stage", {.field = key});
+    }
+    if (!value.is_number()) {
+      throw Error("bad_config", "timeouts." + stage + " is not a number of seconds: " + value.dump(),
+                  {.field = key});
+    }
+    RequireInRange(kTimeoutsSection, stage, value.get<double>(), 1e-3, kMaxTimeoutSeconds);
+  }
+}
+
+double StageTimeout(const Json& config, const std::string& stage) {
+  if (config.is_object() && config.contains(kTimeoutsSection) &&
+      config.at(kTimeoutsSection).contains(stage)) {
+    return config.at(kTimeoutsSection).at(stage).get<double>();
+  }
+  const StageEntry* entry = Find(stage);
+  return entry ? entry->timeout_s : kMaxTimeoutSeconds;
+}
+
+}  // namespace doasido::pipeline

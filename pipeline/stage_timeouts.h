@@ -1,0 +1,30 @@
+// Wall-clock limits of stage runs. Every stage has a default that fits its
+// work (seconds for probe, an hour for a model command); the [timeouts]
+// section of the config overrides them by stage name:
+//
+//   [timeouts]
+//   probe = 30          # seconds
+//   bundle = 7200
+//
+// A run past its limit is failed as kStageTimeout (core/error_codes.h) by
+// the worker's watchdog, which then ends the worker process (a hung read or
+// a stuck library call cannot be cancelled in place); the supervisor starts
+// another worker. The timeout of a deterministic stage is permanent.
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+
+namespace doasido::pipeline {
+
+inline constexpr const char* kTimeoutsSection = "timeouts";
+
+// Throws Error("bad_config") naming timeouts.<key> for a key that is not a
+// stage or a limit that is not a number of seconds in (0, 30 days].
+void CheckStageTimeouts(const Json& config);
+
+// The limit of `stage` in seconds: the config's, else the stage's default.
+double StageTimeout(const Json& config, const std::string& stage);
+
+}  // namespace doasido::pipeline

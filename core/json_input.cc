@@ -43,7 +43,9 @@ Json ParseJsonInput(std::string_view text, const ErrorSite& site, const JsonLimi
   }
   try {
     return Json::parse(text);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {
+    // parse_error, and out_of_range for a number past double's range
+    // (1e400), which is no more JSON a reader here can use.
     throw Error(kBadJson, std::string("not JSON: ") + e.what(), site);
   }
 }

@@ -28,8 +28,12 @@ void AddInitCommand(CLI::App& app) {
       ->delimiter(',');
   cmd->footer("Stages:" + stages +
               "\n\nEach stage run has a wall-clock limit; a run past it fails as stage_timeout "
-              "(not retried, except for download). Change limits by stage in --config:\n"
-              "  [timeouts]\n  probe = 30      # seconds\n  bundle = 14400"
+              "(not retried, except for download). A run that reports progress (frames "
+              "decoded, solver iterations, a model command's log growing) and then stands still "
+              "for no_progress seconds (default 900) fails the same way. Change limits by stage "
+              "in --config:\n"
+              "  [timeouts]\n  probe = 30      # seconds\n  bundle = 14400\n"
+              "  no_progress = 600"
               "\n\nExample:\n  doasido init --db work/doasido.db\n"
               "  doasido init --db work/queue-test.db --pipeline noop");
   cmd->callback([opt] {

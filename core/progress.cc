@@ -7,6 +7,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/stage_progress.h"
+
 namespace doasido {
 
 bool Progress::Interactive() {
@@ -26,6 +28,7 @@ Progress::~Progress() { Finish(); }
 void Progress::Add(std::uint64_t n) { Set(done_ + n); }
 
 void Progress::Set(std::uint64_t done) {
+  if (done != done_) ReportStageProgress();
   done_ = done;
   Draw(false);
 }

@@ -1,6 +1,7 @@
 #include "pipeline/stage_timeouts.h"
 
 #include <algorithm>
+#include <optional>
 
 #include "core/config_check.h"
 #include "pipeline/stage_registry.h"
@@ -28,8 +29,10 @@ void CheckStageTimeouts(const Json& config) {
   }
   for (const auto& [stage, value] : section.items()) {
     const std::string key = std::string(kTimeoutsSection) + "." + stage;
-    if (Find(stage) == nullptr) {
-      throw Error("bad_config", "timeouts." + stage + " names no stage", {.field = key});
+    if (stage != kNoProgressKey && Find(stage) == nullptr) {
+      throw Error("bad_config",
+                  "timeouts." + stage + " names no stage (nor is it " + kNoProgressKey + ")",
+                  {.field = key});
     }
     if (!value.is_number()) {
       throw Error("bad_config", "timeouts." + stage + " is not a number of seconds: " + value.dump(),
@@ -39,13 +42,26 @@ void CheckStageTimeouts(const Json& config) {
   }
 }
 
-double StageTimeout(const Json& config, const std::string& stage) {
+namespace {
+
+std::optional<double> Configured(const Json& config, const std::string& key) {
   if (config.is_object() && config.contains(kTimeoutsSection) &&
-      config.at(kTimeoutsSection).contains(stage)) {
-    return config.at(kTimeoutsSection).at(stage).get<double>();
+      config.at(kTimeoutsSection).contains(key)) {
+    return config.at(kTimeoutsSection).at(key).get<double>();
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+double StageTimeout(const Json& config, const std::string& stage) {
+  if (const auto configured = Configured(config, stage)) return *configured;
   const StageEntry* entry = Find(stage);
   return entry ? entry->timeout_s : kMaxTimeoutSeconds;
+}
+
+double NoProgressLimit(const Json& config) {
+  return Configured(config, kNoProgressKey).value_or(kDefaultNoProgressSeconds);
 }
 
 }  // namespace doasido::pipeline

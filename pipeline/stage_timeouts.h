@@ -5,11 +5,15 @@
 //   [timeouts]
 //   probe = 30          # seconds
 //   bundle = 7200
+//   no_progress = 900   # a run that reported progress and then stands still
 //
 // A run past its limit is failed as kStageTimeout (core/error_codes.h) by
 // the worker's watchdog, which then ends the worker process (a hung read or
 // a stuck library call cannot be cancelled in place); the supervisor starts
 // another worker. The timeout of a deterministic stage is permanent.
+// `no_progress` applies to every stage run that reports progress
+// (core/stage_progress.h): once its count stands still that long, the watch
+// stops renewing its lease and fails it the same way.
 #pragma once
 
 #include <string>
@@ -19,6 +23,8 @@
 namespace doasido::pipeline {
 
 inline constexpr const char* kTimeoutsSection = "timeouts";
+inline constexpr const char* kNoProgressKey = "no_progress";
+inline constexpr double kDefaultNoProgressSeconds = 900;
 
 // Throws Error("bad_config") naming timeouts.<key> for a key that is not a
 // stage or a limit that is not a number of seconds in (0, 30 days].
@@ -26,5 +32,9 @@ void CheckStageTimeouts(const Json& config);
 
 // The limit of `stage` in seconds: the config's, else the stage's default.
 double StageTimeout(const Json& config, const std::string& stage);
+
+// How long a run that reports progress may stand still: the config's
+// timeouts.no_progress, else kDefaultNoProgressSeconds.
+double NoProgressLimit(const Json& config);
 
 }  // namespace doasido::pipeline

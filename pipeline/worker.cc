@@ -17,6 +17,7 @@
 #include "core/child_groups.h"
 #include "core/error_codes.h"
 #include "core/log.h"
+#include "core/stage_progress.h"
 #include "db/database.h"
 #include "pipeline/stage_registry.h"
 #include "pipeline/stage_timeouts.h"
@@ -37,15 +38,19 @@ std::string WorkerName() {
 }
 
 // Watches the run in progress from a second thread with its own
-// connection: renews its lease while the run is within its wall-clock limit
-// (so a long stage is not mistaken for a dead worker), and once it is past
-// the limit fails it as a stage timeout and ends this worker process, since
-// a hung read or a stuck library call cannot be cancelled in place. The
-// supervisor starts another worker (kTimedOutExitCode).
+// connection. It renews the run's lease (so a long stage is not mistaken for
+// a dead worker) while the run is within its wall-clock limit and, once the
+// run has reported progress (core/stage_progress.h), only while that
+// progress keeps moving. A run past its limit, or standing still for longer
+// than timeouts.no_progress, is failed as a stage timeout and this worker
+// process ends, since a hung read or a stuck library call cannot be
+// cancelled in place. The supervisor starts another worker
+// (kTimedOutExitCode).
 class RunWatch {
  public:
   RunWatch(const std::string& db_path, std::string worker, const WorkerOptions& options)
       : worker_(std::move(worker)), options_(options),
+        no_progress_s_(NoProgressLimit(options.config)),
         thread_([this, db_path] { Loop(db_path); }) {}
   ~RunWatch() {
     {
@@ -60,12 +65,15 @@ class RunWatch {
     std::lock_guard lock(mutex_);
     claim_ = claim;
     if (!claim) return;
-    started_ = std::chrono::steady_clock::now();
+    started_ = moved_ = std::chrono::steady_clock::now();
+    count_at_start_ = count_ = StageProgressCount();
     limit_s_ = StageTimeout(options_.config, claim->stage);
     permanent_ = IsDeterministic(claim->stage);
   }
 
  private:
+  using Clock = std::chrono::steady_clock;
+
   static bool IsDeterministic(const std::string& stage) {
     for (const auto& entry : StageTable()) {
       if (entry.name == stage) return entry.deterministic;
@@ -73,16 +81,41 @@ class RunWatch {
     return true;
   }
 
+  static double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+  // Why the run must stop now, or "" while it may go on.
+  std::string Overdue(Clock::time_point now) {
+    char text[160];
+    if (Seconds(now - started_) > limit_s_) {
+      std::snprintf(text, sizeof text, "ran past its limit of %g s (%s.%s in the config)", limit_s_,
+                    kTimeoutsSection, claim_->stage.c_str());
+      return text;
+    }
+    const std::uint64_t count = StageProgressCount();
+    if (count != count_) {
+      count_ = count;
+      moved_ = now;
+    }
+    if (count_ != count_at_start_ && Seconds(now - moved_) > no_progress_s_) {
+      std::snprintf(text, sizeof text,
+                    "made no progress for %g s after %llu steps (%s.%s in the config)",
+                    no_progress_s_, static_cast<unsigned long long>(count_ - count_at_start_),
+                    kTimeoutsSection, kNoProgressKey);
+      return text;
+    }
+    return "";
+  }
+
   void Loop(const std::string& db_path) {
     Database db(db_path);
     const auto renew_every = std::chrono::duration<double>(options_.lease_s / 3);
-    auto renewed = std::chrono::steady_clock::now();
+    auto renewed = Clock::now();
     std::unique_lock lock(mutex_);
     while (!cv_.wait_for(lock, std::chrono::milliseconds(200), [this] { return quit_; })) {
       if (!claim_) continue;
-      const auto now = std::chrono::steady_clock::now();
-      if (std::chrono::duration<double>(now - started_).count() > limit_s_) {
-        TimeOut(db);
+      const auto now = Clock::now();
+      if (const std::string why = Overdue(now); !why.empty()) {
+        TimeOut(db, why);
         continue;
       }
       if (now - renewed < renew_every) continue;
@@ -95,19 +128,14 @@ class RunWatch {
     }
   }
 
-  void TimeOut(Database& db) {
-    char limit[32];
-    std::snprintf(limit, sizeof limit, "%g", limit_s_);
+  void TimeOut(Database& db, const std::string& why) {
     std::string clip = std::to_string(claim_->clip_id);
     try {
       const std::string external = db.GetClip(claim_->clip_id).external_id;
       if (!external.empty()) clip = external;
     } catch (const std::exception&) {
     }
-    const Error error(kStageTimeout,
-                      claim_->stage + " ran past its limit of " + limit + " s (" +
-                          kTimeoutsSection + "." + claim_->stage + " in the config)",
-                      {.clip = clip});
+    const Error error(kStageTimeout, claim_->stage + " " + why, {.clip = clip});
     bool recorded = false;
     try {
       recorded = db.Fail(*claim_, worker_, error.what(),
@@ -128,8 +156,12 @@ class RunWatch {
   std::mutex mutex_;
   std::condition_variable cv_;
   bool quit_ = false;
+  const double no_progress_s_;
   std::optional<Claim> claim_;
-  std::chrono::steady_clock::time_point started_;
+  Clock::time_point started_;
+  Clock::time_point moved_;  // when the progress count last moved
+  std::uint64_t count_at_start_ = 0;
+  std::uint64_t count_ = 0;
   double limit_s_ = 0;
   bool permanent_ = true;
   std::thread thread_;
@@ -156,6 +188,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   };
   std::optional<Claim> claim = claim_next();
   while (!g_stop) {
+    watch.Set(claim);
     if (!claim) {
       if (options.until_empty) {
         const auto s = db.Summary();
@@ -165,7 +198,6 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       claim = claim_next();
       continue;
     }
-    watch.Set(claim);
     const Claim current = *claim;
     const StageRunReport report =
         RunClaimedStage(db, *stages.at(current.stage), current, worker,
@@ -176,7 +208,6 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
       case RunOutcome::kFailed: ++stats.failed_attempts; break;
       case RunOutcome::kLeaseLost: ++stats.lost_leases; break;
     }
-    watch.Set(claim);
   }
   return stats;
 }

@@ -12,6 +12,7 @@
 
 #include "core/child_groups.h"
 #include "core/error.h"
+#include "core/stage_progress.h"
 
 namespace doasido::recon {
 namespace {
@@ -55,9 +56,17 @@ CommandOutcome RunModelCommand(const std::string& command, const std::filesystem
   CommandOutcome out;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   int status = 0;
+  std::error_code ignored;
+  std::uintmax_t log_size = 0;
   while (true) {
     const pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid) break;
+    // A command that writes to its log is getting on (core/stage_progress.h).
+    const std::uintmax_t size = std::filesystem::file_size(log, ignored);
+    if (!ignored && size != log_size) {
+      log_size = size;
+      ReportStageProgress();
+    }
     if (std::chrono::steady_clock::now() >= deadline) {
       ::kill(-pid, SIGKILL);
       ::waitpid(pid, &status, 0);

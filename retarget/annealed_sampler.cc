@@ -8,6 +8,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/stage_progress.h"
 #include "retarget/rollout_pool.h"
 
 namespace doasido::retarget {
@@ -173,6 +174,7 @@ int Planner::Optimise(int start, int plan) {
     });
     stats_.rollout_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats_.rollouts += samples_ * group_;
+    ReportStageProgress();
     stats_.sim_steps += static_cast<long long>(samples_) * group_ * length;
     double worst = 0;
     for (double r : rollout_return_) {

@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "core/stage_progress.h"
 
 namespace doasido::retarget {
 namespace {
@@ -348,6 +349,7 @@ void KinematicRetargeter::SolveHolding(Eigen::VectorXd& q, const std::vector<Vec
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
+  ReportStageProgress();
 }
 
 Eigen::VectorXd KinematicRetargeter::KabschStart(const std::vector<Vec3>& targets) const {

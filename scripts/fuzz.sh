@@ -9,7 +9,8 @@
 #
 # Seeds: tests/fuzz/regressions/<target>/ (inputs that once crashed, kept as
 # regression tests: each is run first) and seeds made from the test data
-# (scripts/fuzz_seeds.sh). The working corpus and crashes are in
+# (scripts/fuzz_seeds.sh; hand_import_fuzz writes its own URDF seed, made by
+# the C++ of the import tests). The working corpus and crashes are in
 # build-fuzz/corpus/<target>/ and build-fuzz/crashes/<target>/; a crash
 # ends the run with exit 1, naming the input file.
 set -euo pipefail
@@ -17,7 +18,7 @@ cd "$(dirname "$0")/.."
 target=${1:-all}
 seconds=${2:-600}
 BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz}
-targets=(bundle_fuzz clip_list_fuzz config_fuzz request_body_fuzz)
+targets=(bundle_fuzz clip_list_fuzz config_fuzz hand_import_fuzz request_body_fuzz)
 [[ $target == all ]] || targets=("$target")
 
 CC=clang CXX=clang++ BUILD_DIR=$BUILD_DIR BUILD_TYPE=RelWithDebInfo \
@@ -36,7 +37,8 @@ for t in "${targets[@]}"; do
       echo "fuzz: $t fails a regression input (see $crashes/regressions.log)"; status=1; continue; }
   fi
   echo "fuzz: $t for ${seconds}s"
-  if ! "$BUILD_DIR/fuzz/$t" "$corpus" "$BUILD_DIR/seeds/$t" -max_total_time="$seconds" \
+  # (a target may add seeds only C++ can make: DOASIDO_FUZZ_SEEDS)
+  if ! DOASIDO_FUZZ_SEEDS=$BUILD_DIR/seeds/$t "$BUILD_DIR/fuzz/$t" "$corpus" "$BUILD_DIR/seeds/$t" -max_total_time="$seconds" \
       -timeout=20 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$crashes/" 2>"$crashes/run.log"; then
     echo "fuzz: $t found a crash, hang or leak:"; grep -E "ERROR|artifact|SUMMARY" "$crashes/run.log" | head -5

@@ -112,6 +112,33 @@ TEST(BadInput, AHangingModelCommandTimesOutAndIsKilled) {
   EXPECT_EQ(ShellOk("pgrep -f 'slee[p] 6131' || true"), "") << "the hung command outlived its worker";
 }
 
+// A run that reports progress and then stands still is stopped once it has
+// been still for timeouts.no_progress, long before its wall-clock limit (an
+// hour for bundle); a command that keeps writing to its log runs on past
+// that many seconds. A model command reports progress when its log grows.
+TEST(BadInput, ARunThatStopsMakingProgressTimesOut) {
+  TempDir dir;
+  const std::string apple = (SharedData() / "videos" / "apple.mp4").string();
+  WriteFile(dir / "l.csv", "video,id\n" + Cups() + ",stuck\n" + apple + ",talker\n");
+  WriteFile(dir / "t.toml",
+            "[timeouts]\nno_progress = 2\n[bundle]\ncommand = \""
+            "if test {clip} = stuck; then echo loading; sleep 6133; fi; "
+            "for i in 1 2 3 4 5 6 7 8; do echo step $i; sleep 0.5; done; exit 3\"\n");
+  Queue(dir / "d.db", "bundle", dir / "l.csv");
+  const double seconds = RunWorker(
+      dir / "d.db", {"--config", (dir / "t.toml").string(), "--max-attempts", "1"});
+  EXPECT_LT(seconds, 2 + 4 + 20.0);
+  auto runs = RunsById(dir / "d.db");
+  EXPECT_EQ(runs["stuck"].state, RunState::kFailed);
+  EXPECT_THAT(runs["stuck"].error, HasSubstr("stage_timeout: bundle made no progress for 2 s"));
+  EXPECT_THAT(runs["stuck"].error, HasSubstr("timeouts.no_progress"));
+  // Four seconds of steps, each within the limit: the command ran to its end.
+  EXPECT_EQ(runs["talker"].state, RunState::kFailed);
+  EXPECT_THAT(runs["talker"].error, HasSubstr("bundle_command_failed"));
+  EXPECT_THAT(runs["talker"].error, ::testing::Not(HasSubstr("stage_timeout")));
+  EXPECT_EQ(ShellOk("pgrep -f 'slee[p] 6133' || true"), "") << "the stuck command outlived its worker";
+}
+
 // Videos no stage can judge fail at probe as unsupported_video, once, with
 // the reason in words; a real video in the same batch passes.
 TEST(BadInput, DegenerateVideosAreUnsupportedAtTheFirstAttempt) {

@@ -12,6 +12,7 @@ extern "C" {
 #include "core/config_check.h"
 #include "core/error_codes.h"
 #include "core/permanent_error.h"
+#include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
 
@@ -162,6 +163,7 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
     while (av_read_frame(c.format, packet) >= 0) {
       if (packet->stream_index == index && packet->size > 0) {
         pts.push_back(packet->pts != AV_NOPTS_VALUE ? packet->pts : packet->dts);
+        ReportStageProgress();
       }
       av_packet_unref(packet);
     }

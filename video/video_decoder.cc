@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/permanent_error.h"
+#include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
 
@@ -211,7 +212,10 @@ bool VideoDecoder::DecodeNext() {
   Codec& c = *codec_;
   while (true) {
     const int received = avcodec_receive_frame(c.context, c.frame);
-    if (received == 0) return true;
+    if (received == 0) {
+      ReportStageProgress();
+      return true;
+    }
     if (received != AVERROR(EAGAIN) || c.flushed) return false;
     // Feed packets until the decoder takes one (corrupt packets are skipped:
     // the frame count then tells a damaged file from a complete one).

@@ -1,9 +1,13 @@
 #include "recon/object_tracker.h"
 
+#include <chrono>
+
 #include "core/error.h"
 
 namespace doasido::recon {
 namespace {
+
+using Clock = std::chrono::steady_clock;
 
 PoseChoice Choose(VelocityField& model, int frame, const StateMatrix& states,
                   const std::vector<Pose>& poses, const TrackInputs& inputs,
@@ -37,14 +41,18 @@ std::vector<TrackedFrame> TrackObject(VelocityField& model, int frames,
     targets.pose_guidance =
         k == 0 ? 0.0 : (k < static_cast<int>(inputs.pose_guidance.size()) ? inputs.pose_guidance[k]
                                                                           : 0.0);
+    const auto start = Clock::now();
     const StateMatrix states =
         SampleGuided(model, k, targets, flow.candidates, flow.steps, flow.seed);
+    const auto sampled = Clock::now();
     TrackedFrame frame;
     frame.pose_guidance = targets.pose_guidance;
     for (Eigen::Index i = 0; i < states.rows(); ++i) {
       frame.candidates.push_back(PoseFromState(layout, states.row(i)));
     }
     frame.choice = Choose(model, k, states, frame.candidates, inputs, flow, selection);
+    frame.sampling_seconds = std::chrono::duration<double>(sampled - start).count();
+    frame.selection_seconds = std::chrono::duration<double>(Clock::now() - sampled).count();
     frame.pose = frame.candidates[frame.choice.index];
     if (k == 0) targets.shape = states.row(frame.choice.index).head(layout.shape_dim).transpose();
     targets.pose = PoseBlock(frame.pose).transpose();

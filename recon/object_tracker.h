@@ -21,6 +21,8 @@ struct TrackedFrame {
   PoseChoice choice;
   double pose_guidance = 0;    // alpha_p used
   std::vector<Pose> candidates;
+  double sampling_seconds = 0;   // drawing the candidates
+  double selection_seconds = 0;  // choosing one
 };
 
 struct TrackInputs {

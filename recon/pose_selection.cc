@@ -16,6 +16,7 @@ void CheckConfig(const PoseSelectionConfig& c, const std::string& section) {
   RequireInRange(section, "rotation_weight", c.rotation_weight, 0, 1e6);
   RequireInRange(section, "link_distance", c.link_distance, 1e-9, 1e6);
   RequireInRange(section, "min_cluster_size", c.min_cluster_size, 1, 1 << 20);
+  RequireInRange(section, "iou_tolerance", c.iou_tolerance, 0, 1);
   RequireInRange(section, "silhouette_stride", c.silhouette_stride, 1, 64);
 }
 
@@ -67,19 +68,28 @@ PoseChoice SelectByClustering(const std::vector<Pose>& poses, const PoseSelectio
                               const std::function<double(const Pose&)>& silhouette_iou) {
   if (poses.empty()) throw Error("bad_candidates", "no candidate pose to select from");
   const auto clusters = ClusterPoses(poses, c);
-  PoseChoice out;
-  int kept = 0;
+  struct Ranked {
+    int medoid;
+    double iou;
+    int size;
+  };
+  std::vector<Ranked> ranked;
+  double best_iou = -INFINITY;
   for (const auto& cluster : clusters) {
     if (static_cast<int>(cluster.size()) < c.min_cluster_size) continue;
-    ++kept;
     const int medoid = Medoid(poses, cluster, c);
-    const double iou = silhouette_iou(poses[medoid]);
-    // Ties go to the larger cluster (clusters come largest first).
-    if (out.index < 0 || iou > out.score) {
-      out = {medoid, iou, static_cast<int>(cluster.size()), 0, false};
+    ranked.push_back({medoid, silhouette_iou(poses[medoid]), static_cast<int>(cluster.size())});
+    best_iou = std::max(best_iou, ranked.back().iou);
+  }
+  PoseChoice out;
+  // Clusters come largest first: the first within the tolerance wins.
+  for (const Ranked& r : ranked) {
+    if (r.iou >= best_iou - c.iou_tolerance) {
+      out = {r.medoid, r.iou, r.size, 0, false};
+      break;
     }
   }
-  out.clusters = kept;
+  out.clusters = static_cast<int>(ranked.size());
   if (out.index < 0) {
     const int medoid = Medoid(poses, clusters.front(), c);
     out = {medoid, silhouette_iou(poses[medoid]), static_cast<int>(clusters.front().size()), 0,

@@ -6,6 +6,11 @@
 //               `min_cluster_size` are outliers; the remaining clusters are
 //               ranked by the silhouette IoU of their medoid pose against
 //               the object mask; the best cluster's medoid is the pose.
+//               IoUs within `iou_tolerance` of the best count as a tie,
+//               won by the larger cluster: a symmetric object's flip differs
+//               from the true pose by a handle's few pixels, less than the
+//               masks' own noise, and the seed's observation that confident
+//               samples concentrate on one mode makes size the tie-break.
 //   likelihood  the candidate of highest log p(pose | shape, frame)
 //               (recon/guided_flow.h PoseLogLikelihood): the principled
 //               choice, ~(1 + pose_dim) times the sampling's model calls.
@@ -34,12 +39,13 @@ struct PoseSelectionConfig {
   double rotation_weight = 0.05;     // w_r per radian (metres per radian)
   double link_distance = 0.02;       // single-linkage threshold, in d's units
   int min_cluster_size = 3;
+  double iou_tolerance = 0.02;       // IoUs this close to the best tie (larger cluster wins)
   int silhouette_stride = 2;         // pixels between silhouette rays
   std::uint64_t seed = 0;            // for `random`
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PoseSelectionConfig, method, translation_weight,
                                                 rotation_weight, link_distance, min_cluster_size,
-                                                silhouette_stride, seed)
+                                                iou_tolerance, silhouette_stride, seed)
 
 void CheckConfig(const PoseSelectionConfig& c, const std::string& section);
 

@@ -52,9 +52,12 @@ cv::Mat SilhouetteRenderer::Render(const Pose& pose, const Camera& camera, int s
 }
 
 double SilhouetteRenderer::IoU(const Pose& pose, const Camera& camera, const cv::Mat& mask,
-                               int stride) const {
-  if (mask.rows != camera.height || mask.cols != camera.width || mask.type() != CV_8U) {
-    throw Error("bad_mask", "the mask is not an 8-bit image of the camera's size");
+                               int stride, const cv::Mat& occluders) const {
+  for (const cv::Mat* m : {&mask, &occluders}) {
+    if (m == &occluders && m->empty()) continue;
+    if (m->rows != camera.height || m->cols != camera.width || m->type() != CV_8U) {
+      throw Error("bad_mask", "a mask is not an 8-bit image of the camera's size");
+    }
   }
   const Pose inverse = pose.Inverse();
   const cv::Rect area = Footprint(pose, camera) | cv::boundingRect(mask);
@@ -63,6 +66,7 @@ double SilhouetteRenderer::IoU(const Pose& pose, const Camera& camera, const cv:
   const int v0 = (area.y + stride - 1) / stride * stride, u0 = (area.x + stride - 1) / stride * stride;
   for (int v = v0; v < area.y + area.height; v += stride) {
     for (int u = u0; u < area.x + area.width; u += stride) {
+      if (!occluders.empty() && occluders.at<std::uint8_t>(v, u) != 0) continue;
       const bool in_mask = mask.at<std::uint8_t>(v, u) != 0;
       const bool hit = Hits(inverse, camera, u, v);
       both += in_mask && hit;

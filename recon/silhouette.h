@@ -24,9 +24,12 @@ class SilhouetteRenderer {
   cv::Mat Render(const Pose& pose, const Camera& camera, int stride = 1) const;
 
   // Intersection over union of Render(pose) and `mask` (nonzero = object)
-  // over the sampled pixels; 0 when both are empty. Casts rays only inside
-  // the boxes of the mask and of the projected mesh.
-  double IoU(const Pose& pose, const Camera& camera, const cv::Mat& mask, int stride = 1) const;
+  // over the sampled pixels; 0 when both are empty. Pixels nonzero in
+  // `occluders` (the hands' masks; may be empty) count for neither: the
+  // object may or may not be behind them. Casts rays only inside the boxes
+  // of the mask and of the projected mesh.
+  double IoU(const Pose& pose, const Camera& camera, const cv::Mat& mask, int stride = 1,
+             const cv::Mat& occluders = {}) const;
 
  private:
   // Whether the ray through pixel (u, v) meets the mesh at `pose`.

@@ -72,6 +72,24 @@ void CheckJoints(const fs::path& urdf, const XMLElement* robot) {
   for (const XMLElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const std::string name = Str(j->Attribute("name")), type = Str(j->Attribute("type"));
     const std::string field = "joint name=" + name;
+    // MuJoCo 2.2.2's URDF reader crashes on a type it does not know (found
+    // by hand_import_fuzz), and on a joint without both links.
+    static const std::set<std::string> kTypes = {"revolute", "continuous", "prismatic",
+                                                 "fixed",    "floating",   "planar"};
+    if (!kTypes.count(type)) {
+      throw Error(kBadUrdfError,
+                  "joint '" + name + "' has type '" + type + "'; URDF's joint types are revolute, "
+                  "continuous, prismatic, fixed, floating and planar, " + Rerun(urdf),
+                  {.file = urdf.string(), .field = field});
+    }
+    for (const char* end : {"parent", "child"}) {
+      const XMLElement* link = j->FirstChildElement(end);
+      if (!link || !link->Attribute("link")) {
+        throw Error(kBadUrdfError,
+                    "joint '" + name + "' has no <" + end + " link=\"..\"/>, " + Rerun(urdf),
+                    {.file = urdf.string(), .field = field});
+      }
+    }
     if (type == "fixed") continue;
     if (type == "continuous" || type == "floating" || type == "planar") {
       throw Error(kUnlimitedJointError,

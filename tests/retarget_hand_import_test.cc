@@ -160,6 +160,24 @@ void ExpectRefusal(const std::function<void()>& f, const std::string& code, cons
   }
 }
 
+// Inputs that crash MuJoCo 2.2.2's own URDF reader (found by
+// hand_import_fuzz) are refused before it sees them.
+TEST(UrdfImport, AnUnknownJointTypeOrAJointWithoutLinksIsRefusedBeforeMujoco) {
+  TempDir dir;
+  auto urdf = WriteTwoFingerHand(dir / "typo");
+  std::string text = doasido::testing::ReadFile(urdf);
+  text.replace(text.find("type=\"revolute\""), 15, "type=\"revolu?e\"");
+  doasido::testing::WriteFile(urdf, text);
+  ExpectRefusal([&] { ImportUrdf(urdf, dir / "out1"); }, kBadUrdfError, urdf.string(),
+                "thumb_cmc_fe", "type 'revolu?e'");
+  urdf = WriteTwoFingerHand(dir / "orphan");
+  text = doasido::testing::ReadFile(urdf);
+  text.replace(text.find("<parent link=\"palm\"/>"), 20, "");
+  doasido::testing::WriteFile(urdf, text);
+  ExpectRefusal([&] { ImportUrdf(urdf, dir / "out2"); }, kBadUrdfError, urdf.string(),
+                "thumb_cmc_fe", "<parent link=");
+}
+
 TEST(UrdfImport, MissingMeshUnlimitedJointAndWrongRootAreNamed) {
   TempDir dir;
   TwoFingerHandOptions missing;

@@ -15,22 +15,6 @@
 #include "core/stage_progress.h"
 
 namespace doasido::recon {
-namespace {
-
-std::string Tail(const std::filesystem::path& log, int lines) {
-  std::ifstream in(log);
-  std::deque<std::string> last;
-  std::string line;
-  while (std::getline(in, line)) {
-    last.push_back(line);
-    if (static_cast<int>(last.size()) > lines) last.pop_front();
-  }
-  std::string out;
-  for (const auto& l : last) out += (out.empty() ? "" : "\n") + l;
-  return out;
-}
-
-}  // namespace
 
 CommandOutcome RunModelCommand(const std::string& command, const std::filesystem::path& log,
                                double timeout_s, int tail_lines) {
@@ -82,7 +66,20 @@ CommandOutcome RunModelCommand(const std::string& command, const std::filesystem
   // Descendants that outlived a finished shell would hold the folder open.
   ::kill(-pid, SIGKILL);
   RemoveChildGroup(pid);
-  out.log_tail = Tail(log, tail_lines);
+  out.log_tail = LogTail(log, tail_lines);
+  return out;
+}
+
+std::string LogTail(const std::filesystem::path& log, int lines) {
+  std::ifstream in(log);
+  std::deque<std::string> last;
+  std::string line;
+  while (std::getline(in, line)) {
+    last.push_back(line);
+    if (static_cast<int>(last.size()) > lines) last.pop_front();
+  }
+  std::string out;
+  for (const auto& l : last) out += (out.empty() ? "" : "\n") + l;
   return out;
 }
 

@@ -20,4 +20,7 @@ struct CommandOutcome {
 CommandOutcome RunModelCommand(const std::string& command, const std::filesystem::path& log,
                                double timeout_s, int tail_lines);
 
+// The last `lines` lines of a log file ("" when it cannot be read).
+std::string LogTail(const std::filesystem::path& log, int lines);
+
 }  // namespace doasido::recon

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "core/config_check.h"
 #include "core/error.h"
 #include "db/database.h"
 #include "deploy/plan.h"
@@ -46,6 +47,9 @@ void PrintIssues(const deploy::Plan& plan) {
 void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::PlanConfig config = a.config;
   const Json file_config = LoadConfig(a.db);
+  if (file_config.is_object() && file_config.contains("deploy")) {
+    RequireSameShape("deploy", Json(config), file_config.at("deploy"));
+  }
   ReadSection(file_config, "deploy", config);
   // Options given on the command line win over the config file.
   if (cmd.count("--rate")) config.rate_hz = a.config.rate_hz;

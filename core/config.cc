@@ -97,8 +97,11 @@ void RequireSameShape(const std::string& section, const Json& defaults, const Js
     } else if (def.is_number()) {
       if (!value.is_number()) refuse("a number");
       if (def.is_number_integer() && value.is_number_float()) {
+        // Converting a double past int's range to int is undefined
+        // behaviour (found by hand_import_fuzz in a hand description).
         const double v = value.get<double>();
         if (!std::isfinite(v) || std::trunc(v) != v) refuse("an integer");
+        if (std::abs(v) > 2147483647.0) refuse("an integer within +-2147483647");
       }
       if (def.is_number_unsigned() && value.is_number_integer() && value.get<long long>() < 0) {
         refuse("a non-negative integer");

@@ -223,6 +223,25 @@ std::string MissingBodyHint(const std::string& xml) {
 }
 
 
+namespace {
+
+// A keypoint written as a float past int's range would make the conversion
+// to int undefined behaviour (found by hand_import_fuzz).
+void RequireWholeKeypoints(const Json& json, const std::string& file) {
+  if (!json.is_object() || !json.contains("points") || !json.at("points").is_array()) return;
+  const Json& points = json.at("points");
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].is_object() || !points[i].contains("keypoint")) continue;
+    const Json& k = points[i].at("keypoint");
+    if (k.is_number_float() || (k.is_number() && (k.get<double>() < 0 || k.get<double>() > 20))) {
+      throw Error("bad_embodiment", "keypoint must be an OpenPose-21 index 0..20, got " + k.dump(),
+                  {.file = file, .field = "points[" + std::to_string(i) + "].keypoint"});
+    }
+  }
+}
+
+}  // namespace
+
 Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
                           const std::filesystem::path& robots_dir) {
   const std::string file = json_path.string();
@@ -231,8 +250,9 @@ Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
   Embodiment e;
   try {
     const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    e = ParseJsonInput(text, {.file = file}, {.max_depth = 16, .max_bytes = 16u << 20})
-            .get<Embodiment>();
+    const Json json = ParseJsonInput(text, {.file = file}, {.max_depth = 16, .max_bytes = 16u << 20});
+    RequireWholeKeypoints(json, file);
+    e = json.get<Embodiment>();
   } catch (const Error& ex) {
     throw Error("bad_embodiment", ex.code() + ": " + ex.message(), {.file = file});
   } catch (const nlohmann::json::exception& ex) {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "core/config.h"
+#include "core/config_check.h"
 #include "tests/test_util.h"
 
 namespace doasido {
@@ -44,6 +45,15 @@ TEST(Config, UnknownKeyAndWrongTypeAreNamed) {
     EXPECT_NE(std::string(e.what()).find("shots.treshold"), std::string::npos) << e.what();
   }
   EXPECT_THROW(ReadSection(Json{{"shots", {{"min_len", "many"}}}}, "shots", c), Error);
+  // A whole number written as a float passes the shape check, unless int
+  // cannot hold it (converting it would be undefined behaviour).
+  RequireSameShape("shots", Json(ExampleConfig{}), Json{{"min_len", 20.0}});
+  try {
+    RequireSameShape("shots", Json(ExampleConfig{}), Json{{"min_len", 3.3e62}});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("an integer within"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Config, TomlSyntaxErrorNamesFileAndLine) {

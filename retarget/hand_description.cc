@@ -339,8 +339,16 @@ void WriteEmbodimentJson(const HandDescription& d, const std::string& comment,
     if (i < d.notes.size()) q["note"] = d.notes[i];
     j["points"].push_back(q);
   }
+  std::string text;
+  try {
+    text = j.dump(1);
+  } catch (const nlohmann::json::type_error&) {
+    // A body or site name that is not UTF-8 (found by hand_import_fuzz).
+    throw Error("bad_hand", "a body or site name of the model is not valid UTF-8; rename it",
+                {.file = path.string()});
+  }
   std::ofstream out(path);
-  out << j.dump(1) << "\n";
+  out << text << "\n";
   if (!out) throw Error("io", "cannot write the hand description", {.file = path.string()});
 }
 

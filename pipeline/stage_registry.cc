@@ -15,6 +15,7 @@
 #include "pipeline/noop_stage.h"
 #include "recon/bundle_stage.h"
 #include "recon/recon_stage.h"
+#include "recon/track_stage.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 
@@ -86,6 +87,11 @@ const std::vector<StageEntry>& StageTable() {
           "runs the model command that writes the clip bundle (or checks the bundle the list "
           "names)",
           false, 2 * kHour),
+      Entry<recon::TrackStage, recon::TrackStageConfig>(
+          recon::kTrackStageName,
+          "tracks the object frame by frame by guided flow sampling (seed 3.1): a velocity "
+          "server, or the bundle's pose candidates as the model",
+          false, kHour),
       Entry<recon::ReconStage, recon::ReconStageConfig>(
           recon::kReconStageName,
           "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction",

@@ -69,6 +69,28 @@ double PoseGuidance(double dtheta_deg, const AdaptiveGuidanceConfig& c) {
   return std::max(c.floor, c.offset - c.slope_per_degree * std::abs(dtheta_deg));
 }
 
+PointFollower FollowPointTracks(const PointTracks& tracks, double radius_px) {
+  return [tracks, radius_px](int k, const std::vector<Vec2>& points) {
+    std::vector<PointFollow> out;
+    const Eigen::Index T = tracks.x.cols();
+    for (const Vec2& p : points) {
+      PointFollow f{p, p, false};
+      double best = radius_px;
+      for (Eigen::Index n = 0; k + 1 < T && n < tracks.x.rows(); ++n) {
+        if (!tracks.visible(n, k) || !tracks.visible(n, k + 1)) continue;
+        const Vec2 at(tracks.x(n, k), tracks.y(n, k));
+        const double d = (at - p).norm();
+        if (d > best) continue;
+        best = d;
+        f.to = p + Vec2(tracks.x(n, k + 1), tracks.y(n, k + 1)) - at;
+        f.found = true;
+      }
+      out.push_back(f);
+    }
+    return out;
+  };
+}
+
 GuidanceEstimate EstimatePoseGuidance(const std::vector<cv::Mat>& masks,
                                       const PointFollower& follow,
                                       const AdaptiveGuidanceConfig& config) {

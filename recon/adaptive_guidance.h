@@ -24,6 +24,7 @@
 
 #include "core/config.h"
 #include "core/geometry.h"
+#include "recon/bundle.h"
 
 namespace doasido::recon {
 
@@ -64,6 +65,12 @@ struct PointFollow {
 // Follows points from one frame to the next: given the frame index k and
 // points in frame k, returns where each is in frame k + 1.
 using PointFollower = std::function<std::vector<PointFollow>(int, const std::vector<Vec2>&)>;
+
+// Follows points with a bundle's point tracks (TAPIR, BootsTAPIR): a pixel
+// of frame k takes the nearest track visible in frames k and k + 1 within
+// `radius_px`, and moves as that track does; farther from every such track
+// it is lost.
+PointFollower FollowPointTracks(const PointTracks& tracks, double radius_px);
 
 struct GuidanceEstimate {
   std::vector<double> alpha_p;    // per frame; [0] = 0

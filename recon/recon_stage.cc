@@ -62,7 +62,7 @@ StageResult ReconStage::Run(const ClipContext& context) {
   std::string pose_source = "bundle";
   try {
     bundle = ReadBundle(dir);
-    const auto track = SiblingArtifactDir(context, kTrackStageFolder) / kTrackPosesFile;
+    const auto track = SiblingArtifactDir(context, kTrackStageName) / kTrackPosesFile;
     if (std::filesystem::is_regular_file(track)) {
       ReadTrackPoses(track, bundle.frames, poses, valid);
       pose_source = "track";

@@ -3,7 +3,7 @@
 //
 // Input: the clip bundle (recon/bundle_location.h BundleDir). Object poses:
 // when <artifacts>/<clip>/track/object_poses.npz exists (written by the
-// object tracker stage, a later issue) its `poses` (T,7) f8, object->camera,
+// `track` stage, recon/track_stage.h) its `poses` (T,7) f8, object->camera,
 // t xyz + quaternion wxyz, point-map units, NaN rows = no pose; else the
 // bundle's object/poses.npz.
 // Steps: hand-object alignment (hand_object_alignment.h) rescales each
@@ -33,6 +33,7 @@
 #include "recon/gravity.h"
 #include "recon/hand_object_alignment.h"
 #include "recon/reconstruction.h"
+#include "recon/track_stage.h"
 
 namespace doasido::recon {
 
@@ -57,9 +58,6 @@ inline constexpr const char* kMeasureGravitySource = "gravity_source";
 inline constexpr const char* kMeasureGravityInlierShare = "gravity_inlier_share";
 inline constexpr const char* kMeasurePoseSource = "object_pose_source";  // "track" or "bundle"
 
-// The tracker's artifact this stage reads when present.
-inline constexpr const char* kTrackStageFolder = "track";
-inline constexpr const char* kTrackPosesFile = "object_poses.npz";
 
 struct ReconStageConfig {
   HandObjectAlignmentConfig alignment;

@@ -1,0 +1,175 @@
+#include "recon/track_stage.h"
+
+#include <spdlog/spdlog.h>
+
+#include <memory>
+
+#include "core/config_check.h"
+#include "core/error.h"
+#include "core/permanent_error.h"
+#include "recon/bundle.h"
+#include "recon/bundle_location.h"
+#include "recon/gaussian_mixture_flow.h"
+#include "recon/npy.h"
+#include "recon/object_tracker.h"
+#include "recon/silhouette.h"
+#include "recon/velocity_server.h"
+
+namespace doasido::recon {
+namespace {
+
+std::string Substitute(std::string text, const std::string& key, const std::string& value) {
+  for (size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + value.size())) {
+    text.replace(at, key.size(), value);
+  }
+  return text;
+}
+
+// The bundle's pose samples as a model: one mode per sample. Quaternions
+// are put in the hemisphere of the previous frame's mean, so that a mode
+// and the guidance toward the previous pose use the same sign.
+std::unique_ptr<VelocityField> CandidatesModel(const ClipBundle& b, double sigma) {
+  std::vector<Mixture> frames;
+  Quat reference = b.candidates.at(0).at(0).pose.q;
+  for (const auto& samples : b.candidates) {
+    Mixture modes;
+    Eigen::Vector4d mean = Eigen::Vector4d::Zero();
+    for (const PoseSample& s : samples) {
+      Pose p = s.pose;
+      if (p.q.dot(reference) < 0) p.q.coeffs() *= -1;
+      mean += p.q.coeffs();
+      modes.push_back({1.0, PoseBlock(p).transpose(), sigma});
+    }
+    if (mean.norm() > 1e-9) reference = Quat(mean.normalized());
+    frames.push_back(std::move(modes));
+  }
+  return std::make_unique<GaussianMixtureFlow>(FlowLayout{.shape_dim = 0}, std::move(frames));
+}
+
+void WriteTrack(const std::filesystem::path& file, const std::vector<TrackedFrame>& track) {
+  const auto T = static_cast<std::int64_t>(track.size());
+  const auto N = static_cast<std::int64_t>(track.empty() ? 0 : track[0].candidates.size());
+  std::vector<double> poses, candidates, score, alpha;
+  std::vector<std::int64_t> chosen;
+  for (const TrackedFrame& f : track) {
+    const auto row = PoseBlock(f.pose);
+    poses.insert(poses.end(), row.data(), row.data() + kPoseDim);
+    for (const Pose& c : f.candidates) {
+      const auto r = PoseBlock(c);
+      candidates.insert(candidates.end(), r.data(), r.data() + kPoseDim);
+    }
+    chosen.push_back(f.choice.index);
+    score.push_back(f.choice.score);
+    alpha.push_back(f.pose_guidance);
+  }
+  WriteNpz(file, {{"poses", MakeArray({T, kPoseDim}, poses)},
+                  {"candidates", MakeArray({T, N, kPoseDim}, candidates)},
+                  {"chosen", MakeArray({T}, chosen)},
+                  {"score", MakeArray({T}, score)},
+                  {"alpha_p", MakeArray({T}, alpha)}});
+}
+
+cv::Mat Occluders(const ClipBundle& b, int k) {
+  cv::Mat out;
+  for (const auto* masks : {&b.mask_hand_left, &b.mask_hand_right}) {
+    if (static_cast<int>(masks->size()) <= k || (*masks)[k].empty()) continue;
+    out = out.empty() ? (*masks)[k].clone() : (out | (*masks)[k]);
+  }
+  return out;
+}
+
+}  // namespace
+
+void CheckConfig(const TrackStageConfig& c, const std::string& section) {
+  RequireInRange(section, "kde_sigma", c.kde_sigma, 1e-6, 10);
+  RequireInRange(section, "pose_guidance", c.pose_guidance, 0, 1);
+  RequireInRange(section, "track_radius_px", c.track_radius_px, 0.1, 1000);
+  CheckConfig(c.flow, section + ".flow");
+  CheckConfig(c.guidance, section + ".guidance");
+  CheckConfig(c.selection, section + ".selection");
+}
+
+TrackStage::TrackStage(TrackStageConfig config) : config_(std::move(config)) {
+  CheckConfig(config_, kTrackStageName);
+}
+
+StageResult TrackStage::Run(const ClipContext& context) {
+  const std::string clip = ClipName(context);
+  const std::filesystem::path dir = BundleDir(context);
+  ClipBundle b;
+  try {
+    b = ReadBundle(dir);
+  } catch (const Error& e) {
+    ErrorSite site = e.site();
+    site.clip = clip;
+    throw PermanentError(e.code(), e.message(), site);  // the same files fail again
+  }
+  StageResult result;
+  result.measurements["bundle"] = dir.string();
+  std::filesystem::create_directories(context.artifact_dir);
+  std::unique_ptr<VelocityField> model;
+  if (!config_.server.empty()) {
+    const std::string command =
+        Substitute(Substitute(config_.server, "{bundle}", dir.string()), "{clip}", clip);
+    model = std::make_unique<VelocityServer>(command, context.artifact_dir / "track.log");
+    result.measurements[kMeasureTrackSource] = "server";
+  } else if (!b.candidates.empty() && !b.candidates[0].empty()) {
+    model = CandidatesModel(b, config_.kde_sigma);
+    result.measurements[kMeasureTrackSource] = "candidates";
+  } else {
+    result.measurements[kMeasureTrackSource] = "none";
+    spdlog::info("{} {}: no object model (set track.server, or give the bundle "
+                 "object/candidates.npz); recon uses the bundle's poses", kTrackStageName, clip);
+    return result;
+  }
+
+  TrackInputs inputs;
+  const bool masks = static_cast<int>(b.mask_object.size()) == b.frames;
+  if (b.tracks && masks) {
+    inputs.pose_guidance =
+        EstimatePoseGuidance(b.mask_object, FollowPointTracks(*b.tracks, config_.track_radius_px),
+                             config_.guidance).alpha_p;
+    result.measurements[kMeasureGuidanceSource] = "tracks";
+  } else {
+    inputs.pose_guidance.assign(b.frames, config_.pose_guidance);
+    result.measurements[kMeasureGuidanceSource] = "fixed";
+  }
+  std::unique_ptr<SilhouetteRenderer> renderer;
+  if (config_.selection.method == kSelectClustering) {
+    if (!b.object_mesh || !masks || b.K.empty()) {
+      throw PermanentError("bad_bundle",
+                           "clustering selection needs object/mesh, K and masks/object",
+                           {.clip = clip, .file = dir.string()});
+    }
+    renderer = std::make_unique<SilhouetteRenderer>(*b.object_mesh);
+    inputs.silhouette_iou = [&](int k, const Pose& pose) {
+      return renderer->IoU(pose, Camera::FromK(b.KAt(k), b.width, b.height), b.mask_object[k],
+                           config_.selection.silhouette_stride, Occluders(b, k));
+    };
+  }
+  const auto track = TrackObject(*model, b.frames, inputs, config_.flow, config_.selection);
+  WriteTrack(context.artifact_dir / kTrackPosesFile, track);
+  result.artifacts.emplace_back("object_poses", kTrackPosesFile);
+
+  double alpha = 0, sampling = 0, selection = 0;
+  int outliers = 0;
+  for (const TrackedFrame& f : track) {
+    alpha += f.pose_guidance / track.size();
+    sampling += f.sampling_seconds;
+    selection += f.selection_seconds;
+    outliers += f.choice.outliers_only;
+  }
+  result.measurements[kMeasureTrackedFrames] = track.size();
+  result.measurements[kMeasureMeanPoseGuidance] = alpha;
+  result.measurements[kMeasureOutlierFrames] = outliers;
+  result.measurements[kMeasureSamplingSeconds] = sampling;
+  result.measurements[kMeasureSelectionSeconds] = selection;
+  spdlog::info("{} {}: {} frames from {} ({} guidance, mean alpha_p {:.2f}), {} selection",
+               kTrackStageName, clip, track.size(),
+               result.measurements[kMeasureTrackSource].get<std::string>(),
+               result.measurements[kMeasureGuidanceSource].get<std::string>(), alpha,
+               config_.selection.method);
+  return result;
+}
+
+}  // namespace doasido::recon

@@ -1,0 +1,123 @@
+// The track stage on a rendered synthetic clip: the bundle's pose
+// candidates as the model, guidance from its point tracks, clustering by
+// silhouette -> poses near the true ones, which recon then uses; a velocity
+// server through the stage; a bundle without a model is passed on.
+#include "recon/track_stage.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "recon/bundle.h"
+#include "recon/mixture_file.h"
+#include "recon/npy.h"
+#include "recon/recon_stage.h"
+#include "recon/velocity_server.h"
+#include "synth/generator.h"
+#include "synth/tracking_scene.h"
+#include "tests/test_util.h"
+
+namespace doasido::recon {
+namespace {
+
+using ::testing::HasSubstr;
+using doasido::testing::TempDir;
+
+const ClipBundle& Clip() {
+  static const ClipBundle bundle = [] {
+    synth::SynthConfig cfg;
+    cfg.width = 240;
+    cfg.height = 180;
+    cfg.frames = 24;
+    cfg.seed = 3;
+    return synth::RenderClip(cfg, 0, synth::DefectKind::kClean).bundle;
+  }();
+  return bundle;
+}
+
+ClipContext Context(const TempDir& root, const ClipBundle& b, const std::string& stage) {
+  WriteBundle(b, root / "artifacts/1/bundle");
+  ClipContext c;
+  c.clip.id = 1;
+  c.clip.external_id = "c1";
+  c.artifact_dir = root / "artifacts/1" / stage;
+  return c;
+}
+
+TEST(TrackStage, CandidatesTracksAndSilhouettesGiveTheTruePoses) {
+  TempDir root;
+  ASSERT_FALSE(Clip().candidates.empty());
+  ASSERT_TRUE(Clip().tracks.has_value());
+  const StageResult r = TrackStage().Run(Context(root, Clip(), kTrackStageName));
+  EXPECT_EQ(r.verdict, Verdict::kPass);
+  EXPECT_EQ(r.measurements[kMeasureTrackSource], "candidates");
+  EXPECT_EQ(r.measurements[kMeasureGuidanceSource], "tracks");
+  EXPECT_EQ(r.measurements[kMeasureTrackedFrames], 24);
+  std::vector<Pose> poses;
+  std::vector<bool> valid;
+  ReadTrackPoses(root / "artifacts/1/track" / kTrackPosesFile, 24, poses, valid);
+  // The clean bundle's poses are the truth; its candidates scatter around
+  // it with flips and outliers.
+  std::vector<double> t_err, r_err;
+  for (int k = 0; k < 24; ++k) {
+    ASSERT_TRUE(valid[k]);
+    t_err.push_back((poses[k].t - Clip().object_poses[k].t).norm());
+    r_err.push_back(RotationAngle(poses[k].q, Clip().object_poses[k].q));
+  }
+  std::sort(t_err.begin(), t_err.end());
+  std::sort(r_err.begin(), r_err.end());
+  EXPECT_LT(t_err[12], 0.01) << "median translation error";
+  EXPECT_LT(r_err[12], 0.15) << "median rotation error";
+  EXPECT_LT(r_err[21], 1.0) << "more than 2 frames flipped";
+
+  const StageResult recon = ReconStage().Run(Context(root, Clip(), kReconStageName));
+  EXPECT_EQ(recon.measurements[kMeasurePoseSource], "track");
+}
+
+TEST(TrackStage, AVelocityServerIsTheModelWhenConfigured) {
+  TempDir root;
+  synth::TrackingSceneOptions o;
+  o.frames = 24;
+  const synth::TrackingScene scene = synth::MakeTrackingScene(4, o);
+  const ClipContext c = Context(root, Clip(), kTrackStageName);
+  WriteMixtureNpz(root / "artifacts/1/bundle/flow_modes.npz", *scene.model);
+  TrackStageConfig config;
+  config.server = std::string("/usr/bin/python3 ") + DOASIDO_SOURCE_DIR +
+                  "/tools/velocity_server.py {bundle}/flow_modes.npz";
+  config.selection.method = kSelectLikelihood;
+  const StageResult r = TrackStage(config).Run(c);
+  EXPECT_EQ(r.measurements[kMeasureTrackSource], "server");
+  std::vector<Pose> poses;
+  std::vector<bool> valid;
+  ReadTrackPoses(c.artifact_dir / kTrackPosesFile, 24, poses, valid);
+  // The scene's model puts its heaviest mode near its own truth.
+  int near = 0;
+  for (int k = 0; k < 24; ++k) near += (poses[k].t - scene.truth[k].t).norm() < 0.02;
+  EXPECT_GE(near, 22);
+
+  config.server += " --misbehave die";
+  try {
+    TrackStage(config).Run(c);
+    ADD_FAILURE() << "a dying server went unnoticed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), kServerDied) << e.what();
+    EXPECT_THAT(e.what(), HasSubstr("track.log"));
+  }
+}
+
+TEST(TrackStage, ABundleWithoutAModelIsPassedOn) {
+  TempDir root;
+  ClipBundle plain = Clip();
+  plain.candidates.clear();
+  const ClipContext c = Context(root, plain, kTrackStageName);
+  const StageResult r = TrackStage().Run(c);
+  EXPECT_EQ(r.verdict, Verdict::kPass);
+  EXPECT_EQ(r.measurements[kMeasureTrackSource], "none");
+  EXPECT_FALSE(std::filesystem::exists(c.artifact_dir / kTrackPosesFile));
+  EXPECT_EQ(ReconStage().Run(Context(root, plain, kReconStageName)).measurements[kMeasurePoseSource],
+            "bundle");
+}
+
+}  // namespace
+}  // namespace doasido::recon

@@ -10,6 +10,7 @@
 #include "recon/bundle.h"
 #include "recon/bundle_location.h"
 #include "recon/gaussian_mixture_flow.h"
+#include "recon/lucas_kanade_follower.h"
 #include "recon/npy.h"
 #include "recon/object_tracker.h"
 #include "recon/silhouette.h"
@@ -130,6 +131,13 @@ StageResult TrackStage::Run(const ClipContext& context) {
         EstimatePoseGuidance(b.mask_object, FollowPointTracks(*b.tracks, config_.track_radius_px),
                              config_.guidance).alpha_p;
     result.measurements[kMeasureGuidanceSource] = "tracks";
+  } else if (masks && !context.video.path.empty() &&
+             std::filesystem::is_regular_file(context.video.path)) {
+    const auto gray = ReadGrayFrames(context.video.path, context.clip.start_frame.value_or(0),
+                                     b.frames, b.width, b.height);
+    inputs.pose_guidance =
+        EstimatePoseGuidance(b.mask_object, FollowWithLucasKanade(gray), config_.guidance).alpha_p;
+    result.measurements[kMeasureGuidanceSource] = "lucas_kanade";
   } else {
     inputs.pose_guidance.assign(b.frames, config_.pose_guidance);
     result.measurements[kMeasureGuidanceSource] = "fixed";

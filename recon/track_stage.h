@@ -13,8 +13,9 @@
 // A bundle with neither is passed on untouched, saying so (measurement
 // track_source "none"); recon then uses the bundle's own poses.
 // Pose guidance: adaptive (recon/adaptive_guidance.h) from the bundle's
-// point tracks; without tracks, the fixed `pose_guidance`, reported as such
-// (guidance_source "fixed"). Selection per `selection.method`; clustering
+// point tracks (guidance_source "tracks"), else from OpenCV's Lucas-Kanade
+// on the clip's video ("lucas_kanade", recon/lucas_kanade_follower.h),
+// else the fixed `pose_guidance` ("fixed"). Selection per `selection.method`; clustering
 // needs the object mesh and masks (the hands' masks count as occluders).
 //
 // Output in artifact_dir (<artifacts>/<clip>/track/):
@@ -39,7 +40,7 @@ inline constexpr const char* kTrackPosesFile = "object_poses.npz";
 
 // Measurement keys and values.
 inline constexpr const char* kMeasureTrackSource = "track_source";  // server / candidates / none
-inline constexpr const char* kMeasureGuidanceSource = "guidance_source";  // tracks / fixed
+inline constexpr const char* kMeasureGuidanceSource = "guidance_source";  // tracks / lucas_kanade / fixed
 inline constexpr const char* kMeasureTrackedFrames = "tracked_frames";
 inline constexpr const char* kMeasureMeanPoseGuidance = "mean_pose_guidance";
 inline constexpr const char* kMeasureOutlierFrames = "outlier_only_frames";

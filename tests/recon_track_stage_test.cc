@@ -9,6 +9,8 @@
 
 #include <algorithm>
 
+#include <opencv2/videoio.hpp>
+
 #include "recon/bundle.h"
 #include "recon/mixture_file.h"
 #include "recon/npy.h"
@@ -73,6 +75,45 @@ TEST(TrackStage, CandidatesTracksAndSilhouettesGiveTheTruePoses) {
 
   const StageResult recon = ReconStage().Run(Context(root, Clip(), kReconStageName));
   EXPECT_EQ(recon.measurements[kMeasurePoseSource], "track");
+}
+
+// Without point tracks, OpenCV's Lucas-Kanade on the clip's video guides
+// the sampling; its turns agree with the tracks' (both measure the same
+// motion) and the poses stay near the truth.
+TEST(TrackStage, LucasKanadeOnTheVideoWhenTheBundleHasNoTracks) {
+  TempDir root;
+  synth::SynthConfig cfg;
+  cfg.width = 240;
+  cfg.height = 180;
+  cfg.frames = 24;
+  cfg.seed = 3;
+  const synth::RenderedClip rendered = synth::RenderClip(cfg, 0, synth::DefectKind::kClean);
+  const auto video = root / "clip.avi";
+  cv::VideoWriter writer(video.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
+                         30, rendered.bgr[0].size());
+  ASSERT_TRUE(writer.isOpened());
+  for (const cv::Mat& f : rendered.bgr) writer.write(f);
+  writer.release();
+  ClipBundle no_tracks = rendered.bundle;
+  no_tracks.tracks.reset();
+  ClipContext c = Context(root, no_tracks, kTrackStageName);
+  c.video.path = video.string();
+  const StageResult r = TrackStage().Run(c);
+  EXPECT_EQ(r.measurements[kMeasureGuidanceSource], "lucas_kanade");
+  const double lk_alpha = r.measurements[kMeasureMeanPoseGuidance].get<double>();
+  auto near_truth = [&] {
+    std::vector<Pose> poses;
+    std::vector<bool> valid;
+    ReadTrackPoses(c.artifact_dir / kTrackPosesFile, 24, poses, valid);
+    int near = 0;
+    for (int k = 0; k < 24; ++k) near += (poses[k].t - rendered.bundle.object_poses[k].t).norm() < 0.01;
+    return near;
+  };
+  const int lk_near = near_truth();
+  const StageResult with_tracks = TrackStage().Run(Context(root, rendered.bundle, kTrackStageName));
+  EXPECT_NEAR(lk_alpha, with_tracks.measurements[kMeasureMeanPoseGuidance].get<double>(), 0.1);
+  EXPECT_GE(lk_near, near_truth() - 3) << "Lucas-Kanade guidance far worse than the tracks'";
+  EXPECT_GE(lk_near, 12);
 }
 
 TEST(TrackStage, AVelocityServerIsTheModelWhenConfigured) {

@@ -1,7 +1,7 @@
 // The seed's tracking ablation (appendix Table 4) in kind, and what
 // selection costs.
 //
-//   recon_tracking_ablation_bench [sequences]     (default 50)
+//   recon_tracking_ablation_bench [sequences] [server_sequences]   (default 50, 3)
 //
 // 1. {fixed, adaptive} pose guidance x {random, likelihood, clustering}
 //    selection on synthetic sequences with occlusions, symmetric flips and
@@ -9,16 +9,64 @@
 //    Chamfer distances (lower is better), per frame, averaged.
 // 2. Selection time at N = 25 candidates, T = 25 Euler steps: clustering
 //    (with silhouette IoU) against likelihood ranking, and each as a share
-//    of the sampling time. With the analytic stand-in a model call costs
-//    microseconds; the model-call counts say what the ratio becomes with a
-//    network that dominates every call.
+//    of the sampling time, with the analytic stand-in in process (a model
+//    call costs microseconds) and through tools/velocity_server.py (the
+//    same model behind the real protocol: every call a round trip to a
+//    Python process, as with a network served the same way).
 #include <cstdio>
 #include <cstdlib>
 
+#include "recon/mixture_file.h"
+#include "recon/object_tracker.h"
+#include "recon/silhouette.h"
+#include "recon/velocity_server.h"
 #include "synth/tracking_ablation.h"
 
+namespace {
+
+using namespace doasido;
+
+// Sampling and selection seconds per frame through the reference server.
+void ThroughTheServer(int sequences) {
+  double seconds[2][2] = {{0, 0}, {0, 0}};  // [likelihood, clustering][sampling, selection]
+  int frames = 0;
+  const auto dir = std::filesystem::temp_directory_path() / "doasido-tracking-bench";
+  std::filesystem::create_directories(dir);
+  for (int s = 0; s < sequences; ++s) {
+    const synth::TrackingScene scene = synth::MakeTrackingScene(100 + s);
+    recon::WriteMixtureNpz(dir / "modes.npz", *scene.model);
+    recon::VelocityServer server(std::string("/usr/bin/python3 ") + DOASIDO_SOURCE_DIR +
+                                     "/tools/velocity_server.py " + (dir / "modes.npz").string(),
+                                 dir / "server.log");
+    const recon::SilhouetteRenderer renderer(scene.mesh);
+    recon::TrackInputs inputs;
+    inputs.pose_guidance.assign(scene.truth.size(), 0.5);
+    inputs.silhouette_iou = [&](int k, const Pose& p) {
+      return renderer.IoU(p, scene.camera, scene.masks[k], 2, scene.hand_masks[k]);
+    };
+    const int T = static_cast<int>(scene.truth.size());
+    for (int m = 0; m < 2; ++m) {
+      recon::PoseSelectionConfig selection;
+      selection.method = m == 0 ? recon::kSelectLikelihood : recon::kSelectClustering;
+      for (const auto& f : recon::TrackObject(server, T, inputs, {}, selection)) {
+        seconds[m][0] += f.sampling_seconds;
+        seconds[m][1] += f.selection_seconds;
+      }
+    }
+    frames += T;
+  }
+  std::filesystem::remove_all(dir);
+  std::printf("through tools/velocity_server.py (%d frames): sampling %.2f ms/frame; selection: "
+              "likelihood %.2f ms/frame (%.2fx the sampling), clustering %.2f ms/frame (%.3fx the "
+              "sampling); clustering is %.0fx faster\n",
+              frames, 1e3 * seconds[1][0] / frames, 1e3 * seconds[0][1] / frames,
+              seconds[0][1] / seconds[0][0], 1e3 * seconds[1][1] / frames,
+              seconds[1][1] / seconds[1][0], seconds[0][1] / seconds[1][1]);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  using namespace doasido;
   synth::TrackingAblationOptions options;
   if (argc > 1) options.sequences = std::atoi(argv[1]);
   const auto cells = synth::RunTrackingAblation(options);
@@ -45,5 +93,6 @@ int main(int argc, char** argv) {
   std::printf("model calls per frame (batched over N): sampling %d, likelihood %d velocity + %d "
               "divergence = %d backbone passes with exact traces (1 + %d per step), clustering 0\n",
               T, T, T, T * (1 + D), D);
+  ThroughTheServer(argc > 2 ? std::atoi(argv[2]) : 3);
   return 0;
 }

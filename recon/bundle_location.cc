@@ -1,5 +1,7 @@
 #include "recon/bundle_location.h"
 
+#include "core/permanent_error.h"
+
 namespace doasido::recon {
 
 bool ListNamesBundle(const ClipContext& context) {
@@ -26,6 +28,16 @@ std::filesystem::path SiblingArtifactDir(const ClipContext& context, const std::
 std::string ClipName(const ClipContext& context) {
   return context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                           : context.clip.external_id;
+}
+
+ClipBundle ReadClipBundle(const std::filesystem::path& dir, const std::string& clip) {
+  try {
+    return ReadBundle(dir);
+  } catch (const Error& e) {
+    ErrorSite site = e.site();
+    site.clip = clip;
+    throw PermanentError(e.code(), e.message(), site);
+  }
 }
 
 }  // namespace doasido::recon

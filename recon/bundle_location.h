@@ -6,6 +6,7 @@
 #include <string>
 
 #include "db/stage.h"
+#include "recon/bundle.h"
 
 namespace doasido::recon {
 
@@ -26,5 +27,9 @@ std::filesystem::path SiblingArtifactDir(const ClipContext& context, const std::
 
 // The clip's external id, else its numeric id: the name errors use.
 std::string ClipName(const ClipContext& context);
+
+// ReadBundle (recon/bundle.h) with `clip` named in its errors, which are
+// permanent: the same files fail again on a retry.
+ClipBundle ReadClipBundle(const std::filesystem::path& dir, const std::string& clip);
 
 }  // namespace doasido::recon

@@ -13,22 +13,6 @@
 #include "recon/model_command.h"
 
 namespace doasido::recon {
-namespace {
-
-// ReadBundle with the clip named in the error. A bad bundle stays bad on a
-// retry (the command is deterministic in what it was given): permanent.
-ClipBundle Validate(const std::filesystem::path& dir, const std::string& clip) {
-  try {
-    return ReadBundle(dir);
-  } catch (const Error& e) {
-    ErrorSite site = e.site();
-    site.clip = clip;
-    throw PermanentError(e.code(), e.message(), site);
-  }
-}
-
-}  // namespace
-
 void CheckConfig(const BundleStageConfig& c, const std::string& section) {
   RequireInRange(section, "timeout_s", c.timeout_s, 0.01, 1e7);
   RequireInRange(section, "log_tail_lines", c.log_tail_lines, 0, 10000);
@@ -82,7 +66,7 @@ StageResult BundleStage::Run(const ClipContext& context) {
     }
     result.measurements["source"] = "command";
   }
-  const ClipBundle bundle = Validate(dir, clip);
+  const ClipBundle bundle = ReadClipBundle(dir, clip);
   result.measurements["bundle"] = dir.string();
   result.measurements["frames"] = bundle.frames;
   result.measurements["parts"] = bundle.present;

@@ -56,12 +56,11 @@ ReconStage::ReconStage(ReconStageConfig config) : config_(std::move(config)) {
 StageResult ReconStage::Run(const ClipContext& context) {
   const std::string clip = ClipName(context);
   const std::filesystem::path dir = BundleDir(context);
-  ClipBundle bundle;
+  const ClipBundle bundle = ReadClipBundle(dir, clip);
   std::vector<Pose> poses;
   std::vector<bool> valid;
   std::string pose_source = "bundle";
   try {
-    bundle = ReadBundle(dir);
     const auto track = SiblingArtifactDir(context, kTrackStageName) / kTrackPosesFile;
     if (std::filesystem::is_regular_file(track)) {
       ReadTrackPoses(track, bundle.frames, poses, valid);

@@ -97,14 +97,7 @@ TrackStage::TrackStage(TrackStageConfig config) : config_(std::move(config)) {
 StageResult TrackStage::Run(const ClipContext& context) {
   const std::string clip = ClipName(context);
   const std::filesystem::path dir = BundleDir(context);
-  ClipBundle b;
-  try {
-    b = ReadBundle(dir);
-  } catch (const Error& e) {
-    ErrorSite site = e.site();
-    site.clip = clip;
-    throw PermanentError(e.code(), e.message(), site);  // the same files fail again
-  }
+  const ClipBundle b = ReadClipBundle(dir, clip);
   StageResult result;
   result.measurements["bundle"] = dir.string();
   std::filesystem::create_directories(context.artifact_dir);

@@ -10,7 +10,7 @@
 
 #include "recon/bundle.h"
 #include "recon/npy.h"
-#include "synth/generator.h"
+#include "tests/small_clip.h"
 #include "tests/test_util.h"
 
 namespace doasido::recon {
@@ -18,17 +18,7 @@ namespace {
 
 using doasido::testing::TempDir;
 
-const ClipBundle& Clip() {
-  static const ClipBundle bundle = [] {
-    synth::SynthConfig cfg;
-    cfg.width = 240;
-    cfg.height = 180;
-    cfg.frames = 24;
-    cfg.seed = 3;
-    return synth::RenderClip(cfg, 0, synth::DefectKind::kClean).bundle;
-  }();
-  return bundle;
-}
+const ClipBundle& Clip() { return testing::SmallClip().bundle; }
 
 ClipContext Context(const TempDir& root, const ClipBundle& b) {
   WriteBundle(b, root / "artifacts/1/bundle");

@@ -16,8 +16,8 @@
 #include "recon/npy.h"
 #include "recon/recon_stage.h"
 #include "recon/velocity_server.h"
-#include "synth/generator.h"
 #include "synth/tracking_scene.h"
+#include "tests/small_clip.h"
 #include "tests/test_util.h"
 
 namespace doasido::recon {
@@ -26,17 +26,7 @@ namespace {
 using ::testing::HasSubstr;
 using doasido::testing::TempDir;
 
-const ClipBundle& Clip() {
-  static const ClipBundle bundle = [] {
-    synth::SynthConfig cfg;
-    cfg.width = 240;
-    cfg.height = 180;
-    cfg.frames = 24;
-    cfg.seed = 3;
-    return synth::RenderClip(cfg, 0, synth::DefectKind::kClean).bundle;
-  }();
-  return bundle;
-}
+const ClipBundle& Clip() { return testing::SmallClip().bundle; }
 
 ClipContext Context(const TempDir& root, const ClipBundle& b, const std::string& stage) {
   WriteBundle(b, root / "artifacts/1/bundle");
@@ -82,12 +72,7 @@ TEST(TrackStage, CandidatesTracksAndSilhouettesGiveTheTruePoses) {
 // motion) and the poses stay near the truth.
 TEST(TrackStage, LucasKanadeOnTheVideoWhenTheBundleHasNoTracks) {
   TempDir root;
-  synth::SynthConfig cfg;
-  cfg.width = 240;
-  cfg.height = 180;
-  cfg.frames = 24;
-  cfg.seed = 3;
-  const synth::RenderedClip rendered = synth::RenderClip(cfg, 0, synth::DefectKind::kClean);
+  const synth::RenderedClip& rendered = testing::SmallClip();
   const auto video = root / "clip.avi";
   cv::VideoWriter writer(video.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'),
                          30, rendered.bgr[0].size());

@@ -162,5 +162,55 @@ TEST(CliRecon, SynthClipsThroughBundleAndReconStages) {
   }
 }
 
+// The track stage through the queue: bundle -> track -> recon, the bundle's
+// pose candidates (flips and outliers among them) as the model; recon takes
+// the tracked poses, whose heights above the table stay within 2 cm of the
+// truth in most frames.
+TEST(CliRecon, TrackStageBetweenBundleAndRecon) {
+  TempDir dir;
+  const auto synth = dir / "s";
+  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "2", "--frames", "24",
+                        "--width", "320", "--height", "240", "--mix", "clean=1", "--seed", "5",
+                        "--no-annotations"})
+                .exit_code,
+            0);
+  WriteFile(dir / "model.py", kModel);
+  WriteFile(dir / "config.toml", "[bundle]\ncommand = \"python3 " + (dir / "model.py").string() +
+                                     " {clip} {video} {output}\"\n");
+  const std::string db = (dir / "d.db").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "bundle,track,recon"}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", db, "--config", (dir / "config.toml").string(),
+                               "--max-attempts", "1", (synth / "clips.csv").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Database check(db);
+  int tracked = 0;
+  for (const StageRunRow& r : check.ListRuns({})) {
+    EXPECT_EQ(r.state, "done") << r.external_id << " " << r.stage << " " << r.error;
+    if (r.stage != "recon") continue;
+    const auto track = check.GetMeasurements(r.clip_id, "track");
+    ASSERT_TRUE(track.has_value());
+    EXPECT_EQ((*track)["track_source"], "candidates");
+    EXPECT_EQ((*track)["tracked_frames"], 24);
+    EXPECT_EQ((*check.GetMeasurements(r.clip_id, "recon"))["object_pose_source"], "track");
+    const recon::Reconstruction rec =
+        recon::ReadReconstruction(check.ArtifactDir(r.clip_id, "recon"));
+    const recon::ClipBundle truth = recon::ReadBundle(synth / "bundles" / r.external_id);
+    std::ifstream gt_file(synth / "gt" / (r.external_id + ".json"));
+    const Json gt = Json::parse(gt_file);
+    int near = 0, valid = 0;
+    for (int t = 0; t < rec.frames(); ++t) {
+      if (!rec.object_valid[t]) continue;
+      ++valid;
+      const Pose world = ReadPose(gt["per_frame"][t]["camera_from_world"]).Inverse() *
+                         truth.object_poses[t];
+      near += std::abs(rec.object_poses[t].t.z() - world.t.z()) < 0.02;
+    }
+    EXPECT_GE(valid, 18) << r.external_id;
+    EXPECT_GE(near, valid * 2 / 3) << r.external_id;
+    ++tracked;
+  }
+  EXPECT_EQ(tracked, 2);
+}
+
 }  // namespace
 }  // namespace doasido

@@ -29,8 +29,9 @@ concept HasConfigCheck = requires(const T& c, const std::string& s) { CheckConfi
 
 // Throws Error("bad_config") naming `section.key` (nested keys joined by
 // dots) for a value in `given` whose JSON type differs from the default's
-// (a string for a number, a fraction for an integer, a negative number for
-// an unsigned one) or for a nested key the default lacks. `defaults` is the
+// (a string for a number, a fraction for an integer or one past int's
+// range written as a float, a negative number for an unsigned one) or for a
+// nested key the default lacks. `defaults` is the
 // config struct serialised with its defaults.
 void RequireSameShape(const std::string& section, const Json& defaults, const Json& given);
 

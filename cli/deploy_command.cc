@@ -165,6 +165,10 @@ void AddStream(CLI::App& deploy) {
     g_stop = false;
     auto previous = std::signal(SIGINT, OnSigint);
     std::signal(SIGTERM, OnSigint);
+    if (a->dry_run.empty()) {
+      std::fprintf(stderr, "streaming %zu commands on %s; Ctrl-C stops after the current one\n",
+                   plan.arm.size(), options.channel.c_str());
+    }
     const deploy::StreamResult r = deploy::StreamPlan(plan, options, g_stop);
     std::signal(SIGINT, previous);
     std::printf("%s %d of %zu commands on %s%s\n", r.stopped ? "stopped after" : "sent", r.sent,

@@ -254,6 +254,7 @@ Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
     RequireWholeKeypoints(json, file);
     e = json.get<Embodiment>();
   } catch (const Error& ex) {
+    if (ex.code() == "bad_embodiment") throw;  // already names the file and field
     throw Error("bad_embodiment", ex.code() + ": " + ex.message(), {.file = file});
   } catch (const nlohmann::json::exception& ex) {
     throw Error("bad_embodiment", std::string("invalid JSON: ") + ex.what(), {.file = file});

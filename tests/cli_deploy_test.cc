@@ -142,7 +142,12 @@ TEST(DeployStream, StopsCleanlyOnSigint) {
   const pid_t pid = Spawn({testing::DoasidoBin().string(), "deploy", "stream", "--plan",
                            (dir / "plan.json").string(), "--url", Url(), "--channel",
                            "DOASIDO_SIGINT_" + std::to_string(getpid())}, dir / "out.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  // Once it says it streams (its Ctrl-C handler is in place), and a little later.
+  for (int i = 0; i < 600 && testing::ReadFile(dir / "out.txt").find("streaming") == std::string::npos;
+       ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
   kill(pid, SIGINT);
   const int code = Wait(pid);
   const std::string out = testing::ReadFile(dir / "out.txt");

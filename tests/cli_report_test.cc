@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <regex>
 
 #include "core/config.h"
 #include "db/database.h"
@@ -56,11 +55,15 @@ TEST_F(CliReport, PageIsSelfContainedAndAgreesWithStatus) {
   EXPECT_NE(html.find("<svg id=\"funnel-chart\""), std::string::npos);
   EXPECT_NE(html.find("id=\"funnel-table\""), std::string::npos);
   EXPECT_EQ(html.find("<script"), std::string::npos);
-  const std::regex ref("(src|href)=\"([^\"]*)\"");
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), ref);
-       it != std::sregex_iterator(); ++it) {
-    const std::string target = (*it)[2];
-    EXPECT_TRUE(target.rfind("data:", 0) == 0 || target.rfind("#", 0) == 0) << target;
+  // Every src/href is inline. (Searched by hand: std::regex matches
+  // recursively, and a data: URI of a thumbnail overflowed the stack under
+  // AddressSanitizer.)
+  for (const std::string attribute : {"src=\"", "href=\""}) {
+    for (size_t at = html.find(attribute); at != std::string::npos;
+         at = html.find(attribute, at + 1)) {
+      const std::string target = html.substr(at + attribute.size(), 8);
+      EXPECT_TRUE(target.rfind("data:", 0) == 0 || target.rfind("#", 0) == 0) << target;
+    }
   }
   EXPECT_EQ(html.find("http://"), std::string::npos);
   EXPECT_EQ(html.find("https://"), std::string::npos);

@@ -7,6 +7,7 @@
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/permanent_error.h"
+#include "core/shell_words.h"
 #include "recon/bundle.h"
 #include "recon/bundle_location.h"
 #include "recon/gaussian_mixture_flow.h"
@@ -18,13 +19,6 @@
 
 namespace doasido::recon {
 namespace {
-
-std::string Substitute(std::string text, const std::string& key, const std::string& value) {
-  for (size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + value.size())) {
-    text.replace(at, key.size(), value);
-  }
-  return text;
-}
 
 // The bundle's pose samples as a model: one mode per sample. Quaternions
 // are put in the hemisphere of the previous frame's mean, so that a mode
@@ -103,8 +97,11 @@ StageResult TrackStage::Run(const ClipContext& context) {
   std::filesystem::create_directories(context.artifact_dir);
   std::unique_ptr<VelocityField> model;
   if (!config_.server.empty()) {
-    const std::string command =
-        Substitute(Substitute(config_.server, "{bundle}", dir.string()), "{clip}", clip);
+    // Quoted as the bundle stage quotes its command's values: a clip id or
+    // a path with spaces or shell characters stays one word.
+    std::string command = config_.server;
+    ReplaceAll(command, "{bundle}", ShellQuote(dir.string()));
+    ReplaceAll(command, "{clip}", ShellQuote(clip));
     model = std::make_unique<VelocityServer>(command, context.artifact_dir / "track.log");
     result.measurements[kMeasureTrackSource] = "server";
   } else if (!b.candidates.empty() && !b.candidates[0].empty()) {

@@ -15,17 +15,16 @@
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <sstream>
 #include <vector>
 
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 
-#include <nlohmann/json.hpp>
 
 #include "core/mesh.h"
 #include "recon/hand_object_alignment.h"
+#include "recon/hot3d_recording.h"
 #include "recon/ray_caster.h"
 #include "synth/generator.h"
 #include "synth/model_noise.h"
@@ -65,38 +64,6 @@ void Report(const char* label, const Errors& e) {
 
 using PoseTrack = std::map<long long, Pose>;
 
-std::map<std::string, PoseTrack> ReadCsvPoses(const std::filesystem::path& csv) {
-  std::map<std::string, PoseTrack> out;
-  std::ifstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::vector<std::string> c;
-    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
-    if (c.size() != 9) continue;
-    out[c[0]][std::stoll(c[1])] = {
-        Quat(std::stod(c[5]), std::stod(c[6]), std::stod(c[7]), std::stod(c[8])).normalized(),
-        Vec3(std::stod(c[2]), std::stod(c[3]), std::stod(c[4]))};
-  }
-  return out;
-}
-
-std::map<std::string, PoseTrack> ReadWrists(const std::filesystem::path& jsonl) {
-  std::map<std::string, PoseTrack> out;
-  std::ifstream in(jsonl);
-  for (std::string line; std::getline(in, line);) {
-    const auto j = nlohmann::json::parse(line);
-    for (const auto& [hand, pose] : j["hand_poses"].items()) {
-      const auto& x = pose["wrist_xform"];
-      out[hand][j["timestamp_ns"].get<long long>()] = {
-          Quat(x["q_wxyz"][0], x["q_wxyz"][1], x["q_wxyz"][2], x["q_wxyz"][3]).normalized(),
-          Vec3(x["t_xyz"][0], x["t_xyz"][1], x["t_xyz"][2])};
-    }
-  }
-  return out;
-}
-
 TriMesh HandBox() {
   TriMesh m;
   const Vec3 h(0.045, 0.04, 0.015);
@@ -126,9 +93,13 @@ Pose LookAt(const Vec3& eye, const Vec3& target) {
 bool Hot3dBundle(const std::filesystem::path& root, recon::ClipBundle& b, std::string& label) {
   const auto rec = root / "Aria" / "P0003_c701bd11";
   if (!std::filesystem::exists(rec / "dynamic_objects.csv")) return false;
-  const auto objects = ReadCsvPoses(rec / "dynamic_objects.csv");
-  const auto headset = ReadCsvPoses(rec / "headset_trajectory.csv").begin()->second;
-  const auto wrists = ReadWrists(rec / "umetrack_hand_pose_trajectory.jsonl");
+  const recon::Hot3dRecording recording = recon::ReadHot3dRecording(rec);
+  const auto& objects = recording.objects;
+  const auto headset = recon::ReadHot3dPoses(rec / "headset_trajectory.csv").begin()->second;
+  std::map<std::string, PoseTrack> wrists;
+  for (const auto& [side, poses] : recording.hands) {
+    for (const auto& [stamp, p] : poses) wrists[side][stamp] = p.wrist;
+  }
   // The (object with a model, hand) pair closest over the recording.
   double best = 1e30;
   std::string uid, hand;

@@ -11,7 +11,10 @@
 
 #include "core/mesh.h"
 #include "recon/bundle.h"
+#include "recon/conventions.h"
+#include "recon/hot3d_recording.h"
 #include "recon/recon_metrics.h"
+#include "synth/objects.h"
 #include "tests/test_util.h"
 
 namespace doasido::recon {
@@ -19,32 +22,16 @@ namespace {
 
 using doasido::testing::SharedData;
 using doasido::testing::TempDir;
+using doasido::testing::ReadFile;
+using doasido::testing::WriteFile;
 
 const char kMouse[] = "265826671143948";
 
 std::filesystem::path Sample() { return SharedData() / "hot3d_sample"; }
 std::filesystem::path Recording() { return Sample() / "Aria" / "P0003_c701bd11"; }
 
-// Rows of a HOT3D pose CSV (object_uid, timestamp[ns], t xyz [m], q wxyz)
-// for one uid, keyed by timestamp.
 std::map<long long, Pose> ReadPoses(const std::filesystem::path& csv, const std::string& uid) {
-  std::ifstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line.rfind("object_uid,timestamp[ns],t_wo_x[m]", 0), 0u) << csv;
-  std::map<long long, Pose> out;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    std::vector<std::string> cells;
-    while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (cells.size() != 9 || cells[0] != uid) continue;
-    Pose p;
-    p.t = Vec3(std::stod(cells[2]), std::stod(cells[3]), std::stod(cells[4]));
-    p.q = Quat(std::stod(cells[5]), std::stod(cells[6]), std::stod(cells[7]), std::stod(cells[8]));
-    out[std::stoll(cells[1])] = p;
-  }
-  return out;
+  return ReadHot3dPoses(csv).at(uid);
 }
 
 class Hot3dBundleTest : public ::testing::Test {
@@ -128,6 +115,144 @@ TEST_F(Hot3dBundleTest, ObjectTrajectoryAndModelRoundTrip) {
   cfg.samples = 3000;
   EXPECT_EQ(CompareSurfaces(raw, *r.object_mesh, cfg).f_5mm, 1.0);
   EXPECT_LT(CompareSurfaces(mm, raw, cfg).f_10mm, 0.01);
+}
+
+// ---- UmeTrack hands and the recording as a reconstruction -----------------
+
+double Length(const Joints21& j, int a, int b) { return (j.row(a) - j.row(b)).norm(); }
+
+TEST_F(Hot3dBundleTest, UmeTrackLandmarksFollowTheSkeleton) {
+  const Hot3dRecording rec = ReadHot3dRecording(Recording());
+  ASSERT_EQ(rec.hands.size(), 2u);
+  for (const auto& [side, poses] : rec.hands) {
+    ASSERT_EQ(poses.size(), 68u) << side;
+    std::vector<Joints21> joints;
+    for (const auto& [stamp, p] : poses) {
+      const HandSide s = side == "right" ? HandSide::kRight : HandSide::kLeft;
+      const auto landmarks = UmeTrackLandmarks(rec.hand_model, p.angles, p.wrist, s);
+      // The wrist landmark sits at the rest origin: the wrist transform's translation.
+      EXPECT_LT((landmarks[5] - p.wrist.t).norm(), 1e-9) << side;
+      joints.push_back(UmeTrackOpenPose21(rec.hand_model, p.angles, p.wrist, s));
+    }
+    // Rotations about the joints keep every bone's length, frame to frame;
+    // a wrong order of the chain or a mm/m slip would not.
+    for (int finger = 0; finger < 5; ++finger) {
+      for (int k = 1; k < 4; ++k) {
+        const int a = 1 + 4 * finger + k - 1, b = a + 1;
+        const double first = Length(joints[0], a, b);
+        EXPECT_GT(first, 0.012) << side << " bone " << a << "-" << b;
+        EXPECT_LT(first, 0.07) << side << " bone " << a << "-" << b;
+        for (const Joints21& j : joints) EXPECT_NEAR(Length(j, a, b), first, 1e-9);
+      }
+    }
+    // A human hand: wrist to middle fingertip 15-21 cm when stretched;
+    // wrist to middle knuckle 7-12 cm.
+    EXPECT_GT(Length(joints[0], 0, 9), 0.07);
+    EXPECT_LT(Length(joints[0], 0, 9), 0.12);
+    EXPECT_FALSE(JointsLookLikeMillimetres(joints[0]));
+  }
+}
+
+// Thumb-side normal of the palm: (index knuckle - wrist) x (pinky knuckle -
+// wrist), projected on the thumb's direction. Its sign is the hand's
+// chirality, which a mirror flips.
+double Chirality(const Joints21& j) {
+  const Vec3 w = j.row(0).transpose();
+  const Vec3 n = (Vec3(j.row(5).transpose()) - w).cross(Vec3(j.row(17).transpose()) - w);
+  return n.dot(Vec3(j.row(2).transpose()) - w);
+}
+
+TEST_F(Hot3dBundleTest, RecordingBecomesAReconstruction) {
+  const Hot3dRecording rec = ReadHot3dRecording(Recording());
+  const auto library = Sample() / "object_library";
+
+  // HOT3D's world is z up: the objects that rest, posed with their models,
+  // have their lowest points at one table height.
+  std::vector<double> bottoms;
+  for (const auto& [uid, poses] : rec.objects) {
+    const auto glb = library / (uid + ".glb");
+    if (std::filesystem::exists(glb)) bottoms.push_back(LoadMesh(glb).Transformed(poses.begin()->second).Min().z());
+  }
+  ASSERT_EQ(bottoms.size(), 4u);
+  const auto [lo, hi] = std::minmax_element(bottoms.begin(), bottoms.end());
+  std::printf("resting objects' lowest points: %.4f .. %.4f m\n", *lo, *hi);
+  EXPECT_LT(*hi - *lo, 0.02);
+
+  Hot3dReferenceOptions o;
+  o.hand = "left";
+  const Hot3dReference left = Hot3dToReconstruction(rec, library, o);
+  const Reconstruction& r = left.reconstruction;
+  EXPECT_EQ(r.frames(), 68);
+  EXPECT_NEAR(r.fps, 1e9 * 67 / double(rec.hands.at("left").rbegin()->first - rec.hands.at("left").begin()->first), 1e-9);
+  EXPECT_EQ(left.object_uid, "37787722328019") << "the keyboard: the nearest object with a model";
+  // The object starts over the origin, its lowest point on the floor.
+  const TriMesh posed = left.mesh.Transformed(r.object_poses[0]);
+  EXPECT_NEAR(posed.Min().z(), 0.0, 1e-9);
+  EXPECT_NEAR(r.object_poses[0].t.head<2>().norm(), 0.0, 1e-9);
+  // The hand is above the table.
+  for (const Joints21& j : r.right_joints) EXPECT_GT(j.col(2).minCoeff(), -0.005);
+
+  // The coffee pot is the object the left hand holds (a hand's width from
+  // its origin); with a 5-cm sphere standing in for its missing model the
+  // fingertips touch the surface.
+  o.object_uid = "228358276546933";
+  EXPECT_THROW(Hot3dToReconstruction(rec, library, o), Error) << "no model, no stand-in";
+  o.stand_in = synth::MakeSphere(0.05);
+  const Hot3dReference pot = Hot3dToReconstruction(rec, library, o);
+  EXPECT_TRUE(pot.stand_in);
+  EXPECT_EQ(pot.reconstruction.info["object_model"], "stand-in");
+  std::printf("left fingertips to the pot's stand-in: %.4f m; to the keyboard: %.4f m\n",
+              pot.mean_fingertip_distance, left.mean_fingertip_distance);
+  EXPECT_LT(pot.mean_fingertip_distance, 0.02);
+  EXPECT_GT(left.mean_fingertip_distance, 0.05);
+
+  // Mirroring turns the left hand into a right hand.
+  o.mirror = true;
+  const Hot3dReference mirrored = Hot3dToReconstruction(rec, library, o);
+  Hot3dReferenceOptions ro;
+  ro.hand = "right";
+  const Hot3dReference right = Hot3dToReconstruction(rec, library, ro);
+  for (int t = 0; t < 68; t += 17) {
+    EXPECT_LT(Chirality(pot.reconstruction.right_joints[t]) * Chirality(right.reconstruction.right_joints[t]), 0);
+    EXPECT_GT(Chirality(mirrored.reconstruction.right_joints[t]) * Chirality(right.reconstruction.right_joints[t]), 0);
+    EXPECT_NEAR(mirrored.reconstruction.right_joints[t](8, 1), -pot.reconstruction.right_joints[t](8, 1), 1e-12);
+  }
+  EXPECT_NEAR(mirrored.mesh.Volume(), pot.mesh.Volume(), 1e-12) << "faces stay outward";
+  EXPECT_GT(mirrored.mesh.Volume(), 0);
+}
+
+TEST_F(Hot3dBundleTest, MalformedRowsAreNamed) {
+  TempDir dir;
+  for (const char* f : {"dynamic_objects.csv", "umetrack_hand_pose_trajectory.jsonl", "umetrack_hand_user_profile.json"}) {
+    std::filesystem::copy_file(Recording() / f, dir.path() / f);
+  }
+  auto expect = [&](const std::string& file, long line, const std::string& field) {
+    try {
+      ReadHot3dRecording(dir.path());
+      ADD_FAILURE() << "accepted a bad " << file;
+    } catch (const Error& e) {
+      EXPECT_NE(e.site().file.find(file), std::string::npos) << e.what();
+      EXPECT_EQ(e.site().line, line) << e.what();
+      EXPECT_EQ(e.site().field, field) << e.what();
+    }
+  };
+  // A NaN translation in row 3 of the object table.
+  const auto csv = dir.path() / "dynamic_objects.csv";
+  std::string text = ReadFile(csv);
+  const size_t row3 = text.find('\n', text.find('\n', text.find('\n') + 1) + 1) + 1;
+  const size_t cell = text.find(',', text.find(',', row3) + 1) + 1;
+  text.replace(cell, text.find(',', cell) - cell, "nan");
+  WriteFile(csv, text);
+  expect("dynamic_objects.csv", 4, "t_wo_x[m]");
+  std::filesystem::copy_file(Recording() / "dynamic_objects.csv", csv, std::filesystem::copy_options::overwrite_existing);
+  // 21 joint angles on line 2 of the hand poses.
+  const auto jsonl = dir.path() / "umetrack_hand_pose_trajectory.jsonl";
+  text = ReadFile(jsonl);
+  const size_t line2 = text.find('\n') + 1;
+  const size_t angles = text.find("\"joint_angles\": [", line2) + 17;
+  text.erase(angles, text.find(',', angles) + 1 - angles);
+  WriteFile(jsonl, text);
+  expect("umetrack_hand_pose_trajectory.jsonl", 2, "joint_angles");
 }
 
 }  // namespace

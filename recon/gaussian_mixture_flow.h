@@ -34,6 +34,7 @@ class GaussianMixtureFlow : public VelocityField {
   FlowLayout Layout() const override { return layout_; }
   void Velocity(int frame, double t, const StateMatrix& x, StateMatrix* v) override;
   void PoseDivergence(int frame, double t, const StateMatrix& x, Eigen::VectorXd* div) override;
+  bool ConcurrentRows() const override { return true; }
 
   // log p_1(x) of the whole state, in closed form (what likelihood ranking
   // estimates by integrating the flow backward).

@@ -1,5 +1,6 @@
 #include "recon/guided_flow.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -19,16 +20,53 @@ std::uint64_t Mix(std::uint64_t a, std::uint64_t b) {
   return z ^ (z >> 31);
 }
 
+// Row blocks of `x`, one per thread of `pool`, or the whole batch.
+template <typename Call>
+void ByRowBlocks(const VelocityField& model, TaskPool* pool, Eigen::Index rows, const Call& call) {
+  const int blocks = pool && model.ConcurrentRows() ? std::min<int>(pool->threads(), rows) : 1;
+  if (blocks <= 1) {
+    call(0, rows);
+    return;
+  }
+  pool->Run(blocks, [&](int b, int) {
+    const Eigen::Index begin = rows * b / blocks, end = rows * (b + 1) / blocks;
+    call(begin, end - begin);
+  });
+}
+
+void Velocity(VelocityField& model, TaskPool* pool, int frame, double t, const StateMatrix& x,
+              StateMatrix* v) {
+  v->resize(x.rows(), x.cols());
+  ByRowBlocks(model, pool, x.rows(), [&](Eigen::Index begin, Eigen::Index n) {
+    if (n == x.rows()) return model.Velocity(frame, t, x, v);
+    StateMatrix part;
+    model.Velocity(frame, t, x.middleRows(begin, n), &part);
+    v->middleRows(begin, n) = part;
+  });
+}
+
+void PoseDivergence(VelocityField& model, TaskPool* pool, int frame, double t,
+                    const StateMatrix& x, Eigen::VectorXd* div) {
+  div->resize(x.rows());
+  ByRowBlocks(model, pool, x.rows(), [&](Eigen::Index begin, Eigen::Index n) {
+    if (n == x.rows()) return model.PoseDivergence(frame, t, x, div);
+    Eigen::VectorXd part;
+    model.PoseDivergence(frame, t, x.middleRows(begin, n), &part);
+    div->segment(begin, n) = part;
+  });
+}
+
 }  // namespace
 
 void CheckConfig(const GuidedFlowConfig& c, const std::string& section) {
   RequireInRange(section, "candidates", c.candidates, 1, 4096);
   RequireInRange(section, "steps", c.steps, 1, 10000);
   RequireInRange(section, "shape_guidance", c.shape_guidance, 0, 1);
+  RequireInRange(section, "threads", c.threads, 1, 256);
 }
 
 StateMatrix SampleGuided(VelocityField& model, int frame, const GuidedTargets& targets,
-                         int candidates, int steps, std::uint64_t seed) {
+                         int candidates, int steps, std::uint64_t seed, TaskPool* pool) {
   const FlowLayout layout = model.Layout();
   if (targets.shape.size() != layout.shape_dim || targets.pose.size() != layout.pose_dim) {
     throw Error("bad_model", "the guidance targets have " + std::to_string(targets.shape.size()) +
@@ -50,7 +88,7 @@ StateMatrix SampleGuided(VelocityField& model, int frame, const GuidedTargets& t
   const double dt = 1.0 / steps;
   for (int j = 1; j <= steps; ++j) {
     const double t = j * dt;
-    model.Velocity(frame, t - dt, x, &v);
+    Velocity(model, pool, frame, t - dt, x, &v);
     for (Eigen::Index i = 0; i < x.rows(); ++i) {
       const Eigen::RowVectorXd free = x.row(i) + dt * v.row(i);
       const Eigen::RowVectorXd ref = (1 - t) * eps.row(i) + t * target;
@@ -62,15 +100,15 @@ StateMatrix SampleGuided(VelocityField& model, int frame, const GuidedTargets& t
 }
 
 Eigen::VectorXd PoseLogLikelihood(VelocityField& model, int frame, const StateMatrix& x1,
-                                  int steps) {
+                                  int steps, TaskPool* pool) {
   const FlowLayout layout = model.Layout();
   StateMatrix x = x1, v;
   Eigen::VectorXd div, integral = Eigen::VectorXd::Zero(x.rows());
   const double dt = 1.0 / steps;
   for (int j = steps; j >= 1; --j) {
     const double t = j * dt;
-    model.Velocity(frame, t, x, &v);
-    model.PoseDivergence(frame, t, x, &div);
+    Velocity(model, pool, frame, t, x, &v);
+    PoseDivergence(model, pool, frame, t, x, &div);
     integral += dt * div;
     x -= dt * v;
     ReportStageProgress();

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "core/config.h"
+#include "core/task_pool.h"
 #include "recon/velocity_field.h"
 
 namespace doasido::recon {
@@ -24,9 +25,12 @@ struct GuidedFlowConfig {
   int steps = 25;                // T Euler steps (seed appendix)
   double shape_guidance = 0.95;  // alpha_s; the seed: any value in [0.9, 1]
   std::uint64_t seed = 0;
+  // Threads over a frame's candidates (models with ConcurrentRows); the
+  // tracks do not depend on it.
+  int threads = 2;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GuidedFlowConfig, candidates, steps,
-                                                shape_guidance, seed)
+                                                shape_guidance, seed, threads)
 
 // Throws Error("bad_config") naming section.key for a value out of range.
 void CheckConfig(const GuidedFlowConfig& c, const std::string& section);
@@ -38,10 +42,12 @@ struct GuidedTargets {
   double pose_guidance = 0.5;     // alpha_p of this frame
 };
 
-// `candidates` states (rows) for `frame`, deterministic for (seed, frame).
-// Throws Error("bad_model") when the targets do not fit the model's layout.
+// `candidates` states (rows) for `frame`, deterministic for (seed, frame)
+// and the same with or without `pool` (which splits the rows over its
+// threads when the model has ConcurrentRows). Throws Error("bad_model")
+// when the targets do not fit the model's layout.
 StateMatrix SampleGuided(VelocityField& model, int frame, const GuidedTargets& targets,
-                         int candidates, int steps, std::uint64_t seed);
+                         int candidates, int steps, std::uint64_t seed, TaskPool* pool = nullptr);
 
 // log p(x_pose | x_shape, frame) of every row of `x` (states at t = 1) by the
 // instantaneous change of variables: `steps` Euler steps backward to t = 0
@@ -50,6 +56,6 @@ StateMatrix SampleGuided(VelocityField& model, int frame, const GuidedTargets& t
 // (the seed's eq. writes the integral with the opposite orientation of
 // time). Every step costs one Velocity and one PoseDivergence call.
 Eigen::VectorXd PoseLogLikelihood(VelocityField& model, int frame, const StateMatrix& x,
-                                  int steps);
+                                  int steps, TaskPool* pool = nullptr);
 
 }  // namespace doasido::recon

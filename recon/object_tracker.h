@@ -28,7 +28,8 @@ struct TrackedFrame {
 struct TrackInputs {
   std::vector<double> pose_guidance;  // alpha_p per frame ([0] unused)
   // Silhouette IoU of a pose at frame k against that frame's mask (for
-  // clustering selection); may be empty for the other methods.
+  // clustering selection); may be empty for the other methods. Called from
+  // several threads at once (GuidedFlowConfig::threads).
   std::function<double(int, const Pose&)> silhouette_iou;
 };
 

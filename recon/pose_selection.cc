@@ -65,7 +65,8 @@ int Medoid(const std::vector<Pose>& poses, const std::vector<int>& cluster,
 }
 
 PoseChoice SelectByClustering(const std::vector<Pose>& poses, const PoseSelectionConfig& c,
-                              const std::function<double(const Pose&)>& silhouette_iou) {
+                              const std::function<double(const Pose&)>& silhouette_iou,
+                              TaskPool* pool) {
   if (poses.empty()) throw Error("bad_candidates", "no candidate pose to select from");
   const auto clusters = ClusterPoses(poses, c);
   struct Ranked {
@@ -77,10 +78,15 @@ PoseChoice SelectByClustering(const std::vector<Pose>& poses, const PoseSelectio
   double best_iou = -INFINITY;
   for (const auto& cluster : clusters) {
     if (static_cast<int>(cluster.size()) < c.min_cluster_size) continue;
-    const int medoid = Medoid(poses, cluster, c);
-    ranked.push_back({medoid, silhouette_iou(poses[medoid]), static_cast<int>(cluster.size())});
-    best_iou = std::max(best_iou, ranked.back().iou);
+    ranked.push_back({Medoid(poses, cluster, c), 0.0, static_cast<int>(cluster.size())});
   }
+  const auto score = [&](int i, int) { ranked[i].iou = silhouette_iou(poses[ranked[i].medoid]); };
+  if (pool) {
+    pool->Run(static_cast<int>(ranked.size()), score);
+  } else {
+    for (size_t i = 0; i < ranked.size(); ++i) score(static_cast<int>(i), 0);
+  }
+  for (const Ranked& r : ranked) best_iou = std::max(best_iou, r.iou);
   PoseChoice out;
   // Clusters come largest first: the first within the tolerance wins.
   for (const Ranked& r : ranked) {

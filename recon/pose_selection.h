@@ -26,6 +26,7 @@
 
 #include "core/config.h"
 #include "core/geometry.h"
+#include "core/task_pool.h"
 
 namespace doasido::recon {
 
@@ -68,9 +69,12 @@ struct PoseChoice {
   bool outliers_only = false;  // clustering: no cluster was large enough; the largest was used
 };
 
-// Clustering selection; `silhouette_iou(pose)` scores a medoid.
+// Clustering selection; `silhouette_iou(pose)` scores a medoid. With `pool`
+// the medoids are scored on its threads (so silhouette_iou must be safe to
+// call concurrently); the choice is the same.
 PoseChoice SelectByClustering(const std::vector<Pose>& poses, const PoseSelectionConfig& c,
-                              const std::function<double(const Pose&)>& silhouette_iou);
+                              const std::function<double(const Pose&)>& silhouette_iou,
+                              TaskPool* pool = nullptr);
 
 // The candidate of highest log-likelihood.
 PoseChoice SelectByLikelihood(const Eigen::VectorXd& log_likelihood);

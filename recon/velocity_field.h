@@ -42,6 +42,12 @@ class VelocityField {
   // every row, for likelihood ranking (recon/pose_selection.h). A model
   // that cannot give it throws Error("unsupported").
   virtual void PoseDivergence(int frame, double t, const StateMatrix& x, Eigen::VectorXd* div);
+  // Whether Velocity and PoseDivergence may run on several threads at once,
+  // each on its own block of rows, with a row's answer independent of the
+  // other rows (an in-process model). Then the sampler splits a batch over
+  // its threads; otherwise (a server, which batches on its side) it sends
+  // the whole batch in one call.
+  virtual bool ConcurrentRows() const { return false; }
 };
 
 // The pose of a state row's pose block (quaternion normalised; a zero

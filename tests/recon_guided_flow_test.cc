@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <mutex>
 #include <random>
+#include <set>
+#include <thread>
 
 #include <opencv2/imgproc.hpp>
 
@@ -240,6 +243,61 @@ TEST(ObjectTracker, FollowsAMovingMode) {
     EXPECT_NEAR(track[k].pose.t.x(), 0.01 * k, 0.01) << k;
     EXPECT_LT(RotationAngle(track[k].pose.q, Quat::Identity()), 0.1) << k;
     EXPECT_EQ(track[k].candidates.size(), 25u);
+  }
+}
+
+// A mixture that notes which threads called it and the largest batch.
+class WatchedMixture : public GaussianMixtureFlow {
+ public:
+  using GaussianMixtureFlow::GaussianMixtureFlow;
+  void Velocity(int frame, double t, const StateMatrix& x, StateMatrix* v) override {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      callers.insert(std::this_thread::get_id());
+      largest_batch = std::max<int>(largest_batch, x.rows());
+    }
+    GaussianMixtureFlow::Velocity(frame, t, x, v);
+  }
+  std::mutex mutex;
+  std::set<std::thread::id> callers;
+  int largest_batch = 0;
+};
+
+TEST(ObjectTracker, TracksDoNotDependOnTheThreadCount) {
+  FlowLayout layout{.shape_dim = 2};
+  std::vector<Mixture> frames;
+  for (int k = 0; k < 6; ++k) {
+    Eigen::VectorXd a(9), b(9);
+    a << 0.4, 0.1, 0.01 * k, 0, 0.5, 1, 0, 0, 0;
+    b << 0.4, 0.1, 0.01 * k + 0.05, 0, 0.5, 0, 0, 0, 1;
+    frames.push_back({{1.0, a, 0.02}, {0.6, b, 0.02}});
+  }
+  TrackInputs inputs{.pose_guidance = std::vector<double>(6, 0.4)};
+  // A stand-in silhouette score: closeness to mode a.
+  inputs.silhouette_iou = [](int k, const Pose& p) {
+    return 1.0 / (1.0 + (p.t - Vec3(0.01 * k, 0, 0.5)).norm());
+  };
+  for (const char* method : {kSelectClustering, kSelectLikelihood}) {
+    std::vector<std::vector<TrackedFrame>> runs;
+    for (int threads : {1, 2, 3}) {
+      WatchedMixture model(layout, frames);
+      GuidedFlowConfig flow;
+      flow.threads = threads;
+      flow.seed = 9;
+      runs.push_back(TrackObject(model, 6, inputs, flow, {.method = method}));
+      // Which threads claim the blocks is up to the scheduler; how the rows
+      // are split is not.
+      EXPECT_LE(static_cast<int>(model.callers.size()), threads) << method;
+      EXPECT_EQ(model.largest_batch, (25 + threads - 1) / threads) << method << " rows split evenly";
+    }
+    for (size_t r = 1; r < runs.size(); ++r) {
+      for (int k = 0; k < 6; ++k) {
+        EXPECT_EQ(runs[r][k].choice.index, runs[0][k].choice.index) << method << " frame " << k;
+        EXPECT_EQ(runs[r][k].pose.t, runs[0][k].pose.t) << method << " frame " << k;
+        EXPECT_EQ(runs[r][k].pose.q.coeffs(), runs[0][k].pose.q.coeffs()) << method << " frame " << k;
+        EXPECT_EQ(runs[r][k].choice.score, runs[0][k].choice.score) << method << " frame " << k;
+      }
+    }
   }
 }
 

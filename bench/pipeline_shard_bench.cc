@@ -1,13 +1,15 @@
 // Shards: what splitting and merging cost, against the work they carry.
 //
-//   pipeline_shard_bench [merge_clips] [pipeline_clips]
+//   pipeline_shard_bench [merge_clips] [pipeline_clips] [width height frames]
 //
 // 1. Merge throughput: a shard of `merge_clips` clips (default 100000) with
 //    10 stages' results per clip (10 runs, 10 measurements, 10 verdicts,
 //    2 detections: 1M measurement rows, 3.2M rows in all) folded into its parent, rows/s,
 //    next to a plain `INSERT INTO ... SELECT` of the same tables between the
 //    same two files (the peer: what copying the rows costs at all).
-// 2. Overhead: `pipeline_clips` synthetic clips (default 200) through the
+// 2. Overhead: `pipeline_clips` synthetic clips (default 200; 160 x 120 px,
+//    60 frames unless given, where fixed costs weigh most; `doasido
+//    synth`'s own default is 640 x 480, 90 frames) through the
 //    default pipeline with one `doasido run --jobs 2`, and the same clips
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
 //    merged. Overhead = (shard + merge) / (sum of the shard runs). Slurm
@@ -112,11 +114,16 @@ void MergeThroughput(const std::filesystem::path& dir, int clips) {
               static_cast<long long>(again.changed_clips), again_s);
 }
 
-void Overhead(const std::filesystem::path& dir, int clips) {
+struct ClipSize {
+  int width = 160, height = 120, frames = 60;
+};
+
+void Overhead(const std::filesystem::path& dir, int clips, const ClipSize& size) {
   const std::string bin = DOASIDO_BIN;
   const std::string pool = (dir / "pool").string();
   Run(bin + " synth --out " + pool + " --clips " + std::to_string(clips) +
-      " --frames 60 --width 160 --height 120 --seed 9 --no-bundles");
+      " --frames " + std::to_string(size.frames) + " --width " + std::to_string(size.width) +
+      " --height " + std::to_string(size.height) + " --seed 9 --no-bundles");
   const std::string single = (dir / "single/d.db").string();
   const std::string parent = (dir / "parent/d.db").string();
   for (const auto& db : {single, parent}) {
@@ -135,8 +142,9 @@ void Overhead(const std::filesystem::path& dir, int clips) {
   }
   const double merge = Run(bin + " merge --db " + parent + " " + (dir / "parent/sh").string() +
                            "/shard-*/doasido.db");
-  std::printf("pipeline on %d clips: one run %.1f s; 4 shards run one after another %.1f s"
-              " (ratio %.2f)\n", clips, one, runs, runs / one);
+  std::printf("pipeline on %d clips of %dx%d px, %d frames: one run %.1f s; 4 shards run one after"
+              " another %.1f s (ratio %.2f)\n", clips, size.width, size.height, size.frames, one, runs,
+              runs / one);
   std::printf("shard %.2f s + merge %.2f s = %.1f%% of the shards' pipeline time (goal < 5%%)\n",
               shard, merge, 100 * (shard + merge) / runs);
 }
@@ -150,7 +158,9 @@ int main(int argc, char** argv) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   MergeThroughput(dir, merge_clips);
-  if (pipeline_clips > 0) Overhead(dir, pipeline_clips);
+  ClipSize size;
+  if (argc > 5) size = {std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5])};
+  if (pipeline_clips > 0) Overhead(dir, pipeline_clips, size);
   std::filesystem::remove_all(dir);
   return 0;
 }

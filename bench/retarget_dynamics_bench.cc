@@ -133,6 +133,31 @@ DynamicRetargetRun RunOne(const recon::Reconstruction& r, const TriMesh& mesh,
   return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label);
 }
 
+// Hand-object contacts when the hand stands at `traj`'s joints of frame k
+// and the object at `object` (for --verbose): how many, and the deepest.
+std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajectory& traj, int k,
+                                const Pose& object) {
+  const SceneIndex index = IndexScene(m);
+  mj_resetData(m, d);
+  for (size_t i = 0; i < traj.qpos_names.size(); ++i) {
+    d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, traj.qpos_names[i].c_str())]] = traj.qpos[k][i];
+  }
+  double* o = d->qpos + index.object_qpos;
+  o[0] = object.t.x(), o[1] = object.t.y(), o[2] = object.t.z();
+  o[3] = object.q.w(), o[4] = object.q.x(), o[5] = object.q.y(), o[6] = object.q.z();
+  mj_forward(m, d);
+  int n = 0;
+  double deepest = 0;
+  for (int c = 0; c < d->ncon; ++c) {
+    const int b1 = m->geom_bodyid[d->contact[c].geom1], b2 = m->geom_bodyid[d->contact[c].geom2];
+    const bool object1 = b1 == index.object_body, object2 = b2 == index.object_body;
+    if (object1 == object2 || b1 == 0 || b2 == 0) continue;  // not hand-object
+    ++n;
+    deepest = std::min(deepest, d->contact[c].dist);
+  }
+  return {n, deepest};
+}
+
 void Ablation(const Flags& f) {
   const char* rows[] = {"annealed sampling", "+ warmup", "+ perturbation", "+ transition reward"};
   std::map<std::pair<int, int>, Tally> tally;  // (row, noisy)
@@ -160,6 +185,18 @@ void Ablation(const Flags& f) {
             std::fprintf(stderr, "\nref %d row %d %s: E_pos %.3f E_rot %.3f lift sim %.3f ref %.3f, in-hand frames %d, %lld steps %.1f s",
                          i, row, noisy ? "noisy" : "clean", run.metrics.e_pos, run.metrics.e_rot,
                          lift_sim, lift_ref, run.in_hand_frames, run.stats.sim_steps, run.stats.seconds);
+            const ModelPtr m = CompileMjcfText(run.robot_scene_xml, (std::filesystem::temp_directory_path() / "doasido-dynamics-bench/robot_scene.xml").string());
+            const DataPtr d = MakeData(m.get());
+            for (int k = 0; k < r.frames(); k += 10) {
+              const auto ref_c = Contacts(m.get(), d.get(), run.kinematic, k, r.object_poses[k]);
+              const auto sim_c = Contacts(m.get(), d.get(), run.trajectory, k, run.trajectory.object_poses[k]);
+              const Eigen::VectorXd dq = run.trajectory.qpos[k] - run.kinematic.qpos[k];
+              std::fprintf(stderr, "\n   frame %2d: reference hand-object contacts %2d (deepest %.4f m), simulated %2d (%.4f m); "
+                           "sim - ref: base %.4f m, largest joint %.3f rad; object %.3f m",
+                           k, ref_c.first, ref_c.second, sim_c.first, sim_c.second, dq.head(3).norm(),
+                           dq.tail(dq.size() - 6).cwiseAbs().maxCoeff(),
+                           (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
+            }
           }
         } catch (const Error& e) {
           ++t.errors;
@@ -238,10 +275,18 @@ void Wall(const Flags& f) {
     const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
     const double steps_per_s = run.stats.sim_steps / run.stats.rollout_seconds;
     std::printf("%s preset (%s): %.1f s wall, %d plans, %d iterations, %lld sim steps (%.0f/s), "
-                "success %d (E_pos %.3f, E_rot %.3f)\n",
+                "success %d (E_pos %.3f, E_rot %.3f), in-hand frames %d\n",
                 f.wall_preset.empty() ? "flags" : f.wall_preset.c_str(), noisy ? "noisy" : "clean", wall, run.stats.plans, run.stats.iterations,
                 run.stats.sim_steps, steps_per_s, run.metrics.success, run.metrics.e_pos,
-                run.metrics.e_rot);
+                run.metrics.e_rot, run.in_hand_frames);
+    if (f.verbose) {
+      const auto& r = noisy ? c.noisy : c.clean;
+      for (int k = 0; k < r.frames(); k += 15) {
+        std::fprintf(stderr, "  t %4.1f s: object z ref %.3f sim %.3f, error %.3f m\n", k / 30.0,
+                     r.object_poses[k].t.z(), run.trajectory.object_poses[k].t.z(),
+                     (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
+      }
+    }
     if (noisy) continue;
     const AnnealedSamplerConfig seed = SamplerPreset("seed");
     const double steps = std::ceil((f.clip_seconds + seed.horizon) / seed.ctrl_dt) *

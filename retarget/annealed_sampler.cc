@@ -93,7 +93,10 @@ class Planner {
   DynamicResult Run(const std::function<void(int, int)>& progress);
 
  private:
-  double RefCtrl(int step, int a) const { return ref_.ctrl(std::clamp(step, 0, ref_.steps() - 1), a); }
+  // The nominal control of actuator a at `step` (feed-forward targets).
+  double RefCtrl(int step, int a) const {
+    return ref_.feedforward(std::clamp(step, 0, ref_.steps() - 1), a);
+  }
   void Clamp(double* u) const {
     for (int a = 0; a < m_->nu; ++a) u[a] = std::clamp(u[a], index_.ctrl_lo[a], index_.ctrl_hi[a]);
   }

@@ -119,6 +119,42 @@ std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<
   return out;
 }
 
+// Per frame and actuator, the target's lead over the joint (see the
+// header); row `frames` holds the lead of a joint at rest (gravity only).
+RowMatrix FeedforwardOffsets(const mjModel* m, const HandTrajectory& kinematic,
+                             const std::vector<int>& column) {
+  const int frames = static_cast<int>(kinematic.qpos.size());
+  RowMatrix lead = RowMatrix::Zero(frames + 1, m->nu);
+  const SceneIndex index = IndexScene(m);
+  DataPtr d = MakeData(m);
+  mj_forward(m, d.get());  // joint axes in the world at qpos0
+  const double h = 1.0 / kinematic.fps;
+  for (int a = 0; a < m->nu; ++a) {
+    const int joint = m->actuator_trnid[2 * a];
+    const double kp = m->actuator_gainprm[a * mjNGAIN];
+    const double damping = m->dof_damping[m->jnt_dofadr[joint]];
+    if (kp <= 0 || damping <= 0) continue;
+    const double tau = damping / kp;  // 2 / w for the base
+    const bool base = index.act_kind[a] != kFinger;
+    double sag = 0;
+    if (index.act_kind[a] == kBasePos) {
+      const Vec3 axis(d->xaxis[3 * joint], d->xaxis[3 * joint + 1], d->xaxis[3 * joint + 2]);
+      sag = -Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]).dot(axis) * tau * tau / 4;
+    }
+    for (int f = 0; f < frames; ++f) {
+      const double q0 = kinematic.qpos[std::max(0, f - 1)][column[a]];
+      const double q1 = kinematic.qpos[f][column[a]];
+      const double q2 = kinematic.qpos[std::min(frames - 1, f + 1)][column[a]];
+      const double span = h * ((f > 0) + (f + 1 < frames));
+      const double velocity = span > 0 ? (q2 - q0) / span : 0;
+      const double acceleration = frames > 2 && f > 0 && f + 1 < frames ? (q2 - 2 * q1 + q0) / (h * h) : 0;
+      lead(f, a) = tau * velocity + (base ? acceleration * tau * tau / 4 + sag : 0);
+    }
+    lead(frames, a) = sag;
+  }
+  return lead;
+}
+
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,
                                 const std::vector<bool>& in_hand, double warmup_seconds) {
@@ -156,6 +192,8 @@ DynamicReference BuildReference(const mjModel* m,
   ref.object_pos.resize(steps);
   ref.object_quat.resize(steps);
   ref.in_hand.resize(steps);
+  const RowMatrix lead = FeedforwardOffsets(m, kinematic, column);  // (frames, nu)
+  ref.feedforward.resize(steps, m->nu);
   for (int s = 0; s < steps; ++s) {
     const double u = std::max(0.0, (s - ref.warmup_steps) * ref.dt * ref.fps);
     const int f0 = std::min(frames - 1, static_cast<int>(u));
@@ -163,6 +201,10 @@ DynamicReference BuildReference(const mjModel* m,
     const double a = std::min(1.0, u - f0);
     for (int c = 0; c < m->nu; ++c) {
       ref.ctrl(s, c) = (1 - a) * kinematic.qpos[f0][column[c]] + a * kinematic.qpos[f1][column[c]];
+      // Warmup holds frame 0 still: only the gravity part of its lead.
+      const bool still = s < ref.warmup_steps;
+      ref.feedforward(s, c) =
+          ref.ctrl(s, c) + (still ? lead(frames, c) : (1 - a) * lead(f0, c) + a * lead(f1, c));
     }
     ref.object_pos[s] = (1 - a) * object[f0].t + a * object[f1].t;
     ref.object_quat[s] = object[f0].q.normalized().slerp(a, object[f1].q.normalized());

@@ -44,7 +44,12 @@ struct DynamicReference {
   double fps = 30;         // of the source frames
   int frames = 0;          // source frames
   int warmup_steps = 0;
-  RowMatrix ctrl;          // (steps, nu) reference position targets
+  RowMatrix ctrl;          // (steps, nu) reference joint positions
+  // (steps, nu) the position targets under which the actuators follow
+  // `ctrl` (BuildReference): the optimiser's nominal controls. A position
+  // actuator with joint damping d pulls by kp (u - q) - d qdot, so a joint
+  // that should move lags its target unless the target leads it.
+  RowMatrix feedforward;
   std::vector<Vec3> object_pos;    // (steps)
   std::vector<Quat> object_quat;   // (steps)
   std::vector<uint8_t> in_hand;    // (steps) 1 = in-hand stage
@@ -72,6 +77,11 @@ std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<
 // Samples `kinematic` (HandTrajectory from KinematicRetargeter, whose
 // qpos_names name the actuated joints), `object` and `in_hand` (one per
 // frame) at the model's timestep, after `warmup_seconds` of frame 0.
+// Feed-forward targets: u = q + (d / kp) qdot for every actuated joint
+// (its damping's lag at the reference velocity); the floating base, whose
+// gains are critically damped (kp = I w^2, d = 2 I w: embodiment.h), also
+// gets + qddot / w^2 and, on the slides, the gravity sag g / w^2.
+// Derivatives are central differences over frames, interpolated like q.
 // Throws Error("bad_reference") on a non-finite value or a size mismatch.
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,

@@ -225,6 +225,46 @@ TEST(DynamicRetarget, AnUnstableSimulationIsANamedError) {
   EXPECT_EQ(ErrorCode([&] { RetargetDynamics(broken.get(), ref, c.sampler); }), "unstable_simulation");
 }
 
+// Position actuators lag a moving target by their damping (and the base
+// sags under gravity); targets that lead by the reference's velocity,
+// acceleration and the sag make the floating wrist follow it.
+TEST(DynamicRetarget, FeedforwardTargetsMakeTheWristFollow) {
+  TempDir dir;
+  const DynamicRetargetConfig c = SmallConfig();
+  const recon::Reconstruction r = Reference();
+  const std::vector<Pose> object = FilledObjectPoses(r);
+  const ObjectScene scene = BuildObjectScene(Cylinder(), object[0], c.scene, dir / "scene");
+  std::ifstream in(scene.xml_path);
+  const std::string xml((std::istreambuf_iterator<char>(in)), {});
+  const HandModel hand = BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene");
+  KinematicRetargeter kinematic(hand, c.kinematic);
+  const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+  const mjModel* m = hand.model.get();
+  const DynamicReference ref = BuildReference(m, t, object, std::vector<bool>(kFrames, false), 0.0);
+  const SceneIndex index = IndexScene(m);
+  // Mean distance of the simulated wrist from the reference's, driven by `targets`.
+  auto wrist_error = [&](const RowMatrix& targets) {
+    DataPtr d = MakeData(m);
+    for (int a = 0; a < m->nu; ++a) d->qpos[index.act_qpos[a]] = ref.ctrl(0, a);
+    mj_forward(m, d.get());
+    double sum = 0;
+    for (int s = 0; s < ref.steps(); ++s) {
+      for (int a = 0; a < m->nu; ++a) d->ctrl[a] = targets(s, a);
+      mj_step(m, d.get());
+      Vec3 e = Vec3::Zero();
+      for (int a = 0, k = 0; a < m->nu; ++a) {
+        if (index.act_kind[a] == kBasePos) e[k++] = d->qpos[index.act_qpos[a]] - ref.ctrl(std::min(s + 1, ref.steps() - 1), a);
+      }
+      sum += e.norm();
+    }
+    return sum / ref.steps();
+  };
+  const double plain = wrist_error(ref.ctrl), led = wrist_error(ref.feedforward);
+  std::printf("mean wrist lag: targets = reference %.2f mm, feed-forward %.2f mm\n", 1e3 * plain, 1e3 * led);
+  EXPECT_LT(led, 0.5 * plain);
+  EXPECT_LT(led, 0.008);
+}
+
 TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   TempDir root;
   recon::Reconstruction r = Reference();

@@ -20,18 +20,28 @@ std::uint64_t Mix(std::uint64_t a, std::uint64_t b) {
   return z ^ (z >> 31);
 }
 
-// Row blocks of `x`, one per thread of `pool`, or the whole batch.
+// A model with ConcurrentRows is called on blocks of this many rows, on
+// the pool's threads or one after another: the same blocks for any thread
+// count, so the same floating-point results (a batched product's rounding
+// may depend on the batch's size).
+constexpr Eigen::Index kRowBlock = 8;
+
 template <typename Call>
 void ByRowBlocks(const VelocityField& model, TaskPool* pool, Eigen::Index rows, const Call& call) {
-  const int blocks = pool && model.ConcurrentRows() ? std::min<int>(pool->threads(), rows) : 1;
-  if (blocks <= 1) {
+  if (!model.ConcurrentRows() || rows <= kRowBlock) {
     call(0, rows);
     return;
   }
-  pool->Run(blocks, [&](int b, int) {
-    const Eigen::Index begin = rows * b / blocks, end = rows * (b + 1) / blocks;
-    call(begin, end - begin);
-  });
+  const int blocks = static_cast<int>((rows + kRowBlock - 1) / kRowBlock);
+  const auto block = [&](int b, int) {
+    const Eigen::Index begin = b * kRowBlock;
+    call(begin, std::min(kRowBlock, rows - begin));
+  };
+  if (pool && pool->threads() > 1) {
+    pool->Run(blocks, block);
+  } else {
+    for (int b = 0; b < blocks; ++b) block(b, 0);
+  }
 }
 
 void Velocity(VelocityField& model, TaskPool* pool, int frame, double t, const StateMatrix& x,

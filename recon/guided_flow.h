@@ -25,9 +25,12 @@ struct GuidedFlowConfig {
   int steps = 25;                // T Euler steps (seed appendix)
   double shape_guidance = 0.95;  // alpha_s; the seed: any value in [0.9, 1]
   std::uint64_t seed = 0;
-  // Threads over a frame's candidates (models with ConcurrentRows); the
-  // tracks do not depend on it.
-  int threads = 2;
+  // Threads over a frame's candidates (models with ConcurrentRows, blocks
+  // of 8 rows; clustering's silhouettes); the tracks do not depend on it.
+  // Worth raising for an in-process model that takes more than about a
+  // tenth of a millisecond per call: the Gaussian-mixture stand-in takes
+  // microseconds, and waking threads 50 times a frame costs more.
+  int threads = 1;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GuidedFlowConfig, candidates, steps,
                                                 shape_guidance, seed, threads)

@@ -2,6 +2,7 @@
 
 #include <zip.h>
 
+#include <algorithm>
 #include <cctype>
 #include <ctime>
 #include <fstream>
@@ -457,10 +458,19 @@ NpzArchive ReadNpz(const std::filesystem::path& path) {
       zip_discard(zip);
       throw Error("bad_npy", "cannot open member: " + msg, {.file = file, .field = key});
     }
-    std::string bytes(static_cast<size_t>(st.size), '\0');
-    const zip_int64_t got = zip_fread(member, bytes.data(), st.size);
+    // Read as the data arrives rather than allocating the size the archive
+    // claims: a damaged header may claim gigabytes for a few bytes.
+    std::string bytes;
+    char chunk[1 << 16];
+    zip_uint64_t remaining = st.size;
+    while (remaining > 0) {
+      const zip_int64_t got = zip_fread(member, chunk, std::min<zip_uint64_t>(remaining, sizeof chunk));
+      if (got <= 0) break;
+      bytes.append(chunk, static_cast<size_t>(got));
+      remaining -= static_cast<zip_uint64_t>(got);
+    }
     zip_fclose(member);
-    if (got < 0 || static_cast<zip_uint64_t>(got) != st.size) {
+    if (remaining != 0) {
       zip_discard(zip);
       throw Error("bad_npy", "member is truncated or corrupt", {.file = file, .field = key});
     }

@@ -207,19 +207,30 @@ TEST(DynamicRetarget, NanFramesAndBadMeshesAreNamedErrors) {
             "bad_mesh");
 }
 
-TEST(DynamicRetarget, AnUnstableSimulationIsANamedError) {
-  TempDir dir;
-  const DynamicRetargetConfig c = SmallConfig();
+// The synthetic reference's hand + cylinder scene in `dir` and the
+// dynamic reference built on it (every frame resting).
+struct SceneAndReference {
+  HandModel hand;
+  DynamicReference ref;
+};
+
+SceneAndReference BuildSceneAndReference(const DynamicRetargetConfig& c, const std::filesystem::path& dir) {
   const recon::Reconstruction r = Reference();
   const std::vector<Pose> object = FilledObjectPoses(r);
   const ObjectScene scene = BuildObjectScene(Cylinder(), object[0], c.scene, dir / "scene");
   std::ifstream in(scene.xml_path);
   const std::string xml((std::istreambuf_iterator<char>(in)), {});
-  const HandModel hand = BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene");
-  KinematicRetargeter kinematic(hand, c.kinematic);
-  HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
-  const DynamicReference ref =
-      BuildReference(hand.model.get(), t, object, std::vector<bool>(kFrames, false), 0.0);
+  SceneAndReference out{BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene"), {}};
+  KinematicRetargeter kinematic(out.hand, c.kinematic);
+  const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+  out.ref = BuildReference(out.hand.model.get(), t, object, std::vector<bool>(kFrames, false), 0.0);
+  return out;
+}
+
+TEST(DynamicRetarget, AnUnstableSimulationIsANamedError) {
+  TempDir dir;
+  const DynamicRetargetConfig c = SmallConfig();
+  const auto [hand, ref] = BuildSceneAndReference(c, dir.path());
   ModelPtr broken(mj_copyModel(nullptr, hand.model.get()));
   broken->opt.gravity[2] = -1e300;  // the state overflows in the first step
   EXPECT_EQ(ErrorCode([&] { RetargetDynamics(broken.get(), ref, c.sampler); }), "unstable_simulation");
@@ -230,17 +241,8 @@ TEST(DynamicRetarget, AnUnstableSimulationIsANamedError) {
 // acceleration and the sag make the floating wrist follow it.
 TEST(DynamicRetarget, FeedforwardTargetsMakeTheWristFollow) {
   TempDir dir;
-  const DynamicRetargetConfig c = SmallConfig();
-  const recon::Reconstruction r = Reference();
-  const std::vector<Pose> object = FilledObjectPoses(r);
-  const ObjectScene scene = BuildObjectScene(Cylinder(), object[0], c.scene, dir / "scene");
-  std::ifstream in(scene.xml_path);
-  const std::string xml((std::istreambuf_iterator<char>(in)), {});
-  const HandModel hand = BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene");
-  KinematicRetargeter kinematic(hand, c.kinematic);
-  const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+  const auto [hand, ref] = BuildSceneAndReference(SmallConfig(), dir.path());
   const mjModel* m = hand.model.get();
-  const DynamicReference ref = BuildReference(m, t, object, std::vector<bool>(kFrames, false), 0.0);
   const SceneIndex index = IndexScene(m);
   // Mean distance of the simulated wrist from the reference's, driven by `targets`.
   auto wrist_error = [&](const RowMatrix& targets) {

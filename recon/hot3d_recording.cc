@@ -150,16 +150,17 @@ struct Candidate {
   bool stand_in = false;
 };
 
-Candidate Pair(const Hot3dRecording& rec, const std::map<long long, Hot3dHandPose>& hand,
-               HandSide side, const std::string& uid, const TriMesh& mesh) {
+// `joints`: the hand's OpenPose-21 joints per timestamp.
+Candidate Pair(const Hot3dRecording& rec, const std::map<long long, Joints21>& joints,
+               const std::string& uid, const TriMesh& mesh) {
   Candidate c;
   c.uid = uid;
   for (const auto& [stamp, pose] : rec.objects.at(uid)) {
-    const auto it = hand.find(stamp);
-    if (it == hand.end()) continue;
+    const auto it = joints.find(stamp);
+    if (it == joints.end()) continue;
     c.stamps.push_back(stamp);
     c.object.push_back(pose);
-    c.joints.push_back(UmeTrackOpenPose21(rec.hand_model, it->second.angles, it->second.wrist, side));
+    c.joints.push_back(it->second);
   }
   if (c.stamps.size() < 2) return c;
   c.mesh = mesh;
@@ -200,13 +201,17 @@ Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
   if (hand == rec.hands.end() || hand->second.empty()) {
     throw Error("bad_hot3d", "the recording has no " + options.hand + " hand poses", site);
   }
+  std::map<long long, Joints21> joints;
+  for (const auto& [stamp, pose] : hand->second) {
+    joints[stamp] = UmeTrackOpenPose21(rec.hand_model, pose.angles, pose.wrist, side);
+  }
   Candidate best;
   for (const auto& [uid, poses] : rec.objects) {
     if (!options.object_uid.empty() && uid != options.object_uid) continue;
     const auto glb = object_library / (uid + ".glb");
     const bool has_model = std::filesystem::exists(glb);
     if (!has_model && options.stand_in.num_faces() == 0) continue;
-    Candidate c = Pair(rec, hand->second, side, uid, has_model ? LoadMesh(glb) : options.stand_in);
+    Candidate c = Pair(rec, joints, uid, has_model ? LoadMesh(glb) : options.stand_in);
     c.stand_in = !has_model;
     if (c.distance < best.distance) best = std::move(c);
   }

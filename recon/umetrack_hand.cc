@@ -68,6 +68,19 @@ std::array<Eigen::Affine3d, kFrames> SkinningFrames(const UmeTrackHand& hand,
   return frames;
 }
 
+std::array<Vec3, kUmeTrackLandmarks> Skin(const UmeTrackHand& hand,
+                                          const std::array<Eigen::Affine3d, kFrames>& frames) {
+  std::array<Vec3, kUmeTrackLandmarks> out;
+  for (int i = 0; i < kUmeTrackLandmarks; ++i) {
+    out[i].setZero();
+    for (int k = 0; k < 3; ++k) {
+      if (hand.landmark_bones[i][k] == kUnusedBone) continue;
+      out[i] += hand.landmark_weights[i][k] * (frames[hand.landmark_bones[i][k]] * hand.landmark_rest[i]);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 UmeTrackHand ReadUmeTrackHand(const std::filesystem::path& profile_json) {
@@ -113,16 +126,7 @@ UmeTrackHand ReadUmeTrackHand(const std::filesystem::path& profile_json) {
 std::array<Vec3, kUmeTrackLandmarks> UmeTrackLandmarks(const UmeTrackHand& hand,
                                                       const std::array<double, kUmeTrackJoints>& angles,
                                                       const Pose& wrist, HandSide side) {
-  const auto frames = SkinningFrames(hand, angles, wrist, side);
-  std::array<Vec3, kUmeTrackLandmarks> out;
-  for (int i = 0; i < kUmeTrackLandmarks; ++i) {
-    out[i].setZero();
-    for (int k = 0; k < 3; ++k) {
-      if (hand.landmark_bones[i][k] == kUnusedBone) continue;
-      out[i] += hand.landmark_weights[i][k] * (frames[hand.landmark_bones[i][k]] * hand.landmark_rest[i]);
-    }
-  }
-  return out;
+  return Skin(hand, SkinningFrames(hand, angles, wrist, side));
 }
 
 Joints21 UmeTrackOpenPose21(const UmeTrackHand& hand,
@@ -131,14 +135,15 @@ Joints21 UmeTrackOpenPose21(const UmeTrackHand& hand,
   // OpenPose-21 index -> UmeTrack landmark; -1 = the thumb's CMC (below).
   static constexpr std::array<int, 21> kFromLandmark = {
       5, -1, 6, 7, 0, 8, 9, 10, 1, 11, 12, 13, 2, 14, 15, 16, 3, 17, 18, 19, 4};
-  const auto landmarks = UmeTrackLandmarks(hand, angles, wrist, side);
+  const auto frames = SkinningFrames(hand, angles, wrist, side);
+  const auto landmarks = Skin(hand, frames);
   Joints21 j;
   for (int k = 0; k < 21; ++k) {
     if (kFromLandmark[k] >= 0) j.row(k) = landmarks[kFromLandmark[k]].transpose();
   }
   // Joint 1 turns about its own rest position, so frame 2 (after joints 0
   // and 1) carries that point where the thumb's base is.
-  j.row(1) = (SkinningFrames(hand, angles, wrist, side)[2] * hand.rest[1]).transpose();
+  j.row(1) = (frames[2] * hand.rest[1]).transpose();
   return j;
 }
 

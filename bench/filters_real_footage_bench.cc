@@ -6,7 +6,8 @@
 //             filter should pass it.
 //   negative: the filter named in the label should reject it; the others
 //             are not scored on it.
-// Usage: filters_real_footage_bench [videos folder] [learned|builtin]
+// Usage: filters_real_footage_bench [videos folder] [learned|builtin] [config.toml]
+// (config: a [filters_analyze] table, to measure other settings)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -88,6 +89,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path dir =
       argc > 1 ? std::filesystem::path(argv[1]) : std::filesystem::path(DOASIDO_SHARED_DATA) / "videos";
   AnalyzeConfig config;
+  if (argc > 3) ReadSection(LoadConfigFile(argv[3]), "filters_analyze", config);
   if (argc > 2) config.hand_detector = argv[2];
   std::vector<std::string> found;
   std::vector<std::unique_ptr<Stage>> stages;

@@ -11,7 +11,13 @@
 // floor), and the built-in interaction detector's verdicts on the four real
 // videos are printed.
 //
-// Usage: filters_throughput_bench [repeats=3]
+// A second table splits the analysis by signal: every file decoded once
+// (exact) into memory, then each signal extractor alone over those frames,
+// in milliseconds of CPU per frame, next to the decode's own cost.
+//
+// Usage: filters_throughput_bench [repeats=3] [config.toml]
+// (config: a [filters_analyze] table, as `doasido --config` takes, to
+// measure other settings than the defaults)
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -21,10 +27,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "filters/analyze_stage.h"
+#include "filters/frame_analyzer.h"
 
 namespace doasido::filters {
 namespace {
@@ -42,6 +52,7 @@ double SelfCpu() {
 
 // CPU seconds of one ffmpeg run (its own rusage from wait4).
 double FfmpegCpu(const std::filesystem::path& file) {
+  std::fflush(stdout);  // or the child flushes our buffered lines a second time
   const pid_t pid = fork();
   if (pid == 0) {
     const std::string input = file.string();
@@ -74,6 +85,77 @@ double Cpu(F&& work) {
   return SelfCpu() - t0;
 }
 
+// CPU milliseconds per frame of each signal extractor alone, on frames
+// decoded beforehand (so the decode is not in any figure but its own).
+void SignalCosts(const std::vector<std::filesystem::path>& files, int repeats,
+                 const AnalyzeConfig& config) {
+  std::printf("\nPer signal, CPU ms per frame (frames decoded once beforehand, exact decode; best"
+              " of %d)\n%-15s %7s %7s %7s %9s %7s %8s %7s %7s\n", repeats, "file", "decode",
+              "gray", "shot", "activity", "camera", "interact", "out_frm", "sum");
+  for (const auto& file : files) {
+    std::vector<AnalysisFrame> frames;
+    VideoGeometry geometry;
+    DecoderOptions options;
+    options.exact_scaling = true;
+    options.skip_loop_filter = false;
+    double decode = 1e30;
+    for (int r = 0; r < repeats; ++r) {
+      frames.clear();
+      decode = std::min(decode, Cpu([&] {
+        VideoDecoder decoder(file, options);
+        geometry = decoder.geometry();
+        AnalysisFrame frame;
+        while (decoder.Next(&frame)) {
+          frames.push_back(frame);
+          frames.back().bgr = frame.bgr.clone();
+        }
+      }));
+    }
+    std::vector<FrameContext> contexts(frames.size());
+    double gray = 1e30;
+    for (int r = 0; r < repeats; ++r) {
+      gray = std::min(gray, Cpu([&] {
+        for (size_t i = 0; i < frames.size(); ++i) {
+          contexts[i].frame = &frames[i];
+          contexts[i].ordinal = static_cast<std::int64_t>(i);
+          cv::cvtColor(frames[i].bgr, contexts[i].gray, cv::COLOR_BGR2GRAY);
+        }
+      }));
+    }
+    auto cost = [&](auto make) {
+      double best = 1e30;
+      for (int r = 0; r < repeats; ++r) {
+        auto consumer = make();
+        best = std::min(best, Cpu([&] {
+          consumer->Begin(geometry);
+          for (FrameContext& context : contexts) {
+            FrameContext copy = context;
+            consumer->Consume(copy);
+          }
+          consumer->Finish();
+        }));
+      }
+      return best;
+    };
+    const double shot = cost([&] { return std::make_unique<ShotSignalExtractor>(config.shot); });
+    const double activity =
+        cost([&] { return std::make_unique<ActivityExtractor>(config.activity); });
+    const double camera =
+        cost([&] { return std::make_unique<CameraMotionExtractor>(config.camera_motion); });
+    const double interaction = cost([&] { return std::make_unique<InteractionExtractor>(); });
+    const double out =
+        cost([&] { return std::make_unique<OutOfFrameExtractor>(config.out_of_frame); });
+    const double n = static_cast<double>(frames.size()) / 1000;
+    std::printf("%-15s %7.3f %7.3f %7.3f %9.3f %7.3f %8.3f %7.3f %7.3f\n",
+                file.filename().c_str(), decode / n, gray / n, shot / n, activity / n,
+                camera / n, interaction / n, out / n,
+                (gray + shot + activity + camera + interaction + out) / n);
+  }
+  std::printf("(decode: libavcodec + full-size BGR + cv::resize to analysis size; sum: every"
+              " signal with the shared gray image, no detector)\n");
+  std::fflush(stdout);
+}
+
 }  // namespace
 }  // namespace doasido::filters
 
@@ -87,6 +169,10 @@ int main(int argc, char** argv) {
       data / "videos" / "apple.mp4", data / "videos" / "bedroom.mp4",
       data / "shots" / "testvideo.mp4"};
 
+  AnalyzeConfig config;
+  if (argc > 2) ReadSection(LoadConfigFile(argv[2]), "filters_analyze", config);
+  SignalCosts(files, repeats, config);
+
   std::vector<Row> rows;
   std::vector<std::pair<std::string, Json>> analyses;
   for (const auto& file : files) {
@@ -94,7 +180,7 @@ int main(int argc, char** argv) {
     row.name = file.filename().string();
     for (int r = 0; r < repeats; ++r) {
       for (int mode = 0; mode < 2; ++mode) {
-        AnalyzeConfig all;
+        AnalyzeConfig all = config;
         all.decode = mode == 0 ? "exact" : "fast";
         DecoderOptions options;
         options.exact_scaling = mode == 0;

@@ -12,19 +12,31 @@
 //    synth`'s own default is 640 x 480, 90 frames) through the
 //    default pipeline with one `doasido run --jobs 2`, and the same clips
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
-//    merged. Overhead = (shard + merge) / (sum of the shard runs). Slurm
-//    itself adds its scheduling latency per task (tests/cli_slurm_test.cc
-//    runs the real thing), which this bench leaves out.
+//    merged. Overhead = (shard + merge) / (sum of the shard runs).
+// 3. Through Slurm (as root, with Debian's slurm-wlm and munge): the same
+//    clips in a fresh parent, `doasido slurm submit --shards 4
+//    --cpus-per-task 1` to a one-node cluster started on loopback
+//    (tests/slurm/loopback_cluster.h), timed from the submit command to the
+//    merge job's end by polling squeue every 0.2 s, against the one
+//    `doasido run` of section 2: total wall time, and what Slurm adds in
+//    phases (submit = shard + script + sbatch; the wait for the first task;
+//    the array; the merge job's wait for its dependency and its run).
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
 #include <string>
+#include <thread>
 
 #include "db/database.h"
 #include "pipeline/shard.h"
+#include "tests/slurm/loopback_cluster.h"
 
 namespace {
 
@@ -118,12 +130,137 @@ struct ClipSize {
   int width = 160, height = 120, frames = 60;
 };
 
-void Overhead(const std::filesystem::path& dir, int clips, const ClipSize& size) {
+// Seconds from `t0` at which each phase of a Slurm submission was first seen.
+struct SlurmPhases {
+  double submitted = 0, first_task = -1, array_done = -1, merge_started = -1, merge_done = -1;
+  std::map<std::string, std::pair<double, double>> tasks;  // task id: first and last seen running
+};
+
+// Polls squeue until the array `array` and the merge job `merge` have left it.
+SlurmPhases WatchSlurm(Clock::time_point t0, const std::string& array, const std::string& merge) {
+  SlurmPhases p;
+  p.submitted = Since(t0);
+  // One line per job or array task: "<id> <state>".
+  const auto listed = [](const std::string& queue, const std::string& pattern) {
+    return std::regex_search(queue, std::regex("(^|\n)" + pattern));
+  };
+  const std::regex running_task("(^|\n)" + array + "_(\\d+) RUNNING");
+  while (p.merge_done < 0) {
+    const std::string queue = doasido::testing::Shell("squeue -h -o '%i %T'");
+    const double now = Since(t0);
+    for (auto it = std::sregex_iterator(queue.begin(), queue.end(), running_task);
+         it != std::sregex_iterator(); ++it) {
+      p.tasks.try_emplace((*it)[2], now, now).first->second.second = now;
+    }
+    if (p.first_task < 0 && !p.tasks.empty()) p.first_task = now;
+    if (p.array_done < 0 && !listed(queue, array + "_")) p.array_done = now;
+    if (p.merge_started < 0 && listed(queue, merge + " RUNNING")) p.merge_started = now;
+    if (!listed(queue, merge + " ")) p.merge_done = now;
+    if (Since(t0) > 7200) {
+      std::fprintf(stderr, "slurm: still running after 2 h\n%s", queue.c_str());
+      std::exit(1);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  // A phase shorter than one poll was not seen: it ended with the next one.
+  if (p.first_task < 0) p.first_task = p.array_done;
+  if (p.merge_started < 0) p.merge_started = p.merge_done;
+  return p;
+}
+
+// Seconds of stage runs recorded in a database (the pipeline's own work).
+double StageSeconds(const std::filesystem::path& db) {
+  sqlite3* raw = nullptr;
+  sqlite3_open(db.c_str(), &raw);
+  sqlite3_stmt* q = nullptr;
+  sqlite3_prepare_v2(raw, "SELECT COALESCE(SUM(duration_s), 0) FROM stage_runs", -1, &q, nullptr);
+  sqlite3_step(q);
+  const double seconds = sqlite3_column_double(q, 0);
+  sqlite3_finalize(q);
+  sqlite3_close(raw);
+  return seconds;
+}
+
+void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, double one_run_s,
+                  const std::filesystem::path& one_run_db) {
   const std::string bin = DOASIDO_BIN;
-  const std::string pool = (dir / "pool").string();
-  Run(bin + " synth --out " + pool + " --clips " + std::to_string(clips) +
-      " --frames " + std::to_string(size.frames) + " --width " + std::to_string(size.width) +
-      " --height " + std::to_string(size.height) + " --seed 9 --no-bundles");
+  if (geteuid() != 0 || std::system("command -v slurmctld sbatch munged > /dev/null") != 0) {
+    std::printf("slurm: skipped (needs root and Debian's slurm-wlm and munge: scripts/setup.sh)\n");
+    return;
+  }
+  doasido::testing::LoopbackSlurm cluster(dir / "slurm");
+  if (!cluster.WaitIdle(60)) {
+    std::fprintf(stderr, "slurm: the node did not come up\n%s", cluster.Logs().c_str());
+    std::exit(1);
+  }
+  const std::string parent = (dir / "slurm-parent/d.db").string();
+  std::filesystem::create_directories(std::filesystem::path(parent).parent_path());
+  Run(bin + " init --db " + parent);
+  Run(bin + " ingest --db " + parent + " " + pool + "/Annotations");
+  const auto t0 = Clock::now();
+  const std::string out = doasido::testing::Shell(
+      bin + " slurm submit --db " + parent + " --shards 4 --cpus-per-task 1 --time 02:00:00");
+  std::smatch m;
+  if (!std::regex_search(out, m, std::regex("array job (\\d+) .*merge job (\\d+)"))) {
+    std::fprintf(stderr, "slurm submit: %s\n", out.c_str());
+    std::exit(1);
+  }
+  const SlurmPhases p = WatchSlurm(t0, m[1], m[2]);
+  sqlite3* db = nullptr;
+  sqlite3_open(parent.c_str(), &db);
+  sqlite3_stmt* open = nullptr;
+  sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM stage_runs WHERE state <> 'done'", -1, &open,
+                     nullptr);
+  sqlite3_step(open);
+  const long long left = sqlite3_column_int64(open, 0);
+  sqlite3_finalize(open);
+  sqlite3_close(db);
+  const double added = p.first_task + (p.merge_done - p.array_done);
+  std::printf("through Slurm (4 array tasks, 1 CPU each, on this %u-CPU node): %.1f s from submit"
+              " to merged, against one run's %.1f s (ratio %.3f); stage runs not done in the"
+              " parent: %lld\n",
+              std::thread::hardware_concurrency(), p.merge_done, one_run_s,
+              p.merge_done / one_run_s, left);
+  std::printf("  submit (shard + scripts + sbatch) %.2f s | wait for the first task %.2f s |"
+              " array %.1f s | merge job: wait %.2f s + run %.2f s\n",
+              p.submitted, p.first_task - p.submitted, p.array_done - p.first_task,
+              p.merge_started - p.array_done, p.merge_done - p.merge_started);
+  std::printf("  submit + first wait + merge job = %.2f s = %.1f%% of one run\n", added,
+              100 * added / one_run_s);
+  for (const auto& [task, seen] : p.tasks) {
+    char name[32];
+    std::snprintf(name, sizeof name, "shard-%03d", std::stoi(task));
+    const auto shard = std::filesystem::path(parent).parent_path() / "shards" / name / "doasido.db";
+    std::printf("  task %s: running %.1f .. %.1f s (%.1f s), its stage runs %.1f s\n",
+                task.c_str(), seen.first, seen.second, seen.second - seen.first,
+                StageSeconds(shard));
+  }
+  std::printf("  stage runs: one run %.1f s, the parent after the merge %.1f s\n",
+              StageSeconds(one_run_db), StageSeconds(parent));
+}
+
+// The synthetic clips, rendered once per size and kept between runs of the
+// bench (rendering 200 clips of 640 x 480 px takes ~10 min on one core;
+// `synth` is deterministic for its seed).
+std::filesystem::path Pool(int clips, const ClipSize& size) {
+  char name[96];
+  std::snprintf(name, sizeof name, "doasido-shard-bench-pool-%dx%dx%d-%d", size.width, size.height,
+                size.frames, clips);
+  const auto pool = std::filesystem::temp_directory_path() / name;
+  if (std::filesystem::exists(pool / "complete")) return pool;
+  std::filesystem::remove_all(pool);
+  Run(std::string(DOASIDO_BIN) + " synth --out " + pool.string() + " --clips " +
+      std::to_string(clips) + " --frames " + std::to_string(size.frames) + " --width " +
+      std::to_string(size.width) + " --height " + std::to_string(size.height) +
+      " --seed 9 --no-bundles");
+  std::ofstream(pool / "complete") << "rendered\n";
+  return pool;
+}
+
+// Returns the one run's wall time.
+double Overhead(const std::filesystem::path& dir, int clips, const ClipSize& size) {
+  const std::string bin = DOASIDO_BIN;
+  const std::string pool = Pool(clips, size).string();
   const std::string single = (dir / "single/d.db").string();
   const std::string parent = (dir / "parent/d.db").string();
   for (const auto& db : {single, parent}) {
@@ -147,6 +284,7 @@ void Overhead(const std::filesystem::path& dir, int clips, const ClipSize& size)
               runs / one);
   std::printf("shard %.2f s + merge %.2f s = %.1f%% of the shards' pipeline time (goal < 5%%)\n",
               shard, merge, 100 * (shard + merge) / runs);
+  return one;
 }
 
 }  // namespace
@@ -160,7 +298,10 @@ int main(int argc, char** argv) {
   MergeThroughput(dir, merge_clips);
   ClipSize size;
   if (argc > 5) size = {std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5])};
-  if (pipeline_clips > 0) Overhead(dir, pipeline_clips, size);
+  if (pipeline_clips > 0) {
+    const double one_run_s = Overhead(dir, pipeline_clips, size);
+    ThroughSlurm(dir, Pool(pipeline_clips, size).string(), one_run_s, dir / "single/d.db");
+  }
   std::filesystem::remove_all(dir);
   return 0;
 }

@@ -6,124 +6,31 @@
 // machine's `doasido run` gives, after one task was cancelled mid-run and
 // resumed, with every stage run done exactly once.
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <regex>
 #include <thread>
 
 #include "tests/db_dump.h"
+#include "tests/slurm/loopback_cluster.h"
 #include "tests/test_util.h"
 
 namespace doasido {
 namespace {
 
+using testing::LoopbackSlurm;
 using testing::QueryRows;
 using testing::ResultTables;
 using testing::RunDoasido;
+using testing::Shell;
 using testing::TempDir;
-
-int FreePort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  socklen_t len = sizeof addr;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  close(fd);
-  return ntohs(addr.sin_port);
-}
-
-std::string Shell(const std::string& command) {
-  std::string out;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  char buffer[4096];
-  size_t n;
-  while (pipe && (n = fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  if (pipe) pclose(pipe);
-  return out;
-}
-
-std::string Replace(std::string s, const std::string& from, const std::string& to) {
-  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
-    s.replace(at, from.size(), to);
-  }
-  return s;
-}
-
-// munged, slurmctld and slurmd for the lifetime of the object.
-class SlurmCluster {
- public:
-  explicit SlurmCluster(const std::filesystem::path& dir) : dir_(dir) {
-    for (const char* sub : {"state", "spool"}) std::filesystem::create_directories(dir / sub);
-    std::string conf = testing::ReadFile(testing::SourceDir() / "tests/slurm/slurm.conf.in");
-    conf = Replace(conf, "@DIR@", dir.string());
-    conf = Replace(conf, "@CTLD_PORT@", std::to_string(FreePort()));
-    conf = Replace(conf, "@SLURMD_PORT@", std::to_string(FreePort()));
-    conf = Replace(conf, "@CPUS@", std::to_string(std::thread::hardware_concurrency()));
-    testing::WriteFile(dir / "slurm.conf", conf);
-    setenv("SLURM_CONF", (dir / "slurm.conf").c_str(), 1);
-    {
-      std::ofstream key(dir / "munge.key", std::ios::binary);
-      std::ifstream random("/dev/urandom", std::ios::binary);
-      std::string bytes(1024, '\0');
-      random.read(bytes.data(), 1024);
-      key << bytes;
-    }
-    std::filesystem::permissions(dir / "munge.key", std::filesystem::perms::owner_read);
-    const std::string d = dir.string();
-    log_ += Shell("munged --force --key-file=" + d + "/munge.key --socket=" + d +
-                  "/munge.socket --pid-file=" + d + "/munged.pid --log-file=" + d +
-                  "/munged.log --seed-file=" + d + "/munged.seed");
-    log_ += Shell("slurmctld -c");
-    log_ += Shell("slurmd");
-  }
-  ~SlurmCluster() {
-    for (const char* pid_file : {"slurmd.pid", "slurmctld.pid", "munged.pid"}) {
-      std::ifstream in(dir_ / pid_file);
-      pid_t pid = 0;
-      if (in >> pid && pid > 0) kill(pid, SIGTERM);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  }
-  // True once the node takes jobs.
-  bool WaitIdle(double seconds) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    while (std::chrono::steady_clock::now() < end) {
-      if (Shell("sinfo -h -o %t").find("idle") != std::string::npos) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(250));
-    }
-    return false;
-  }
-  // Waits until no job is queued or running.
-  bool WaitEmpty(double seconds) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    while (std::chrono::steady_clock::now() < end) {
-      if (Shell("squeue -h -o %i").empty()) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(250));
-    }
-    return false;
-  }
-  std::string Logs() const {
-    return log_ + testing::ReadFile(dir_ / "slurmctld.log") + testing::ReadFile(dir_ / "slurmd.log");
-  }
-
- private:
-  std::filesystem::path dir_;
-  std::string log_;
-};
 
 TEST(Slurm, ArrayAndMergeEqualOneMachineAfterACancelledTaskIsResumed) {
   ASSERT_EQ(geteuid(), 0u) << "the test starts slurmctld and slurmd as root";
   TempDir dir;
-  SlurmCluster cluster(dir / "slurm");
+  LoopbackSlurm cluster(dir / "slurm");
   ASSERT_TRUE(cluster.WaitIdle(60)) << cluster.Logs();
 
   const std::string pool = (dir / "pool").string();

@@ -16,9 +16,6 @@
 //
 // Usage: filters_pipeline_bench [repeats=3]
 #include <sqlite3.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -29,34 +26,16 @@
 #include <string>
 #include <vector>
 
+#include "bench/child_cpu.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-double Seconds(const timeval& t) { return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6; }
-
-// CPU seconds (user + system, children included) of a command; -1 on failure.
-double CpuOf(const std::vector<std::string>& argv) {
-  std::fflush(stdout);  // or the child flushes our buffered lines a second time
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    std::freopen("/dev/null", "w", stdout);
-    std::freopen("/dev/null", "w", stderr);
-    execvp(args[0], args.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage u{};
-  wait4(pid, &status, 0, &u);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
-  return Seconds(u.ru_utime) + Seconds(u.ru_stime);
-}
+using doasido::bench::ChildCpu;
 
 void Must(const std::vector<std::string>& argv) {
-  if (CpuOf(argv) < 0) {
+  if (ChildCpu(argv) < 0) {
     std::string line;
     for (const auto& a : argv) line += a + " ";
     std::fprintf(stderr, "failed: %s\n", line.c_str());
@@ -108,7 +87,7 @@ PipelineRun RunOnce(const fs::path& dir, const fs::path& list, const std::string
   Must(init);
   Must({bin, "ingest", "--db", db, list.string()});
   PipelineRun run;
-  run.cpu = CpuOf({bin, "run", "--db", db, "--config", config, "--jobs", "1"});
+  run.cpu = ChildCpu({bin, "run", "--db", db, "--config", config, "--jobs", "1"});
   if (run.cpu < 0) {
     std::fprintf(stderr, "doasido run failed on %s\n", db.c_str());
     std::exit(1);
@@ -161,8 +140,7 @@ int main(int argc, char** argv) {
       if (run.cpu < best[c].cpu) best[c] = run;
     }
     for (size_t f = 0; f < files.size(); ++f) {
-      const double cpu = CpuOf({"ffmpeg", "-hide_banner", "-nostdin", "-i", files[f].string(),
-                                "-vf", "select='gt(scene,0.3)'", "-f", "null", "-"});
+      const double cpu = doasido::bench::FfmpegSceneCpu(files[f].string());
       if (cpu > 0) ffmpeg_file[f] = std::min(ffmpeg_file[f], cpu);
     }
   }

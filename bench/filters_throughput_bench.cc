@@ -20,8 +20,6 @@
 // measure other settings than the defaults)
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -33,13 +31,14 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "bench/child_cpu.h"
 #include "filters/analyze_stage.h"
 #include "filters/frame_analyzer.h"
 
 namespace doasido::filters {
 namespace {
 
-double Seconds(const timeval& t) { return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6; }
+using bench::Seconds;
 
 // This process and its waited-for children: the learned hand detector's
 // Node process is waited for when an analysis ends, so its CPU counts.
@@ -48,25 +47,6 @@ double SelfCpu() {
   getrusage(RUSAGE_SELF, &u);
   getrusage(RUSAGE_CHILDREN, &c);
   return Seconds(u.ru_utime) + Seconds(u.ru_stime) + Seconds(c.ru_utime) + Seconds(c.ru_stime);
-}
-
-// CPU seconds of one ffmpeg run (its own rusage from wait4).
-double FfmpegCpu(const std::filesystem::path& file) {
-  std::fflush(stdout);  // or the child flushes our buffered lines a second time
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const std::string input = file.string();
-    std::freopen("/dev/null", "w", stdout);
-    std::freopen("/dev/null", "w", stderr);
-    execlp("ffmpeg", "ffmpeg", "-hide_banner", "-nostdin", "-i", input.c_str(), "-vf",
-           "select='gt(scene,0.3)'", "-f", "null", "-", static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  int status = 0;
-  rusage u{};
-  wait4(pid, &status, 0, &u);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
-  return Seconds(u.ru_utime) + Seconds(u.ru_stime);
 }
 
 struct Row {
@@ -203,7 +183,7 @@ int main(int argc, char** argv) {
           benchmark::DoNotOptimize(AnalyzeClip(file, {}, {}, no_detector).measurements.size());
         }));
       }
-      const double f = FfmpegCpu(file);
+      const double f = bench::FfmpegSceneCpu(file.string());
       if (f > 0) row.ffmpeg = std::min(row.ffmpeg, f);
     }
     rows.push_back(row);

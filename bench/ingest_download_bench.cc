@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/file_text.h"
 #include "core/log.h"
 #include "db/database.h"
 #include "ingest/download_stage.h"
@@ -31,13 +32,6 @@ namespace {
 
 double Since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-std::string ReadAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // Seconds per clip of claim + LoadContext + Complete for `clips` clips,
@@ -86,7 +80,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> bodies;
   for (const char* name : {"02_cups.mp4", "03_blocks.mp4", "bedroom.mp4", "laptop_trackpad.mp4",
                            "pool_cleaning.mp4", "apple.mp4"}) {
-    bodies.push_back(ReadAll(videos / name));
+    bodies.push_back(doasido::TryReadFile(videos / name).value_or(""));
   }
   const int files = 24;  // each body served under four names
   std::int64_t total = 0;

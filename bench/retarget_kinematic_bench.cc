@@ -17,6 +17,7 @@
 #include <benchmark/benchmark.h>
 #include <spdlog/spdlog.h>
 
+#include "core/file_text.h"
 #include "core/mesh.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
@@ -49,11 +50,6 @@ std::filesystem::path SceneDir() {
     return d;
   }();
   return dir;
-}
-
-std::string ReadText(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 struct Row {
@@ -119,7 +115,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.worst_multi = Mean(wm);
 
   // Raw simulation throughput of the hand scene.
-  const HandModel scene = BuildHandModel(e, ReadText(SceneDir() / "scene.xml"), SceneDir());
+  const HandModel scene = BuildHandModel(e, TryReadFile(SceneDir() / "scene.xml").value_or(""), SceneDir());
   DataPtr d = MakeData(scene.model.get());
   const int steps = 4000;
   const auto s0 = Clock::now();
@@ -130,7 +126,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
 
 void BM_MjStep(benchmark::State& state) {
   const Embodiment e = FindEmbodiment(kHands[state.range(0)], kData / "robots");
-  const HandModel scene = BuildHandModel(e, ReadText(SceneDir() / "scene.xml"), SceneDir());
+  const HandModel scene = BuildHandModel(e, TryReadFile(SceneDir() / "scene.xml").value_or(""), SceneDir());
   DataPtr d = MakeData(scene.model.get());
   for (auto _ : state) mj_step(scene.model.get(), d.get());
   state.SetLabel(kHands[state.range(0)]);

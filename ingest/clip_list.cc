@@ -11,6 +11,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/file_text.h"
 #include "core/error.h"
 #include "core/error_codes.h"
 #include "core/json_input.h"
@@ -28,11 +29,7 @@ constexpr JsonLimits kDocumentLimits{.max_depth = 32, .max_bytes = 1u << 30};
 constexpr double kMaxSeconds = 1e7;                 // ~115 days
 
 std::string ReadAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("bad_list", "cannot open list", {.file = path.string()});
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  return ReadFileOrThrow(path, "bad_list", "cannot open list");
 }
 
 bool IsUtf8(const std::string& s) {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/file_text.h"
 #include "core/config.h"
 #include "core/permanent_error.h"
 #include "core/shell_words.h"
@@ -32,13 +33,6 @@ std::string IdAfter(const std::string& url, const std::string& marker) {
   auto end = begin;
   while (end < url.size() && IsYoutubeIdChar(url[end])) ++end;
   return end - begin == 11 ? url.substr(begin, 11) : "";
-}
-
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 bool Says(const std::string& text, const std::vector<std::string>& needles) {
@@ -104,7 +98,7 @@ void RunDownloadCommand(const DownloadCommand& command, const std::string& url,
   fs::remove(output, ec);  // only a file this run wrote counts
   const std::string shell = "( " + text + " ) >" + ShellQuote(log.string()) + " 2>&1 </dev/null";
   const int status = std::system(shell.c_str());
-  const std::string said = ReadText(log);
+  const std::string said = TryReadFile(log).value_or("");
   const int exit_code = status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   if (exit_code == 0 && fs::exists(output)) return;
   const std::string tail = LastLines(said, 5);

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/file_text.h"
+
 namespace doasido::recon {
 namespace {
 
@@ -195,14 +197,6 @@ std::string ZipMessage(int code) {
   std::string msg = zip_error_strerror(&err);
   zip_error_fini(&err);
   return msg;
-}
-
-std::string ReadAll(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("io", "cannot open file", {.file = path.string()});
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 void WriteAll(const std::filesystem::path& path, const std::string& bytes) {
@@ -423,7 +417,7 @@ std::string SerializeNpy(const NpyArray& a) {
 }
 
 NpyArray ReadNpy(const std::filesystem::path& path) {
-  return ParseNpy(ReadAll(path), path.string());
+  return ParseNpy(ReadFileOrThrow(path, "io", "cannot open file"), path.string());
 }
 
 void WriteNpy(const std::filesystem::path& path, const NpyArray& a) {

@@ -6,6 +6,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "core/json_input.h"
 
 namespace doasido::recon {
@@ -84,11 +85,9 @@ std::array<Vec3, kUmeTrackLandmarks> Skin(const UmeTrackHand& hand,
 }  // namespace
 
 UmeTrackHand ReadUmeTrackHand(const std::filesystem::path& profile_json) {
-  std::ifstream in(profile_json, std::ios::binary);
-  if (!in) throw Error("io", "cannot read the hand profile", {.file = profile_json.string()});
-  std::stringstream text;
-  text << in.rdbuf();
-  const Json doc = ParseJsonInput(text.str(), {.file = profile_json.string()});
+  const Json doc =
+      ParseJsonInput(ReadFileOrThrow(profile_json, "io", "cannot read the hand profile"),
+                     {.file = profile_json.string()});
   if (!doc.is_object() || !doc.contains("hand_model") || !doc["hand_model"].is_object()) {
     Bad(profile_json, "hand_model", "no hand_model object (not a UmeTrack user profile)");
   }

@@ -2,6 +2,7 @@
 
 #include <fstream>
 
+#include "core/file_text.h"
 #include "core/config_check.h"
 #include "core/error.h"
 
@@ -12,11 +13,6 @@ Error WithClip(const Error& e, const std::string& label) {
   ErrorSite site = e.site();
   if (site.clip.empty()) site.clip = label;
   return Error(e.code(), e.message(), site);
-}
-
-std::string ReadText(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // The simulated trajectory at the reference's frames, in the kinematic
@@ -80,7 +76,7 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
     SceneConfig scene_config = config.scene;
     scene_config.place_on_floor = false;  // the reconstruction's floor is z = 0 already
     const ObjectScene scene = BuildObjectScene(mesh, object[0], scene_config, scene_dir);
-    const HandModel model = BuildHandModel(hand, ReadText(scene.xml_path), scene_dir);
+    const HandModel model = BuildHandModel(hand, TryReadFile(scene.xml_path).value_or(""), scene_dir);
     run.robot_scene_xml = model.xml;
     const mjModel* m = model.model.get();
 

@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
+#include "core/file_text.h"
 #include "core/error.h"
 #include "retarget/mj_model.h"
 #include "retarget/urdf_import.h"
@@ -58,11 +59,8 @@ void Record(std::vector<CompatChange>& changes, CompatChange change) {
 }
 
 void ParseFile(const std::filesystem::path& path, const std::string& label, XMLDocument& doc) {
-  std::ifstream in(path);
-  if (!in) throw Error("bad_mjcf", "cannot read MJCF file", {.file = label});
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (doc.Parse(ss.str().c_str()) != tinyxml2::XML_SUCCESS) {
+  const std::string text = ReadFileOrThrow(path, "bad_mjcf", "cannot read MJCF file", label);
+  if (doc.Parse(text.c_str()) != tinyxml2::XML_SUCCESS) {
     throw Error("bad_mjcf", std::string("malformed XML: ") + Str(doc.ErrorStr()), {.file = label});
   }
 }
@@ -440,11 +438,7 @@ PreparedMjcf PrepareMjcfText(const std::string& xml, const std::filesystem::path
 }
 
 PreparedMjcf PrepareMjcf(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("bad_mjcf", "cannot read MJCF file", {.file = path.string()});
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return PrepareMjcfText(ss.str(), std::filesystem::absolute(path).parent_path(), path.string());
+  return PrepareMjcfText(ReadFileOrThrow(path, "bad_mjcf", "cannot read MJCF file"), std::filesystem::absolute(path).parent_path(), path.string());
 }
 
 }  // namespace doasido::retarget

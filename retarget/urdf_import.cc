@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
+#include "core/file_text.h"
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/mesh.h"
@@ -41,13 +42,9 @@ std::string Fmt(double v) {
 std::string Rerun(const fs::path& urdf) { return "then rerun `" + UrdfImportCommand(urdf) + "`"; }
 
 void LoadUrdf(const fs::path& urdf, XMLDocument& doc) {
-  std::ifstream in(urdf);
-  if (!in) {
-    throw Error(kBadUrdfError, "cannot read the URDF file; check the path", {.file = urdf.string()});
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (doc.Parse(ss.str().c_str()) != tinyxml2::XML_SUCCESS) {
+  const std::string text =
+      ReadFileOrThrow(urdf, kBadUrdfError, "cannot read the URDF file; check the path");
+  if (doc.Parse(text.c_str()) != tinyxml2::XML_SUCCESS) {
     throw Error(kBadUrdfError, std::string("malformed XML (") + doc.ErrorStr() + "); fix it, " +
                 Rerun(urdf), {.file = urdf.string()});
   }
@@ -249,10 +246,7 @@ void AddActuators(const fs::path& mjcf, const std::string& name, double hold_def
   DataPtr data = MakeData(m);
   mj_forward(m, data.get());
   XMLDocument doc;
-  std::ifstream in(mjcf);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  doc.Parse(ss.str().c_str());
+  doc.Parse(TryReadFile(mjcf).value_or("").c_str());
   XMLElement* root = doc.RootElement();
   root->SetAttribute("model", name.c_str());
   std::map<std::string, XMLElement*> joints;

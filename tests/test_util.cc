@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/file_text.h"
+
 namespace doasido::testing {
 
 std::filesystem::path SharedData() { return DOASIDO_SHARED_DATA; }
@@ -69,10 +71,7 @@ void WriteFile(const std::filesystem::path& path, const std::string& text) {
 }
 
 std::string ReadFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  return TryReadFile(path).value_or("");
 }
 
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path) {

@@ -12,6 +12,8 @@
 #include <sstream>
 #include <thread>
 
+#include "core/file_text.h"
+
 namespace doasido::testing {
 namespace {
 
@@ -34,12 +36,7 @@ std::string Replace(std::string s, const std::string& from, const std::string& t
   return s;
 }
 
-std::string Slurp(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string Slurp(const std::filesystem::path& path) { return TryReadFile(path).value_or(""); }
 
 // Polls `done` every 250 ms for up to `seconds`.
 template <typename Done>

@@ -6,8 +6,9 @@
 #include <iterator>
 
 #include "cli/commands.h"
-#include "pipeline/stage_registry.h"
 #include "core/error.h"
+#include "core/file_text.h"
+#include "pipeline/stage_registry.h"
 #include "db/database.h"
 #include "pipeline/shard.h"
 #include "pipeline/slurm.h"
@@ -157,9 +158,7 @@ void Submit(Database& db, const std::vector<Database::ShardRow>& shards,
 }
 
 void PrintFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::printf("# ---- %s\n%s\n", path.c_str(),
-              std::string(std::istreambuf_iterator<char>(in), {}).c_str());
+  std::printf("# ---- %s\n%s\n", path.c_str(), TryReadFile(path).value_or("").c_str());
 }
 
 pipeline::SlurmScripts Scripts(Database& db, const std::vector<Database::ShardRow>& shards,

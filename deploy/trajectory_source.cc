@@ -4,6 +4,7 @@
 #include <iterator>
 
 #include "core/error.h"
+#include "core/file_text.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::deploy {
@@ -33,9 +34,7 @@ std::optional<TrajectoryFiles> FindTrajectoryFiles(const Database& db, ClipId cl
 
 std::string ReadSceneXml(const std::filesystem::path& scene_dir) {
   if (scene_dir.empty()) return {};
-  std::ifstream in(scene_dir / "scene.xml");
-  if (!in) throw Error("io", "cannot read scene", {.file = (scene_dir / "scene.xml").string()});
-  return {std::istreambuf_iterator<char>(in), {}};
+  return ReadFileOrThrow(scene_dir / "scene.xml", "io", "cannot read scene");
 }
 
 }  // namespace doasido::deploy

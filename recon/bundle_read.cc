@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_text.h"
 #include "core/json_input.h"
 #include "recon/bundle_layout.h"
 #include "recon/exr_io.h"
@@ -103,9 +104,8 @@ class Reader {
     if (!fs::exists(path)) Fail(rel, "", "meta.json is missing");
     Json meta;
     try {
-      std::ifstream in(path, std::ios::binary);
-      const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-      meta = ParseJsonInput(text, {}, {.max_depth = 16, .max_bytes = 1u << 20});
+      meta = ParseJsonInput(ReadFileOrThrow(path, "io", "cannot read meta.json"), {},
+                            {.max_depth = 16, .max_bytes = 1u << 20});
     } catch (const Error& e) {
       Fail(rel, "", e.code() + ": " + e.message());
     }

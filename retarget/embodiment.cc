@@ -12,6 +12,7 @@
 
 #include "core/data_dirs.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "core/json_input.h"
 #include "retarget/mjcf_text.h"
 #include "retarget/urdf_import.h"
@@ -245,11 +246,10 @@ void RequireWholeKeypoints(const Json& json, const std::string& file) {
 Embodiment LoadEmbodiment(const std::filesystem::path& json_path,
                           const std::filesystem::path& robots_dir) {
   const std::string file = json_path.string();
-  std::ifstream in(json_path);
-  if (!in) throw Error("bad_embodiment", "cannot read embodiment description", {.file = file});
+  const std::string text =
+      ReadFileOrThrow(json_path, "bad_embodiment", "cannot read embodiment description");
   Embodiment e;
   try {
-    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     const Json json = ParseJsonInput(text, {.file = file}, {.max_depth = 16, .max_bytes = 16u << 20});
     RequireWholeKeypoints(json, file);
     e = json.get<Embodiment>();

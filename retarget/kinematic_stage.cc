@@ -9,6 +9,7 @@
 
 #include "core/data_dirs.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "recon/bundle.h"
 #include "recon/bundle_location.h"
 #include "recon/gravity.h"
@@ -146,8 +147,7 @@ StageResult KinematicStage::Run(const ClipContext& context) {
     SceneConfig scene_config = config_.scene;
     scene_config.place_on_floor = false;  // the floor is already under the object
     const ObjectScene scene = BuildObjectScene(*in.object_mesh, object_world[0], scene_config, scene_dir);
-    std::ifstream xml_file(scene.xml_path);
-    scene_xml.assign(std::istreambuf_iterator<char>(xml_file), {});
+    scene_xml = TryReadFile(scene.xml_path).value_or("");
     result.measurements["object_mass"] = scene.mass;
     result.measurements["object_hulls"] = scene.hull_files.size();
     result.artifacts.emplace_back("scene", "scene/scene.xml");

@@ -8,6 +8,7 @@
 
 #include "core/data_dirs.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "deploy/trajectory_source.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
@@ -105,11 +106,6 @@ Json Replay(const mjModel* m, const retarget::HandTrajectory& t) {
   return frames;
 }
 
-std::string ReadFileText(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
 }  // namespace
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
@@ -172,7 +168,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
       return;
     }
     res.set_header("Cache-Control", "max-age=3600");
-    res.set_content(ReadFileText(p), "text/javascript; charset=utf-8");
+    res.set_content(TryReadFile(p).value_or(""), "text/javascript; charset=utf-8");
   });
 
   http.Get("/api/verify/queue", [hooks](const httplib::Request&, httplib::Response& res) {

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/file_text.h"
 #include "core/json_input.h"
 
 #include <toml++/toml.h>
@@ -36,10 +37,8 @@ Json TomlToJson(const toml::node& node) {
 }  // namespace
 
 Json LoadConfigFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("bad_config", "cannot open config file", {.file = path.string()});
+  const std::string text = ReadFileOrThrow(path, "bad_config", "cannot open config file");
   if (path.extension() == ".json") {
-    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     try {
       return ParseJsonInput(text, {.file = path.string()}, {.max_bytes = 16u << 20});
     } catch (const Error& e) {
@@ -47,7 +46,7 @@ Json LoadConfigFile(const std::filesystem::path& path) {
     }
   }
   try {
-    return TomlToJson(toml::parse_file(path.string()));
+    return TomlToJson(toml::parse(text, path.string()));
   } catch (const toml::parse_error& e) {
     throw Error("bad_config", std::string(e.description()),
                 {.file = path.string(), .line = static_cast<long>(e.source().begin.line)});

@@ -36,6 +36,10 @@ Pose FitRigid(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return {Quat(r), cb - r * ca};
 }
 
+Quat SameHemisphere(const Quat& q, const Quat& reference) {
+  return q.dot(reference) < 0 ? Quat(-q.w(), -q.x(), -q.y(), -q.z()) : q;
+}
+
 double RotationAngle(const Quat& a, const Quat& b) {
   const double d = std::abs(a.normalized().dot(b.normalized()));
   return 2.0 * std::acos(std::clamp(d, 0.0, 1.0));

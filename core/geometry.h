@@ -38,6 +38,13 @@ Pose FitRigid(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 // Angle in radians of the rotation taking a to b, in [0, pi].
 double RotationAngle(const Quat& a, const Quat& b);
 
+// q or -q, whichever is nearer `reference` (same rotation; a model that
+// treats quaternions as vectors needs one sign for a mode and its target).
+Quat SameHemisphere(const Quat& q, const Quat& reference);
+
+// log(2 pi), the Gaussian normalisation constant per dimension.
+inline constexpr double kLog2Pi = 1.8378770664093453;
+
 // Pinhole intrinsics in pixels.
 struct Camera {
   int width = 0;

@@ -4,11 +4,10 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/geometry.h"
 
 namespace doasido::recon {
 namespace {
-
-constexpr double kLog2Pi = 1.8378770664093453;
 
 }  // namespace
 

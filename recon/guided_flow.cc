@@ -6,12 +6,11 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/geometry.h"
 #include "core/stage_progress.h"
 
 namespace doasido::recon {
 namespace {
-
-constexpr double kLog2Pi = 1.8378770664093453;
 
 std::uint64_t Mix(std::uint64_t a, std::uint64_t b) {
   std::uint64_t z = a * 0x9e3779b97f4a7c15ULL + b + 0x632be59bd9b4e019ULL;

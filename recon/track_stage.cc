@@ -31,7 +31,7 @@ std::unique_ptr<VelocityField> CandidatesModel(const ClipBundle& b, double sigma
     Eigen::Vector4d mean = Eigen::Vector4d::Zero();
     for (const PoseSample& s : samples) {
       Pose p = s.pose;
-      if (p.q.dot(reference) < 0) p.q.coeffs() *= -1;
+      p.q = SameHemisphere(p.q, reference);
       mean += p.q.coeffs();
       modes.push_back({1.0, PoseBlock(p).transpose(), sigma});
     }

@@ -15,12 +15,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;
 
-// q or -q, whichever is nearer `reference` (the model's state is a vector:
-// a mode and its guidance target must use the same sign).
-Quat SameHemisphere(const Quat& q, const Quat& reference) {
-  return q.dot(reference) < 0 ? Quat(-q.w(), -q.x(), -q.y(), -q.z()) : q;
-}
-
 Quat SmallRotation(double radians, std::mt19937_64& rng) {
   std::normal_distribution<double> normal;
   const Vec3 axis = Vec3(normal(rng), normal(rng), normal(rng)).normalized();

@@ -9,7 +9,8 @@
 //    same two files (the peer: what copying the rows costs at all).
 // 2. Overhead: `pipeline_clips` synthetic clips (default 200; 160 x 120 px,
 //    60 frames unless given, where fixed costs weigh most; `doasido
-//    synth`'s own default is 640 x 480, 90 frames) through the
+//    synth`'s own default is 640 x 480, 90 frames; rendered once per size
+//    and kept in the temporary folder for later runs) through the
 //    default pipeline with one `doasido run --jobs 2`, and the same clips
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
 //    merged. Overhead = (shard + merge) / (sum of the shard runs).

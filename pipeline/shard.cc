@@ -29,20 +29,45 @@ std::vector<std::vector<const VideoGroup*>> Balance(std::vector<VideoGroup>& gro
   return out;
 }
 
-void CopyArtifacts(const std::filesystem::path& from_root, const std::filesystem::path& to_root,
-                   ClipId clip) {
+// How a clip's artifact folder travels. A shard gets copies (it writes its
+// own results beside them); results come home as hard links, which cost no
+// space or time, and as copies where the two roots are on different file
+// systems (or the file system has no links). A file already linked to its
+// source is left alone, so merging twice changes nothing.
+enum class Transfer { kCopy, kLink };
+
+void PlaceFile(const std::filesystem::path& from, const std::filesystem::path& to,
+               Transfer how) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (how == Transfer::kLink) {
+    if (fs::exists(to, ec) && fs::equivalent(from, to, ec)) return;
+    fs::remove(to, ec);
+    fs::create_hard_link(from, to, ec);
+    if (!ec) return;
+  }
+  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  if (ec) throw Error("io", "cannot place artifact: " + ec.message(), {.file = from.string()});
+}
+
+void TransferArtifacts(const std::filesystem::path& from_root, const std::filesystem::path& to_root,
+                       ClipId clip, Transfer how) {
+  namespace fs = std::filesystem;
   const auto from = from_root / "artifacts" / std::to_string(clip);
-  if (!std::filesystem::is_directory(from)) return;
+  if (!fs::is_directory(from)) return;
   const auto to = to_root / "artifacts" / std::to_string(clip);
   std::error_code ec;
-  std::filesystem::create_directories(to, ec);
-  std::filesystem::copy(from, to,
-                        std::filesystem::copy_options::recursive |
-                            std::filesystem::copy_options::overwrite_existing,
-                        ec);
-  if (ec) {
-    throw Error("io", "cannot copy artifacts: " + ec.message(), {.file = from.string()});
+  fs::create_directories(to, ec);
+  for (auto it = fs::recursive_directory_iterator(from, ec); !ec && it != fs::end(it);
+       it.increment(ec)) {
+    const auto target = to / fs::relative(it->path(), from);
+    if (it->is_directory()) {
+      fs::create_directories(target, ec);
+    } else if (it->is_regular_file()) {
+      PlaceFile(it->path(), target, how);
+    }
   }
+  if (ec) throw Error("io", "cannot read artifacts: " + ec.message(), {.file = from.string()});
 }
 
 }  // namespace
@@ -86,7 +111,7 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options) {
     info.frames = spec.frames;
     std::filesystem::create_directories(info.db.parent_path());
     db.ExportShard(spec);
-    for (ClipId c : spec.clips) CopyArtifacts(db.root(), info.db.parent_path(), c);
+    for (ClipId c : spec.clips) TransferArtifacts(db.root(), info.db.parent_path(), c, Transfer::kCopy);
     made.push_back(info);
   }
   return made;
@@ -98,7 +123,7 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   Database::MergeStats stats = db.MergeShard(shard_db);
   Database shard(shard_db);
   for (const ClipRecord& clip : shard.ListClips()) {
-    CopyArtifacts(shard.root(), db.root(), clip.id);
+    TransferArtifacts(shard.root(), db.root(), clip.id, Transfer::kLink);
   }
   return stats;
 }

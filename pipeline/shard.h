@@ -43,9 +43,12 @@ struct ShardInfo {
 // there are none, Error("shard_exists") when a shard folder is in the way.
 std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options);
 
-// The shard database of shard folder `shard_db`'s clip artifacts copied
-// into the parent's artifact root (existing files replaced), then the rows
-// merged (Database::MergeShard). Safe to repeat.
+// The rows of shard database `shard_db` merged into `db`
+// (Database::MergeShard; a refused shard changes nothing), then its clips'
+// artifact files placed in the parent's artifact root as hard links
+// (copies where the two are on different file systems; a file in the way is
+// replaced). Safe to repeat. ShardQueue copies the other way, so a shard
+// never writes into a file its parent holds.
 Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard_db);
 
 // The shard folders' database name.

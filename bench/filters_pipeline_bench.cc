@@ -15,8 +15,6 @@
 // bookkeeping and ingest-free claiming.
 //
 // Usage: filters_pipeline_bench [repeats=3]
-#include <sqlite3.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +25,7 @@
 #include <vector>
 
 #include "bench/child_cpu.h"
+#include "tests/db_dump.h"
 
 namespace {
 
@@ -43,26 +42,7 @@ void Must(const std::vector<std::string>& argv) {
   }
 }
 
-// Rows of a one-column-or-more query, columns joined by '|'.
-std::vector<std::string> Query(const fs::path& db, const std::string& sql) {
-  sqlite3* raw = nullptr;
-  sqlite3_open(db.c_str(), &raw);
-  sqlite3_stmt* s = nullptr;
-  std::vector<std::string> rows;
-  if (sqlite3_prepare_v2(raw, sql.c_str(), -1, &s, nullptr) == SQLITE_OK) {
-    while (sqlite3_step(s) == SQLITE_ROW) {
-      std::string row;
-      for (int c = 0; c < sqlite3_column_count(s); ++c) {
-        const auto* text = sqlite3_column_text(s, c);
-        row += (c ? "|" : "") + std::string(text ? reinterpret_cast<const char*>(text) : "");
-      }
-      rows.push_back(row);
-    }
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(raw);
-  return rows;
-}
+using doasido::testing::QueryRows;
 
 const std::vector<std::string> kStages = {"probe",       "filters_analyze", "shot_boundary",
                                           "interaction", "out_of_frame",    "activity",
@@ -92,15 +72,15 @@ PipelineRun RunOnce(const fs::path& dir, const fs::path& list, const std::string
     std::fprintf(stderr, "doasido run failed on %s\n", db.c_str());
     std::exit(1);
   }
-  for (const auto& row : Query(db, "SELECT stage, SUM(duration_s) FROM stage_runs GROUP BY 1")) {
+  for (const auto& row : QueryRows(db, "SELECT stage, SUM(duration_s) FROM stage_runs GROUP BY 1")) {
     const auto bar = row.find('|');
     run.stage[row.substr(0, bar)] = std::atof(row.substr(bar + 1).c_str());
   }
-  for (const auto& f : Query(db, "SELECT json_extract(data, '$.clip.frames') FROM measurements"
+  for (const auto& f : QueryRows(db, "SELECT json_extract(data, '$.clip.frames') FROM measurements"
                                  " WHERE stage = 'filters_analyze'")) {
     run.frames += std::atof(f.c_str());
   }
-  run.verdicts = Query(db,
+  run.verdicts = QueryRows(db,
                        "SELECT c.id || ' ' || COALESCE((SELECT stage || ':' || reason FROM"
                        " verdicts v WHERE v.clip_id = c.id AND v.verdict = 'reject' ORDER BY"
                        " v.rowid LIMIT 1), 'pass') FROM clips c ORDER BY c.id");

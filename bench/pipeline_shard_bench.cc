@@ -37,6 +37,7 @@
 
 #include "db/database.h"
 #include "pipeline/shard.h"
+#include "tests/db_dump.h"
 #include "tests/slurm/loopback_cluster.h"
 
 namespace {
@@ -171,15 +172,8 @@ SlurmPhases WatchSlurm(Clock::time_point t0, const std::string& array, const std
 
 // Seconds of stage runs recorded in a database (the pipeline's own work).
 double StageSeconds(const std::filesystem::path& db) {
-  sqlite3* raw = nullptr;
-  sqlite3_open(db.c_str(), &raw);
-  sqlite3_stmt* q = nullptr;
-  sqlite3_prepare_v2(raw, "SELECT COALESCE(SUM(duration_s), 0) FROM stage_runs", -1, &q, nullptr);
-  sqlite3_step(q);
-  const double seconds = sqlite3_column_double(q, 0);
-  sqlite3_finalize(q);
-  sqlite3_close(raw);
-  return seconds;
+  return std::stod(doasido::testing::QueryRows(
+      db, "SELECT COALESCE(SUM(duration_s), 0) FROM stage_runs")[0]);
 }
 
 void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, double one_run_s,
@@ -207,21 +201,14 @@ void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, dou
     std::exit(1);
   }
   const SlurmPhases p = WatchSlurm(t0, m[1], m[2]);
-  sqlite3* db = nullptr;
-  sqlite3_open(parent.c_str(), &db);
-  sqlite3_stmt* open = nullptr;
-  sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM stage_runs WHERE state <> 'done'", -1, &open,
-                     nullptr);
-  sqlite3_step(open);
-  const long long left = sqlite3_column_int64(open, 0);
-  sqlite3_finalize(open);
-  sqlite3_close(db);
+  const std::string left = doasido::testing::QueryRows(
+      parent, "SELECT COUNT(*) FROM stage_runs WHERE state <> 'done'")[0];
   const double added = p.first_task + (p.merge_done - p.array_done);
   std::printf("through Slurm (4 array tasks, 1 CPU each, on this %u-CPU node): %.1f s from submit"
               " to merged, against one run's %.1f s (ratio %.3f); stage runs not done in the"
-              " parent: %lld\n",
+              " parent: %s\n",
               std::thread::hardware_concurrency(), p.merge_done, one_run_s,
-              p.merge_done / one_run_s, left);
+              p.merge_done / one_run_s, left.c_str());
   std::printf("  submit (shard + scripts + sbatch) %.2f s | wait for the first task %.2f s |"
               " array %.1f s | merge job: wait %.2f s + run %.2f s\n",
               p.submitted, p.first_task - p.submitted, p.array_done - p.first_task,

@@ -2,16 +2,14 @@
 // machine (pipeline/shard.h, pipeline/slurm.h).
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/file_text.h"
-#include "pipeline/stage_registry.h"
 #include "db/database.h"
 #include "pipeline/shard.h"
 #include "pipeline/slurm.h"
+#include "pipeline/stage_registry.h"
 
 namespace doasido::cli {
 namespace {

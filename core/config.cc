@@ -2,10 +2,8 @@
 #include "core/config_check.h"
 
 #include <cmath>
-#include <iterator>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "core/file_text.h"

@@ -1,8 +1,5 @@
 #include "deploy/trajectory_source.h"
 
-#include <fstream>
-#include <iterator>
-
 #include "core/error.h"
 #include "core/file_text.h"
 #include "retarget/kinematic_stage.h"

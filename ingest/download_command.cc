@@ -6,12 +6,11 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 #include <vector>
 
-#include "core/file_text.h"
 #include "core/config.h"
+#include "core/file_text.h"
 #include "core/permanent_error.h"
 #include "core/shell_words.h"
 #include "ingest/http_fetch.h"

@@ -111,7 +111,9 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options) {
     info.frames = spec.frames;
     std::filesystem::create_directories(info.db.parent_path());
     db.ExportShard(spec);
-    for (ClipId c : spec.clips) TransferArtifacts(db.root(), info.db.parent_path(), c, Transfer::kCopy);
+    for (ClipId c : spec.clips) {
+      TransferArtifacts(db.root(), info.db.parent_path(), c, Transfer::kCopy);
+    }
     made.push_back(info);
   }
   return made;

@@ -6,7 +6,6 @@
 #include <cctype>
 #include <ctime>
 #include <fstream>
-#include <sstream>
 
 #include "core/file_text.h"
 

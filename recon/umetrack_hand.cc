@@ -1,8 +1,6 @@
 #include "recon/umetrack_hand.h"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "core/config.h"
 #include "core/error.h"

@@ -1,10 +1,8 @@
 #include "retarget/dynamic_retarget.h"
 
-#include <fstream>
-
-#include "core/file_text.h"
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/file_text.h"
 
 namespace doasido::retarget {
 namespace {

@@ -2,8 +2,6 @@
 
 #include <cctype>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <map>
 
 #include <Eigen/SVD>

@@ -1,7 +1,6 @@
 #include "retarget/mjcf_compat.h"
 
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -10,8 +9,8 @@
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
-#include "core/file_text.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "retarget/mj_model.h"
 #include "retarget/urdf_import.h"
 

@@ -6,15 +6,14 @@
 #include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include <mujoco/mujoco.h>
 #include <spdlog/spdlog.h>
 #include <tinyxml2.h>
 
-#include "core/file_text.h"
 #include "core/config_check.h"
 #include "core/error.h"
+#include "core/file_text.h"
 #include "core/mesh.h"
 #include "retarget/mj_model.h"
 #include "retarget/mjcf_compat.h"

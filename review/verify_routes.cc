@@ -3,8 +3,6 @@
 #include "review/request_body.h"
 
 #include <cstdlib>
-#include <fstream>
-#include <iterator>
 
 #include "core/data_dirs.h"
 #include "core/error.h"

@@ -14,12 +14,19 @@
 //  4. real references (--sections=hot3d): the HOT3D sample's hands and the
 //     object each hand's fingertips come closest to (recon/hot3d_recording.h),
 //     the left hand onto sharpa_left and, mirrored, onto sharpa_right; the
-//     right hand onto sharpa_right; fast preset, and seed with --seed_wall.
+//     right hand onto sharpa_right; fast preset, and seed with --seed_wall;
+//  5. the kinematic reference's grasps (--sections=grasp), with and without
+//     the grasp terms (KinematicConfig contact_weight): hand-object contacts
+//     per in-hand frame, the deepest penetration, and whether the grasp at
+//     the highest frame holds the object for a second: a reference whose own
+//     grasp drops the object cannot be tracked into a lift.
 // Episodes' motions are scaled by --lift_scale (default 2: lifts of ~20 cm),
 // so that an object left on the floor fails the 0.1 m success threshold.
 // Sizes are flags, so a short run is possible:
 //   retarget_dynamics_bench --refs=30 --frames=60 --samples=16 --iterations=3
-//       --horizon=0.5 --threads=2 --clip_seconds=10 --sections=ablation,throughput,wall,hot3d
+//       --horizon=0.5 --threads=2 --clip_seconds=10 --sections=ablation,throughput,wall,hot3d,grasp
+//   [--contact_weight=W --contact_depth=D --contact_epsilon=E] (grasp terms in every section)
+//   [--elevation=RAD] (the synthetic hand's approach above the horizontal; 0.55)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -47,10 +54,13 @@ const std::filesystem::path kData = DOASIDO_SHARED_DATA;
 struct Flags {
   int refs = 30, frames = 60, samples = 16, iterations = 3, threads = 2;
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
+  // The kinematic reference's grasp terms (KinematicConfig); < 0 keeps the default.
+  double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
+  double contact_weight = -1, contact_depth = -1, contact_epsilon = -1;
   bool seed_wall = false, verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
   std::string wall_preset = "fast";
-  std::string sections = "ablation,throughput,wall,hot3d";
+  std::string sections = "ablation,throughput,wall,hot3d,grasp";
 };
 
 Flags Parse(int argc, char** argv) {
@@ -69,6 +79,10 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--knot_dt") f.knot_dt = std::stod(v);
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
     else if (k == "--lift_scale") f.lift_scale = std::stod(v);
+    else if (k == "--elevation") f.elevation = std::stod(v);
+    else if (k == "--contact_weight") f.contact_weight = std::stod(v);
+    else if (k == "--contact_depth") f.contact_depth = std::stod(v);
+    else if (k == "--contact_epsilon") f.contact_epsilon = std::stod(v);
     else if (k == "--seed_wall") f.seed_wall = v != "0";
     else if (k == "--wall_preset") f.wall_preset = eq == std::string::npos ? "" : v;
     else if (k == "--sections") f.sections = v;
@@ -84,7 +98,7 @@ struct Case {
 };
 
 // Reference i: verb, object and approach vary with i; noise seeded by i.
-Case MakeCase(int i, int frames, double lift_scale) {
+Case MakeCase(int i, int frames, double lift_scale, double elevation) {
   const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
   Case c;
   c.mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
@@ -93,6 +107,7 @@ Case MakeCase(int i, int frames, double lift_scale) {
   spec.frames = frames;
   spec.manipulation_scale = lift_scale;
   spec.object_yaw = 0.4 * i;
+  spec.approach_elevation = elevation;
   spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
   c.clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, c.mesh), 30.0);
   c.noisy = c.clean;
@@ -105,6 +120,9 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   c.preset = "";
   c.robots_dir = (kData / "robots").string();
   c.kinematic.restarts = 1;
+  if (f.contact_weight >= 0) c.kinematic.contact_weight = f.contact_weight;
+  if (f.contact_depth >= 0) c.kinematic.contact_depth = f.contact_depth;
+  if (f.contact_epsilon >= 0) c.kinematic.contact_epsilon = f.contact_epsilon;
   AnnealedSamplerConfig& s = c.sampler;
   s.num_samples = f.samples;
   s.max_num_iterations = f.iterations;
@@ -163,7 +181,7 @@ void Ablation(const Flags& f) {
   std::map<std::pair<int, int>, Tally> tally;  // (row, noisy)
   const auto t0 = Clock::now();
   for (int i = 0; i < f.refs; ++i) {
-    const Case c = MakeCase(i, f.frames, f.lift_scale);
+    const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation);
     for (int row = 0; row < 4; ++row) {
       DynamicRetargetConfig config = BaseConfig(f);
       config.sampler.warmup = row >= 1;
@@ -191,9 +209,9 @@ void Ablation(const Flags& f) {
               const auto ref_c = Contacts(m.get(), d.get(), run.kinematic, k, r.object_poses[k]);
               const auto sim_c = Contacts(m.get(), d.get(), run.trajectory, k, run.trajectory.object_poses[k]);
               const Eigen::VectorXd dq = run.trajectory.qpos[k] - run.kinematic.qpos[k];
-              std::fprintf(stderr, "\n   frame %2d: reference hand-object contacts %2d (deepest %.4f m), simulated %2d (%.4f m); "
+              std::fprintf(stderr, "\n   frame %2d: fingertips asked to touch %d; reference hand-object contacts %2d (deepest %.4f m), simulated %2d (%.4f m); "
                            "sim - ref: base %.4f m, largest joint %.3f rad; object %.3f m",
-                           k, ref_c.first, ref_c.second, sim_c.first, sim_c.second, dq.head(3).norm(),
+                           k, run.grasp_contacts.empty() ? 0 : run.grasp_contacts[k], ref_c.first, ref_c.second, sim_c.first, sim_c.second, dq.head(3).norm(),
                            dq.tail(dq.size() - 6).cwiseAbs().maxCoeff(),
                            (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
             }
@@ -245,7 +263,7 @@ double RawStepsPerSecond(const mjModel* m, int threads, double seconds) {
 }
 
 void Throughput(const Flags& f) {
-  const Case c = MakeCase(0, f.frames, f.lift_scale);
+  const Case c = MakeCase(0, f.frames, f.lift_scale, f.elevation);
   std::printf("\n== Simulation throughput: sim steps/s inside the optimiser vs raw mj_step, same scene\n");
   std::printf("%-8s | %-14s | %-14s | %s\n", "threads", "optimiser", "raw mj_step", "ratio");
   for (int threads = 1; threads <= f.threads; ++threads) {
@@ -263,7 +281,7 @@ void Throughput(const Flags& f) {
 
 void Wall(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
-  const Case c = MakeCase(0, frames, f.lift_scale);
+  const Case c = MakeCase(0, frames, f.lift_scale, f.elevation);
   std::printf("\n== Wall time for a %.0f-s clip (%d frames), %d threads\n", f.clip_seconds, frames,
               f.threads);
   DynamicRetargetConfig fast = BaseConfig(f);
@@ -302,6 +320,71 @@ void Wall(const Flags& f) {
     std::printf("seed preset (noisy): %.1f s wall, %d iterations, success %d (E_pos %.3f, E_rot %.3f)\n",
                 std::chrono::duration<double>(Clock::now() - t0).count(), run.stats.iterations,
                 run.metrics.success, run.metrics.e_pos, run.metrics.e_rot);
+  }
+}
+
+// How far the object falls in `seconds` when the hand stands at the
+// kinematic reference's pose of frame k, its actuators targeting that pose,
+// and the object starts at the reference's pose: whether the reference's
+// grasp can hold the object at all.
+double HoldDrop(const mjModel* m, mjData* d, const HandTrajectory& kinematic, int k,
+                const Pose& object, double seconds) {
+  const SceneIndex index = IndexScene(m);
+  mj_resetData(m, d);
+  for (size_t j = 0; j < kinematic.qpos_names.size(); ++j) {
+    d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, kinematic.qpos_names[j].c_str())]] = kinematic.qpos[k][j];
+  }
+  double* o = d->qpos + index.object_qpos;
+  o[0] = object.t.x(), o[1] = object.t.y(), o[2] = object.t.z();
+  o[3] = object.q.w(), o[4] = object.q.x(), o[5] = object.q.y(), o[6] = object.q.z();
+  for (int a = 0; a < m->nu; ++a) d->ctrl[a] = d->qpos[index.act_qpos[a]];
+  const int steps = static_cast<int>(std::lround(seconds / m->opt.timestep));
+  for (int s = 0; s < steps; ++s) mj_step(m, d);
+  return object.t.z() - o[2];
+}
+
+// The kinematic reference's grasps with and without the grasp terms
+// (KinematicConfig contact_weight) on the lifting references (pick-and-place
+// and lift-and-rotate): hand-object contacts per in-hand frame, the deepest
+// penetration, and whether the grasp at the highest reference frame holds
+// the object for 1 s (falls less than 2 cm).
+void Grasp(const Flags& f) {
+  const double weight = f.contact_weight > 0 ? f.contact_weight : 16;
+  std::printf("\n== Kinematic reference grasps on the lifting references (of %d), grasp terms off / "
+              "on (contact_weight %g)\n", f.refs, weight);
+  std::printf("%-10s | %-11s | %-13s | %-17s | %s\n", "terms", "references", "contacts/frame",
+              "deepest penetr.", "grasp holds 1 s");
+  for (const double w : {0.0, weight}) {
+    int refs = 0, holds = 0, frames = 0, contacts = 0;
+    double deepest = 0;
+    for (int i = 0; i < f.refs; ++i) {
+      if (i % 3 == 2) continue;  // slides never leave the floor
+      const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation);
+      DynamicRetargetConfig config = BaseConfig(f);
+      config.sampler.num_samples = 1;
+      config.sampler.max_num_iterations = 1;
+      config.kinematic.contact_weight = w;
+      const DynamicRetargetRun run = RunOne(c.clean, c.mesh, config, "grasp");
+      const ModelPtr m = CompileMjcfText(run.robot_scene_xml, (std::filesystem::temp_directory_path() / "doasido-dynamics-bench/robot_scene.xml").string());
+      const DataPtr d = MakeData(m.get());
+      const std::vector<bool> in_hand = LabelInHand(c.clean, c.clean.object_poses, c.mesh,
+                                                    config.sampler.reward.transition_epsilon);
+      int top = 0;
+      for (int k = 0; k < c.clean.frames(); ++k) {
+        if (c.clean.object_poses[k].t.z() > c.clean.object_poses[top].t.z()) top = k;
+        if (!in_hand[k]) continue;
+        const auto [n, depth] = Contacts(m.get(), d.get(), run.kinematic, k, c.clean.object_poses[k]);
+        ++frames;
+        contacts += n;
+        deepest = std::min(deepest, depth);
+      }
+      const double drop = HoldDrop(m.get(), d.get(), run.kinematic, top, c.clean.object_poses[top], 1.0);
+      ++refs;
+      holds += drop < 0.02;
+      if (f.verbose) std::fprintf(stderr, "ref %d terms %g: frame %d, object fell %.3f m\n", i, w, top, drop);
+    }
+    std::printf("%-10s | %11d | %13.2f | %14.1f mm | %d/%d\n", w > 0 ? "on" : "off", refs,
+                double(contacts) / std::max(1, frames), -1000 * deepest, holds, refs);
   }
 }
 
@@ -372,5 +455,6 @@ int main(int argc, char** argv) {
   if (f.sections.find("throughput") != std::string::npos) Throughput(f);
   if (f.sections.find("wall") != std::string::npos) Wall(f);
   if (f.sections.find("hot3d") != std::string::npos) Hot3d(f);
+  if (f.sections.find("grasp") != std::string::npos) Grasp(f);
   return 0;
 }

@@ -1,5 +1,6 @@
-// doasido hand import | check: bringing a new robot hand in (URDF or MJCF),
-// and checking a hand description before retargeting onto it.
+// doasido hand import | check | mirror: bringing a new robot hand in (URDF
+// or MJCF), checking a hand description before retargeting onto it, and
+// making the other side's hand from it.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -8,6 +9,7 @@
 #include "cli/hand_render.h"
 #include "core/error.h"
 #include "retarget/hand_check.h"
+#include "retarget/hand_mirror.h"
 #include "retarget/kinematic_stage.h"
 #include "retarget/urdf_import.h"
 
@@ -157,14 +159,61 @@ void AddCheck(CLI::App& hand) {
   });
 }
 
+void AddMirror(CLI::App& hand) {
+  struct Options {
+    std::string hand, robots_dir, out, name;
+    char axis = 'y';
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = hand.add_subcommand(
+      "mirror",
+      "Make the other side's hand: the model reflected through a plane (positions, orientations,\n"
+      "joint axes so that flexion stays positive, inertias, mesh scales) and the description with it\n"
+      "(points' offsets reflected, side swapped), then checked like `doasido hand check`. Exits 1\n"
+      "when the mirrored hand has a problem");
+  cmd->add_option("hand", opt->hand, "Description .json, or a built-in name (sharpa_right, shadow, allegro)")
+      ->required();
+  cmd->add_option("--out", opt->out, "Output folder (created)")->required();
+  cmd->add_option("--name", opt->name, "Name of the mirrored hand and its files (default: right and left swapped)");
+  cmd->add_option("--axis", opt->axis, "The axis the reflection flips, in the model's frame")
+      ->check(CLI::IsMember({'x', 'y', 'z'}))
+      ->capture_default_str();
+  cmd->add_option("--robots-dir", opt->robots_dir, "Folder of robot models descriptions refer to");
+  cmd->footer("Writes <out>/<name>.xml (one self-contained MJCF; meshes stay where they are, scaled by -1\n"
+              "along the axis) and <out>/<name>.json. Mirroring the result again gives the original.\n\n"
+              "Examples:\n"
+              "  doasido hand mirror shadow --out robots/shadow_left\n"
+              "  doasido hand mirror robots/my_hand_mj/my_hand.json --out robots/my_hand_left --name my_hand_left\n"
+              "  doasido hand check robots/shadow_left/shadow_left.json");
+  cmd->callback([opt] {
+    const std::string robots = opt->robots_dir.empty() ? retarget::DefaultRobotsDir() : opt->robots_dir;
+    const retarget::Embodiment source = retarget::FindEmbodiment(opt->hand, robots);
+    const retarget::MirroredHand m = retarget::MirrorHand(source, opt->out, {.axis = opt->axis, .name = opt->name});
+    std::printf("%s (%s) mirrored through %c = 0: %s (%s)\nmodel: %s\ndescription: %s (%zu points)\n",
+                source.name.c_str(), source.side.c_str(), opt->axis, m.embodiment.name.c_str(),
+                m.embodiment.side.c_str(), m.model.c_str(), m.description.c_str(), m.embodiment.points.size());
+    const HandCheck c = retarget::CheckHand(m.description);
+    PrintChains(c);
+    if (c.problems.empty()) {
+      std::printf("problems: none\n");
+      return;
+    }
+    for (const retarget::HandProblem& p : c.problems) std::printf("  %s: %s\n", p.code.c_str(), p.message.c_str());
+    throw Error("hand_problems", std::to_string(c.problems.size()) + " problem(s) in the mirrored hand; see above",
+                {.file = m.description.string()});
+  });
+}
+
 }  // namespace
 
 void AddHandCommand(CLI::App& app) {
-  auto* hand = app.add_subcommand("hand", "Bring your own robot hand: import a URDF or MJCF, check a description");
+  auto* hand = app.add_subcommand(
+      "hand", "Bring your own robot hand: import a URDF or MJCF, check a description, mirror it to the other side");
   hand->require_subcommand(1);
-  hand->footer("Run `doasido hand import --help` and `doasido hand check --help`.");
+  hand->footer("Run `doasido hand import --help`, `doasido hand check --help` and `doasido hand mirror --help`.");
   AddImport(*hand);
   AddCheck(*hand);
+  AddMirror(*hand);
 }
 
 }  // namespace doasido::cli

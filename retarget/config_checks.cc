@@ -15,6 +15,10 @@ void CheckConfig(const KinematicConfig& c, const std::string& section) {
   RequireInRange(section, "scale", c.scale, 0, 10);  // 0 adapts; robot hands are 0.5-3x
   RequireInRange(section, "wrist_noise_rad", c.wrist_noise_rad, 0, std::numbers::pi);
   RequireInRange(section, "wrist_noise_m", c.wrist_noise_m, 0, 1);
+  RequireInRange(section, "robust_loss_scale", c.robust_loss_scale, 0, 1e3);
+  RequireInRange(section, "contact_weight", c.contact_weight, 0, 1e6);
+  RequireInRange(section, "contact_epsilon", c.contact_epsilon, 0, 0.2);  // m
+  RequireInRange(section, "contact_depth", c.contact_depth, 0, 0.02);     // m
 }
 
 void CheckConfig(const DecompositionConfig& c, const std::string& section) {

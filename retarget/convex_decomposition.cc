@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <array>
 #include <map>
 #include <limits>
 #include <random>
@@ -196,6 +197,29 @@ bool IsClosed(const TriMesh& mesh) {
   return !directed.empty();
 }
 
+TriMesh WeldVertices(const TriMesh& mesh) {
+  std::map<std::array<double, 3>, int> index;
+  std::vector<int> remap(mesh.num_vertices());
+  TriMesh out;
+  std::vector<Vec3> kept;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::array<double, 3> key{mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)};
+    const auto [it, inserted] = index.emplace(key, static_cast<int>(kept.size()));
+    if (inserted) kept.push_back(mesh.vertices.row(v).transpose());
+    remap[v] = it->second;
+  }
+  std::vector<Eigen::Vector3i> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3i t(remap[mesh.faces(f, 0)], remap[mesh.faces(f, 1)], remap[mesh.faces(f, 2)]);
+    if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) faces.push_back(t);
+  }
+  out.vertices.resize(static_cast<int>(kept.size()), 3);
+  for (size_t i = 0; i < kept.size(); ++i) out.vertices.row(i) = kept[i].transpose();
+  out.faces.resize(static_cast<int>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i) out.faces.row(i) = faces[i].transpose();
+  return out;
+}
+
 TriMesh ClusterVertices(const TriMesh& mesh, double cell) {
   std::map<std::tuple<long, long, long>, int> index;
   std::vector<Vec3> sum;
@@ -273,13 +297,13 @@ static std::vector<std::vector<int>> HacdPatches(const TriMesh& input, const Dec
 std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const DecompositionConfig& config) {
   if (mesh.num_faces() == 0) throw Error("bad_mesh", "empty mesh has no convex decomposition");
   const double diagonal = (mesh.Max() - mesh.Min()).norm();
-  TriMesh input = mesh;
+  TriMesh input = WeldVertices(mesh);
   // Halve the cell until the clustered mesh fits the triangle budget.
   if (input.num_faces() > config.max_input_triangles) {
     double cell = diagonal / 20;
-    TriMesh best = ClusterVertices(mesh, cell);
+    TriMesh best = ClusterVertices(input, cell);
     for (int i = 0; i < 12; ++i) {
-      TriMesh finer = ClusterVertices(mesh, cell * 0.8);
+      TriMesh finer = ClusterVertices(input, cell * 0.8);
       if (finer.num_faces() > config.max_input_triangles) break;
       best = std::move(finer);
       cell *= 0.8;

@@ -70,6 +70,12 @@ bool IsClosed(const TriMesh& mesh);
 // Whether p lies inside (or on) a convex hull with outward-facing faces.
 bool InsideHull(const TriMesh& hull, const Vec3& p);
 
+// Merges vertices at identical coordinates (a mesh built with a copy of
+// each corner per face, for flat shading, is closed only once welded) and
+// drops the triangles that collapse. Files read through core/mesh.h come
+// welded already.
+TriMesh WeldVertices(const TriMesh& mesh);
+
 // Simplifies by snapping vertices to a grid of `cell` metres, merging
 // vertices in one cell (at their mean) and dropping collapsed triangles.
 TriMesh ClusterVertices(const TriMesh& mesh, double cell);

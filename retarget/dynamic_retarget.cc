@@ -3,6 +3,7 @@
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/file_text.h"
+#include "retarget/config_checks.h"
 
 namespace doasido::retarget {
 namespace {
@@ -50,6 +51,8 @@ HandTrajectory Resample(const mjModel* m, const SceneIndex& index, const Dynamic
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
   if (!c.preset.empty()) SamplerPreset(c.preset);  // throws on an unknown name
   CheckConfig(c.sampler, section + ".sampler");
+  CheckConfig(c.kinematic, section + ".kinematic");
+  CheckConfig(c.scene, section + ".scene");
 }
 
 AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config) {
@@ -79,7 +82,7 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
     const mjModel* m = model.model.get();
 
     KinematicRetargeter kinematic(model, config.kinematic);
-    run.kinematic = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+    run.kinematic = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &object, &run.grasp_contacts);
     run.kinematic.object_poses = object;
     const std::vector<bool> in_hand =
         LabelInHand(r, object, mesh, sampler.reward.transition_epsilon);

@@ -50,6 +50,9 @@ struct DynamicRetargetRun {
   SamplerStats stats;
   std::string robot_scene_xml; // the hand + object scene it ran in
   int in_hand_frames = 0;
+  // Per frame, the robot fingertips the kinematic reference put on the
+  // object (KinematicConfig contact_weight; all 0 when off).
+  std::vector<int> grasp_contacts;
 };
 
 // Runs steps 1-5. `mesh` is the object in its own frame; scene files go to

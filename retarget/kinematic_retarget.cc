@@ -42,8 +42,13 @@ Vec3 EulerXYZ(const Mat3& r) {
 }  // namespace
 
 KinematicRetargeter::KinematicRetargeter(const HandModel& hand, KinematicConfig config)
-    : hand_(hand), config_(config), data_(MakeData(hand.model.get())), rng_(config.seed) {
+    : hand_(hand), config_(config), data_(MakeData(hand.model.get())),
+      surface_(hand.model.get(), NameToId(hand.model.get(), mjOBJ_BODY, "object")), rng_(config.seed) {
   const mjModel* m = hand_.model.get();
+  const int object = NameToId(m, mjOBJ_BODY, "object");
+  if (object >= 0 && m->body_jntnum[object] == 1 && m->jnt_type[m->body_jntadr[object]] == mjJNT_FREE) {
+    object_qpos_ = m->jnt_qposadr[m->body_jntadr[object]];
+  }
   if (hand_.wrist_qpos.size() != 6) {
     throw Error("bad_embodiment", "kinematic retargeting needs the floating wrist",
                 {.field = "floating_base"});
@@ -69,6 +74,26 @@ KinematicRetargeter::KinematicRetargeter(const HandModel& hand, KinematicConfig 
       active_.push_back(i);
     }
     if (IsPalmKeypoint(hand_.points[i].keypoint)) palm_points_.push_back(i);
+  }
+  tip_geom_.assign(active_.size(), -1);
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int body = m->geom_bodyid[g];
+    if (body == 0 || body == object || !(m->geom_contype[g] | m->geom_conaffinity[g]) ||
+        !ObjectSurface::Measures(m, g)) {
+      continue;
+    }
+    hand_geoms_.push_back(g);
+  }
+  for (size_t a = 0; a < active_.size(); ++a) {  // a fingertip's geom: the one nearest its site
+    const ModelPoint& p = hand_.points[active_[a]];
+    if (p.site < 0 || !p.fingertip) continue;
+    double nearest = kInf;
+    for (int g : hand_geoms_) {
+      if (m->geom_bodyid[g] != m->site_bodyid[p.site]) continue;
+      const double dist = (Eigen::Map<const Vec3>(m->geom_pos + 3 * g) -
+                           Eigen::Map<const Vec3>(m->site_pos + 3 * p.site)).norm();
+      if (dist < nearest) nearest = dist, tip_geom_[a] = g;
+    }
   }
   if (palm_points_.size() < 3) {
     palm_points_.clear();
@@ -149,50 +174,14 @@ double KinematicRetargeter::AdaptScale(const std::vector<Keypoints21>& human) {
   return scale_;
 }
 
-double KinematicRetargeter::Objective(const Eigen::VectorXd& q, const std::vector<Vec3>& targets,
-                                      const Eigen::VectorXd* previous, Eigen::VectorXd* residual,
-                                      Eigen::MatrixXd* jacobian) {
-  const mjModel* m = hand_.model.get();
-  mjData* d = data_.get();
-  const int n = static_cast<int>(q.size());
-  for (int k = 0; k < n; ++k) d->qpos[qpos_adr_[k]] = q[k];
-  mj_kinematics(m, d);
-  if (jacobian) mj_comPos(m, d);
-  const int rows = 3 * static_cast<int>(active_.size()) + (previous ? n : 0);
-  Eigen::VectorXd r(rows);
-  if (jacobian) jacobian->setZero(rows, n);
-  std::vector<mjtNum> jacp(jacobian ? 3 * m->nv : 0);
-  int row = 0;
-  for (int i : active_) {
-    const ModelPoint& p = hand_.points[i];
-    const double w = std::sqrt(p.weight) / config_.sigma;
-    const Vec3 x = PointPosition(m, d, p);
-    r.segment<3>(row) = w * (x - targets[i]);
-    if (jacobian) {
-      const int body = p.site >= 0 ? m->site_bodyid[p.site] : p.body;
-      mj_jac(m, d, jacp.data(), nullptr, x.data(), body);
-      for (int k = 0; k < n; ++k) {
-        for (int a = 0; a < 3; ++a) (*jacobian)(row + a, k) = w * jacp[a * m->nv + dof_adr_[k]];
-      }
-    }
-    row += 3;
-  }
-  if (previous) {
-    const double w = std::sqrt(config_.smooth_weight);
-    r.tail(n) = w * (q - *previous);
-    if (jacobian) jacobian->bottomRows(n).diagonal().setConstant(w);
-  }
-  if (residual) *residual = r;
-  return r.squaredNorm();
-}
-
-// Forward kinematics and point Jacobians (mj_jac) of every matched point at
-// one q, computed once however many residual blocks ask for it.
+// Forward kinematics, point Jacobians (mj_jac) and grasp terms of every
+// matched point at one q, computed once however many residual blocks ask.
 class KinematicRetargeter::PointEvaluator {
  public:
-  PointEvaluator(const KinematicRetargeter& r, const std::vector<Vec3>& targets)
+  PointEvaluator(KinematicRetargeter& r, const std::vector<Vec3>& targets)
       : r_(r), targets_(targets), n_(static_cast<int>(r.qpos_adr_.size())),
-        jacp_(3 * r.hand_.model->nv), residual_(r.active_.size()), jacobian_(r.active_.size()) {}
+        jacp_(3 * r.hand_.model->nv), residual_(r.active_.size()), jacobian_(r.active_.size()),
+        surface_residual_(r.geom_terms_.size(), 0.0), surface_jacobian_(r.geom_terms_.size()) {}
 
   // Residual (3) and, when `jacobian` is set, its row-major 3 x n Jacobian
   // of matched point `i` (index into active_) at q.
@@ -200,6 +189,39 @@ class KinematicRetargeter::PointEvaluator {
     if (!valid_ || !std::equal(q, q + n_, last_.begin())) Update(q);
     std::copy(residual_[i].data(), residual_[i].data() + 3, residual);
     if (jacobian) std::copy(jacobian_[i].data(), jacobian_[i].data() + 3 * n_, jacobian);
+  }
+  // The residual (1) of grasp term `i` (index into geom_terms_) and its 1 x n Jacobian.
+  void EvaluateSurface(const double* q, int i, double* residual, double* jacobian) {
+    if (!valid_ || !std::equal(q, q + n_, last_.begin())) Update(q);
+    *residual = surface_residual_[i];
+    if (jacobian) std::copy(surface_jacobian_[i].begin(), surface_jacobian_[i].end(), jacobian);
+  }
+
+  // The stacked residual: points, grasp terms in use, then smoothness.
+  double Stack(const Eigen::VectorXd& q, const Eigen::VectorXd* previous, Eigen::VectorXd* residual,
+               Eigen::MatrixXd* jacobian) {
+    Update(q.data());
+    const int points = 3 * static_cast<int>(residual_.size());
+    const int surface = static_cast<int>(surface_residual_.size());
+    const int rows = points + surface + (previous ? n_ : 0);
+    Eigen::VectorXd r(rows);
+    Eigen::MatrixXd j = Eigen::MatrixXd::Zero(rows, n_);
+    for (size_t a = 0; a < residual_.size(); ++a) {
+      r.segment<3>(3 * a) = residual_[a];
+      j.middleRows<3>(3 * a) = Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>>(jacobian_[a].data(), 3, n_);
+    }
+    for (int s = 0; s < surface; ++s) {
+      r[points + s] = surface_residual_[s];
+      j.row(points + s) = Eigen::Map<const Eigen::RowVectorXd>(surface_jacobian_[s].data(), n_);
+    }
+    if (previous) {
+      const double w = std::sqrt(r_.config_.smooth_weight);
+      r.tail(n_) = w * (q - *previous);
+      j.bottomRows(n_).diagonal().setConstant(w);
+    }
+    if (residual) *residual = r;
+    if (jacobian) *jacobian = j;
+    return r.squaredNorm();
   }
 
  private:
@@ -220,30 +242,53 @@ class KinematicRetargeter::PointEvaluator {
         for (int k = 0; k < n_; ++k) jacobian_[a][row * n_ + k] = w * jacp_[row * m->nv + r_.dof_adr_[k]];
       }
     }
+    const double surface_w = std::sqrt(r_.config_.contact_weight) / r_.config_.sigma;
+    for (size_t i = 0; i < r_.geom_terms_.size(); ++i) {
+      const GraspGap& term = r_.geom_terms_[i];
+      Vec3 witness, normal;
+      const double d_geom = r_.surface_.GeomDistance(m, d, term.geom, &witness, &normal);
+      const double gap = term.touch ? d_geom + r_.config_.contact_depth : std::min(0.0, d_geom);
+      surface_residual_[i] = surface_w * gap;
+      surface_jacobian_[i].assign(n_, 0.0);
+      if (gap == 0) continue;
+      mj_jac(m, d, jacp_.data(), nullptr, witness.data(), m->geom_bodyid[term.geom]);
+      for (int k = 0; k < n_; ++k) {
+        double g = 0;
+        for (int row = 0; row < 3; ++row) g += normal[row] * jacp_[row * m->nv + r_.dof_adr_[k]];
+        surface_jacobian_[i][k] = surface_w * g;
+      }
+    }
     last_.assign(q, q + n_);
     valid_ = true;
   }
 
-  const KinematicRetargeter& r_;
+  KinematicRetargeter& r_;
   const std::vector<Vec3>& targets_;
   int n_;
   std::vector<mjtNum> jacp_;
   std::vector<Vec3> residual_;
   std::vector<std::vector<double>> jacobian_;
+  std::vector<double> surface_residual_;
+  std::vector<std::vector<double>> surface_jacobian_;
   std::vector<double> last_;
   bool valid_ = false;
 };
 
+double KinematicRetargeter::Objective(const Eigen::VectorXd& q, const std::vector<Vec3>& targets,
+                                      const Eigen::VectorXd* previous, Eigen::VectorXd* residual,
+                                      Eigen::MatrixXd* jacobian) {
+  PointEvaluator evaluator(*this, targets);
+  return evaluator.Stack(q, previous, residual, jacobian);
+}
+
 namespace {
 
-// One matched point's residual block.
+// One residual block of a matched point: `size` residuals from `evaluate`.
 class PointCost : public ceres::CostFunction {
  public:
-  template <typename Evaluator>
-  PointCost(Evaluator* e, int i, int n) : evaluate_([e, i](const double* q, double* r, double* j) {
-      e->Evaluate(q, i, r, j);
-    }) {
-    set_num_residuals(3);
+  PointCost(std::function<void(const double*, double*, double*)> evaluate, int size, int n)
+      : evaluate_(std::move(evaluate)) {
+    set_num_residuals(size);
     mutable_parameter_block_sizes()->push_back(n);
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
@@ -328,9 +373,17 @@ void KinematicRetargeter::SolveHolding(Eigen::VectorXd& q, const std::vector<Vec
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  for (size_t i = 0; i < active_.size(); ++i) {
-    problem.AddResidualBlock(new PointCost(&evaluator, static_cast<int>(i), n),
-                             config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
+  for (int i = 0; i < static_cast<int>(active_.size()); ++i) {
+    PointEvaluator* e = &evaluator;
+    problem.AddResidualBlock(
+        new PointCost([e, i](const double* x, double* r, double* j) { e->Evaluate(x, i, r, j); }, 3, n),
+        config_.robust_loss_scale > 0 ? &huber : nullptr, q.data());
+  }
+  for (int i = 0; i < static_cast<int>(geom_terms_.size()); ++i) {
+    PointEvaluator* e = &evaluator;
+    problem.AddResidualBlock(
+        new PointCost([e, i](const double* x, double* r, double* j) { e->EvaluateSurface(x, i, r, j); }, 1, n),
+        nullptr, q.data());
   }
   if (previous) {
     problem.AddResidualBlock(new SmoothCost(*previous, std::sqrt(config_.smooth_weight)), nullptr,
@@ -414,9 +467,50 @@ FrameSolution KinematicRetargeter::SolveFrame(const Keypoints21& human,
   return best;
 }
 
+int KinematicRetargeter::PoseObject(const Keypoints21& human, const Pose& object) {
+  geom_terms_.clear();
+  if (config_.contact_weight <= 0 || surface_.empty() || object_qpos_ < 0) return 0;
+  const mjModel* m = hand_.model.get();
+  mjData* d = data_.get();
+  mjtNum* q = d->qpos + object_qpos_;
+  for (int a = 0; a < 3; ++a) q[a] = object.t[a];
+  const Quat r = object.q.normalized();
+  q[3] = r.w(), q[4] = r.x(), q[5] = r.y(), q[6] = r.z();
+  mj_kinematics(m, d);
+  std::vector<int> touching;
+  for (size_t a = 0; a < active_.size(); ++a) {
+    const int keypoint = hand_.points[active_[a]].keypoint;
+    if (tip_geom_[a] >= 0 && ObjectDistance(human.row(keypoint).transpose()) < config_.contact_epsilon) {
+      touching.push_back(tip_geom_[a]);
+    }
+  }
+  for (int g : hand_geoms_) {
+    geom_terms_.push_back({g, std::find(touching.begin(), touching.end(), g) != touching.end(), 0});
+  }
+  return static_cast<int>(touching.size());
+}
+
+double KinematicRetargeter::ObjectDistance(const Vec3& p) const {
+  if (surface_.empty()) return std::numeric_limits<double>::infinity();
+  return surface_.SignedDistance(data_.get(), p);
+}
+
+std::vector<KinematicRetargeter::GraspGap> KinematicRetargeter::GraspGaps(const Eigen::VectorXd& qpos) {
+  Points(qpos);  // poses the hand in data_
+  std::vector<GraspGap> out = geom_terms_;
+  for (GraspGap& g : out) g.distance = surface_.GeomDistance(hand_.model.get(), data_.get(), g.geom);
+  return out;
+}
+
 HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
                                           const std::vector<bool>& valid, double fps,
-                                          const std::function<void(std::size_t)>& progress) {
+                                          const std::function<void(std::size_t)>& progress,
+                                          const std::vector<Pose>* object,
+                                          std::vector<int>* contacts) {
+  if (object && object->size() != human.size()) {
+    throw Error("bad_reference", "hand and object differ in length", {.field = "object_poses"});
+  }
+  if (contacts) contacts->assign(human.size(), 0);
   auto is_valid = [&](size_t t) { return valid.empty() || valid[t]; };
   if (config_.scale <= 0 && hand_.embodiment.scale <= 0) {
     std::vector<Keypoints21> seen;
@@ -443,6 +537,10 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
       continue;
     }
     out.reference_keypoints[t] = Reference(human[t]);
+    if (object) {
+      const int touching = PoseObject(human[t], (*object)[t]);
+      if (contacts) (*contacts)[t] = touching;
+    }
     FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr);
     out.qpos[t] = s.qpos;
     out.fingertip_error[t] = s.fingertip_mean;
@@ -451,6 +549,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
     }
     previous = s.qpos;
   }
+  geom_terms_.clear();
   if (!previous) {
     throw Error("bad_keypoints", "no frame with a valid hand", {.field = "valid"});
   }

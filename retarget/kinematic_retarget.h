@@ -22,6 +22,18 @@
 // finger length knuckle -> tip (robot at qpos0, whose fingers are straight;
 // human: median bone lengths over the sequence). The thumb is left out
 // because robot thumbs differ most in where they sit on the palm.
+//
+// Grasp terms (contact_weight > 0 and the object's poses given to Solve;
+// the model must hold the body "object" with a free joint, as the
+// dynamics-aware retargeting's scene does): the object is posed per frame
+// and the hand's collision geoms get residuals on their signed distance d to
+// the object's collision surface (object_surface.h GeomDistance). A
+// fingertip whose human fingertip lies within contact_epsilon of the object
+// has its fingertip geom pulled into it, sqrt(contact_weight) (d +
+// contact_depth) / sigma: the position targets then squeeze what the human
+// held. Every other geom is kept out, sqrt(contact_weight) min(0, d) / sigma.
+// Scaling the human hand to the robot's moves its fingertips off the object
+// it holds; without these terms the robot grasps beside it, or through it.
 #pragma once
 
 #include <filesystem>
@@ -35,6 +47,7 @@
 #include "core/config.h"
 #include "core/geometry.h"
 #include "retarget/embodiment.h"
+#include "retarget/object_surface.h"
 
 namespace doasido::retarget {
 
@@ -51,10 +64,16 @@ struct KinematicConfig {
   double wrist_noise_rad = 0.3;  // spread of random starts' wrist rotation
   double wrist_noise_m = 0.01;   // and translation
   double robust_loss_scale = 0;  // > 0: Huber threshold per point, in sigma
+  // Grasp terms, used when Solve is given the object's poses (see the
+  // header comment); 0 turns them off.
+  double contact_weight = 0;
+  double contact_epsilon = 0.02;   // m: a human fingertip this close to the object touches it
+  double contact_depth = 0.002;    // m: how far a touching fingertip geom is asked into the object
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_iterations, sigma,
                                                 smooth_weight, use_intermediate, scale, seed,
-                                                wrist_noise_rad, wrist_noise_m, robust_loss_scale)
+                                                wrist_noise_rad, wrist_noise_m, robust_loss_scale,
+                                                contact_weight, contact_epsilon, contact_depth)
 
 // The reference the dynamics-aware optimiser tracks.
 struct HandTrajectory {
@@ -128,9 +147,29 @@ class KinematicRetargeter {
   // Solves a sequence (scale adapted first unless fixed). Frames with
   // valid[t] false hold the previous pose. `valid` may be empty (all valid).
   // `progress` (may be empty) is called with the number of frames done
-  // after each frame.
+  // after each frame. `object` (one pose per frame, or null) turns on the
+  // grasp terms (header comment); `contacts` (may be null) receives, per
+  // frame, how many robot fingertips were asked to touch the object.
   HandTrajectory Solve(const std::vector<Keypoints21>& human, const std::vector<bool>& valid,
-                       double fps, const std::function<void(std::size_t)>& progress = {});
+                       double fps, const std::function<void(std::size_t)>& progress = {},
+                       const std::vector<Pose>* object = nullptr,
+                       std::vector<int>* contacts = nullptr);
+
+  // Poses the object for the next SolveFrame calls and chooses the grasp
+  // terms from `human` (unscaled); returns the number of touching
+  // fingertips. No-op returning 0 without grasp terms.
+  int PoseObject(const Keypoints21& human, const Pose& object);
+  // The signed distance of a world point to the posed object (m; +inf
+  // without an object).
+  double ObjectDistance(const Vec3& p) const;
+  // The grasp terms the last PoseObject chose, each with its geom's signed
+  // distance to the object (ObjectSurface::GeomDistance) with the hand at `qpos`.
+  struct GraspGap {
+    int geom = -1;
+    bool touch = false;  // else kept out
+    double distance = 0; // m
+  };
+  std::vector<GraspGap> GraspGaps(const Eigen::VectorXd& qpos);
 
   // Names of the variables, the order of FrameSolution::qpos.
   std::vector<std::string> VariableNames() const;
@@ -164,6 +203,11 @@ class KinematicRetargeter {
   double scale_ = 1.0;
   std::vector<int> qpos_adr_, dof_adr_;  // per variable: wrist (6) then fingers
   std::vector<int> active_;            // indices into hand_.points that are matched
+  std::vector<GraspGap> geom_terms_;   // this frame's grasp terms (distance unused)
+  std::vector<int> hand_geoms_;        // the hand's geoms GeomDistance measures
+  std::vector<int> tip_geom_;          // per active_ entry: its fingertip geom, or -1
+  ObjectSurface surface_;
+  int object_qpos_ = -1;               // the object's free joint, or -1
   std::vector<Vec3> palm_at_zero_;     // palm points at zero wrist, fingers at qpos0
   std::vector<int> palm_points_;       // indices into hand_.points (wrist + knuckles)
   Eigen::VectorXd lower_, upper_;      // per qpos; +-inf when unlimited

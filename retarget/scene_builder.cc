@@ -62,7 +62,7 @@ ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneC
 
   // Mass properties: the mesh itself when it is closed, else the hulls.
   MassProperties mp;
-  if (IsClosed(mesh)) mp = ComputeMassProperties(mesh);
+  if (const TriMesh welded = WeldVertices(mesh); IsClosed(welded)) mp = ComputeMassProperties(welded);
   if (!(mp.volume > 0) || !PositiveDefinite(mp.inertia)) {
     mp = Combine(hulls);
     scene.inertia_from_hulls = true;

@@ -5,6 +5,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/config.h"
+#include "retarget/embodiment.h"
 #include "tests/test_util.h"
 #include "tests/two_finger_hand.h"
 
@@ -64,6 +66,35 @@ TEST(CliHand, CheckNamesProblemsAndExitsOne) {
   EXPECT_NE(check.out.find("missing_body: points["), std::string::npos) << check.out;
   EXPECT_NE(check.out.find("index_nail"), std::string::npos) << check.out;
   EXPECT_NE(check.err.find("hand_problems"), std::string::npos) << check.err;
+}
+
+// A left Shadow hand from the right one, mirrored back: the description
+// returns to the right side with the right hand's points.
+TEST(CliHand, MirrorMakesALeftHandAndMirroringBackTheRightOne) {
+  TempDir dir;
+  const CommandResult left = RunDoasido({"hand", "mirror", "shadow", "--out", (dir / "left").string()});
+  ASSERT_EQ(left.exit_code, 0) << left.out << left.err;
+  EXPECT_NE(left.out.find("shadow_right (right) mirrored through y = 0: shadow_left (left)"), std::string::npos)
+      << left.out;
+  EXPECT_NE(left.out.find("problems: none"), std::string::npos) << left.out;
+  const CommandResult check =
+      RunDoasido({"hand", "check", (dir / "left/shadow_left.json").string(), "--no-pictures"});
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  EXPECT_NE(check.out.find("hand shadow_left (left)"), std::string::npos) << check.out;
+
+  const CommandResult back = RunDoasido(
+      {"hand", "mirror", (dir / "left/shadow_left.json").string(), "--out", (dir / "back").string()});
+  ASSERT_EQ(back.exit_code, 0) << back.out << back.err;
+  // Compared as descriptions (the file spells defaults out).
+  const auto original =
+      Json::parse(ReadFile(SourceDir() / "retarget/models/shadow_right.json")).get<retarget::Embodiment>();
+  const auto returned = Json::parse(ReadFile(dir / "back/shadow_right.json")).get<retarget::Embodiment>();
+  EXPECT_EQ(returned.side, "right");
+  EXPECT_EQ(Json(returned.points), Json(original.points));
+
+  const CommandResult bad = RunDoasido({"hand", "mirror", "shadow", "--out", (dir / "w").string(), "--axis", "w"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--axis"), std::string::npos) << bad.err;
 }
 
 TEST(CliHand, UrdfAsHandAnswersWithTheImportCommand) {

@@ -21,6 +21,7 @@ namespace doasido::retarget {
 namespace {
 
 using doasido::testing::SharedData;
+using doasido::testing::ErrorCode;
 using doasido::testing::TempDir;
 
 constexpr int kFrames = 20;
@@ -56,15 +57,6 @@ DynamicRetargetRun Retarget(const recon::Reconstruction& r, const DynamicRetarge
                        const TempDir& dir) {
   return RetargetReconstruction(r, Cylinder(), FindEmbodiment(c.hand, c.robots_dir), c,
                                 dir / "scene", "synthetic");
-}
-
-std::string ErrorCode(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.code();
-  }
-  return "no error";
 }
 
 TEST(KnotSpline, InterpolatesLinearlyAndHoldsTheLastKnot) {

@@ -169,5 +169,38 @@ TEST(MassProperties, UnitCubeMatchesClosedForm) {
   EXPECT_TRUE(grown.Max().isApprox(Vec3::Constant(1.002), 1e-12));
 }
 
+// A box built with its own copy of each corner per face (as renderers want
+// for flat shading) is closed once welded: one hull, and the mass of its
+// volume rather than of a hollow shell of slabs.
+TEST(MassProperties, AnUnweldedBoxIsWeldedIntoOneSolidHull) {
+  TriMesh cube;
+  cube.vertices.resize(8, 3);
+  for (int i = 0; i < 8; ++i) cube.vertices.row(i) << 0.05 * (i & 1), 0.04 * (i >> 1 & 1), 0.08 * (i >> 2 & 1);
+  cube.faces.resize(12, 3);
+  cube.faces << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2,
+      4, 6, 1, 3, 5, 3, 7, 5;
+  TriMesh unwelded;
+  unwelded.vertices.resize(36, 3);
+  unwelded.faces.resize(12, 3);
+  for (int f = 0; f < 12; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      unwelded.vertices.row(3 * f + k) = cube.vertices.row(cube.faces(f, k));
+      unwelded.faces(f, k) = 3 * f + k;
+    }
+  }
+  ASSERT_FALSE(IsClosed(unwelded));
+  const TriMesh welded = WeldVertices(unwelded);
+  EXPECT_EQ(welded.num_vertices(), 8);
+  EXPECT_EQ(welded.num_faces(), 12);
+  EXPECT_TRUE(IsClosed(welded));
+  TempDir dir;
+  SceneConfig config;
+  config.settle_seconds = 0;
+  const ObjectScene scene = BuildObjectScene(unwelded, Pose{}, config, dir.path());
+  EXPECT_EQ(scene.hull_files.size(), 1u);
+  EXPECT_FALSE(scene.inertia_from_hulls);
+  EXPECT_NEAR(scene.mass, 1000 * 0.05 * 0.04 * 0.08, 1e-9);
+}
+
 }  // namespace
 }  // namespace doasido::retarget

@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "core/error.h"
 #include "core/file_text.h"
 
 namespace doasido::testing {
@@ -100,6 +101,15 @@ std::string ShellOk(const std::string& command) {
   while (p && (n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
   EXPECT_EQ(p ? pclose(p) : -1, 0) << command;
   return out;
+}
+
+std::string ErrorCode(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  return "no error";
 }
 
 }  // namespace doasido::testing

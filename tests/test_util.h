@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,8 @@ std::string ReadFile(const std::filesystem::path& path);
 // quotes (quotes dropped; enough for the project's own files, not for
 // quotes inside cells).
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path);
+
+// The code of the doasido::Error `f` throws, or "no error".
+std::string ErrorCode(const std::function<void()>& f);
 
 }  // namespace doasido::testing

@@ -1,0 +1,124 @@
+// The kinematic retargeting's grasp terms (kinematic_retarget.h) and the
+// object surface they measure (object_surface.h): signed distances against
+// a box whose answer is known, then a synthetic pick-and-place reference
+// (synth module) retargeted with and without the terms.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "core/file_text.h"
+#include "retarget/dynamic_reference.h"
+#include "retarget/kinematic_retarget.h"
+#include "retarget/object_surface.h"
+#include "retarget/scene_builder.h"
+#include "synth/episode.h"
+#include "synth/objects.h"
+#include "synth/reconstruction_noise.h"
+#include "tests/test_util.h"
+
+namespace doasido::retarget {
+namespace {
+
+using doasido::testing::SharedData;
+using doasido::testing::TempDir;
+
+HandModel HandWithObject(const TriMesh& mesh, const Pose& pose, const TempDir& dir) {
+  SceneConfig scene;
+  scene.place_on_floor = false;
+  scene.settle_seconds = 0;
+  const ObjectScene s = BuildObjectScene(mesh, pose, scene, dir / "scene");
+  return BuildHandModel(FindEmbodiment("sharpa_right", (SharedData() / "robots").string()),
+                        ReadFileOrThrow(s.xml_path, "io", "cannot read the scene"), dir / "scene");
+}
+
+// A 16-sided cylinder (radius 3 cm to its corners, 9 cm tall), dilated by
+// the scene's 2 mm: at its centre, minus the distance to the side faces;
+// above the top, the height over it, straight up; beside it, the distance
+// to the nearest side face, horizontally.
+TEST(ObjectSurface, SignedDistanceOfADilatedCylinder) {
+  TempDir dir;
+  const Pose pose{Quat(Eigen::AngleAxisd(0.3, Vec3::UnitX())), Vec3(0.1, 0.2, 0.05)};
+  const HandModel hand = HandWithObject(synth::MakeCylinder(0.03, 0.09, 16), pose, dir);
+  const mjModel* m = hand.model.get();
+  DataPtr d = MakeData(m);
+  mj_kinematics(m, d.get());
+  const ObjectSurface surface(m, NameToId(m, mjOBJ_BODY, "object"));
+  ASSERT_FALSE(surface.empty());
+  const double apothem = 0.03 * std::cos(M_PI / 16), dilation = 0.002;
+  EXPECT_NEAR(surface.SignedDistance(d.get(), pose * Vec3(0, 0, 0.045)), -(apothem + dilation), 2e-4);
+  Vec3 gradient;
+  EXPECT_NEAR(surface.SignedDistance(d.get(), pose * Vec3(0.005, -0.01, 0.09 + dilation + 0.01), &gradient),
+              0.01, 2e-4);
+  EXPECT_LT((gradient - pose.q * Vec3::UnitZ()).norm(), 1e-6);
+  // 4.2 cm from the axis: between the distance to a side face seen along
+  // a corner's direction and along the face's own normal.
+  const double x = 0.03 + dilation + 0.01;
+  const double beside = surface.SignedDistance(d.get(), pose * Vec3(x, 0, 0.03), &gradient);
+  EXPECT_GT(beside, x * std::cos(M_PI / 16) - apothem - dilation - 3e-4);
+  EXPECT_LT(beside, x - apothem - dilation + 3e-4);
+  EXPECT_NEAR((pose.q.inverse() * gradient).z(), 0.0, 1e-9);
+}
+
+// A grasping reference retargeted with the grasp terms: every fingertip
+// geom asked to touch sits contact_depth into the object (within a
+// millimetre on average), no other hand geom goes further in than the
+// tolerance; without the terms the same fingertips stay outside.
+TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
+  TempDir dir;
+  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
+  synth::EpisodeSpec spec;
+  spec.frames = 40;
+  const recon::Reconstruction r =
+      synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
+  const std::vector<Pose> object = FilledObjectPoses(r);
+  const HandModel hand = HandWithObject(cylinder, object[0], dir);
+  KinematicConfig config;
+  config.restarts = 1;
+  config.contact_weight = 16;
+  config.contact_depth = 0.003;
+  struct Gaps {
+    double touching_mean = 0, kept_out_min = 1;
+    int touching = 0, frames = 0;
+  };
+  auto measure = [&](const KinematicConfig& c) {
+    KinematicRetargeter kinematic(hand, c);
+    std::vector<int> contacts;
+    const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &object, &contacts);
+    // The terms of the on-configuration decide which geoms are compared.
+    KinematicConfig on = c;
+    on.contact_weight = 16;
+    KinematicRetargeter judge(hand, on);
+    judge.set_scale(t.scale);
+    Gaps g;
+    for (int f = 0; f < r.frames(); ++f) {
+      if (!r.right_valid[f] || judge.PoseObject(r.right_joints[f], object[f]) == 0) continue;
+      ++g.frames;
+      for (const auto& gap : judge.GraspGaps(t.qpos[f])) {
+        if (gap.touch) {
+          g.touching_mean += gap.distance;
+          ++g.touching;
+        } else {
+          g.kept_out_min = std::min(g.kept_out_min, gap.distance);
+        }
+      }
+    }
+    g.touching_mean /= std::max(1, g.touching);
+    return g;
+  };
+  const Gaps on = measure(config);
+  KinematicConfig off_config = config;
+  off_config.contact_weight = 0;
+  const Gaps off = measure(off_config);
+  std::printf("grasp frames %d, touching fingertip geoms %d: mean distance with terms %.2f mm, "
+              "without %.2f mm; deepest other geom with %.2f mm, without %.2f mm\n",
+              on.frames, on.touching, 1e3 * on.touching_mean, 1e3 * off.touching_mean,
+              1e3 * on.kept_out_min, 1e3 * off.kept_out_min);
+  ASSERT_GT(on.frames, 5);
+  ASSERT_GT(on.touching, 2 * on.frames);
+  EXPECT_NEAR(on.touching_mean, -config.contact_depth, 0.001);
+  EXPECT_GT(off.touching_mean, on.touching_mean + 0.001);
+  EXPECT_GT(on.kept_out_min, -0.002);
+}
+
+}  // namespace
+}  // namespace doasido::retarget

@@ -173,6 +173,11 @@ Candidate Pair(const Hot3dRecording& rec, const std::map<long long, Joints21>& j
 void Mirror(Reconstruction& r, TriMesh& mesh) {
   const Mat3 m = Eigen::Vector3d(1, -1, 1).asDiagonal();
   for (auto& j : r.right_joints) j = j * m;
+  for (auto& j : r.left_joints) j = j * m;
+  if (!r.left_valid.empty()) {  // a mirrored left hand is a right hand
+    std::swap(r.right_valid, r.left_valid);
+    std::swap(r.right_joints, r.left_joints);
+  }
   for (auto& p : r.object_poses) p = {Quat(m * p.R() * m), m * p.t};
   mesh.vertices = mesh.vertices * m;
   for (int f = 0; f < mesh.num_faces(); ++f) std::swap(mesh.faces(f, 1), mesh.faces(f, 2));
@@ -196,15 +201,21 @@ Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
   if (options.hand != "left" && options.hand != "right") {
     throw Error("bad_config", "hand must be \"left\" or \"right\", not '" + options.hand + "'", site);
   }
-  const HandSide side = options.hand == "right" ? HandSide::kRight : HandSide::kLeft;
   const auto hand = rec.hands.find(options.hand);
   if (hand == rec.hands.end() || hand->second.empty()) {
     throw Error("bad_hot3d", "the recording has no " + options.hand + " hand poses", site);
   }
-  std::map<long long, Joints21> joints;
-  for (const auto& [stamp, pose] : hand->second) {
-    joints[stamp] = UmeTrackOpenPose21(rec.hand_model, pose.angles, pose.wrist, side);
-  }
+  const auto openpose = [&](const std::string& name) {
+    std::map<long long, Joints21> out;
+    const auto poses = rec.hands.find(name);
+    if (poses == rec.hands.end()) return out;
+    const HandSide s = name == "right" ? HandSide::kRight : HandSide::kLeft;
+    for (const auto& [stamp, pose] : poses->second) {
+      out[stamp] = UmeTrackOpenPose21(rec.hand_model, pose.angles, pose.wrist, s);
+    }
+    return out;
+  };
+  const std::map<long long, Joints21> joints = openpose(options.hand);
   Candidate best;
   for (const auto& [uid, poses] : rec.objects) {
     if (!options.object_uid.empty() && uid != options.object_uid) continue;
@@ -242,11 +253,26 @@ Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
     r.object_poses.push_back({best.object[t].q, best.object[t].t - origin});
   }
   r.floor_z = 0;
+  if (options.both_hands) {
+    const std::string other_name = options.hand == "right" ? "left" : "right";
+    const std::map<long long, Joints21> other = openpose(other_name);
+    for (int t = 0; t < n; ++t) {
+      const auto it = other.find(best.stamps[t]);
+      r.left_valid.push_back(it != other.end());
+      r.left_joints.push_back(it != other.end() ? Joints21(it->second.rowwise() - origin.transpose())
+                                                : Joints21::Zero());
+    }
+    if (options.hand == "left") {  // the chosen hand went into right_joints
+      std::swap(r.right_valid, r.left_valid);
+      std::swap(r.right_joints, r.left_joints);
+    }
+  }
   if (options.mirror) Mirror(r, out.mesh);
   out.mirrored = options.mirror;
   r.info = {{"source", "hot3d"},
             {"recording", rec.dir.string()},
             {"hand", options.hand},
+            {"both_hands", options.both_hands},
             {"mirrored", options.mirror},
             {"object_uid", best.uid},
             {"object_model", best.stand_in ? "stand-in" : "hot3d"},

@@ -61,10 +61,16 @@ struct Hot3dReferenceOptions {
   // frame: a left hand becomes a right hand (and the object its mirror
   // image), for robots that exist in one handedness only.
   bool mirror = false;
+  // Both hands: the human right hand in right_joints and the left one in
+  // left_joints (after `mirror`, the mirrored left hand is the right one);
+  // `hand` then only chooses whose fingertips pick the object. A frame
+  // where a hand has no pose is invalid for that hand.
+  bool both_hands = false;
 };
 
 struct Hot3dReference {
-  Reconstruction reconstruction;  // the hand's joints in right_joints (see `hand`)
+  // The hand's joints in right_joints (see `hand`), or both hands (`both_hands`).
+  Reconstruction reconstruction;
   TriMesh mesh;                   // the object, in its own frame
   std::string object_uid;
   std::string hand;               // the human hand the joints are from

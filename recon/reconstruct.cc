@@ -123,16 +123,20 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
   }
   out.floor_offset = floor_h;
   for (Pose& p : r.object_poses) p.t.z() -= floor_h;
+  // A hand's joints in the gravity-aligned frame, floor at z = 0.
+  const auto place = [&](const HandTrack& h, std::vector<bool>& valid, std::vector<Joints21>& joints) {
+    valid.assign(T, false);
+    joints.assign(T, Joints21::Zero());
+    for (int t = 0; t < T && static_cast<size_t>(t) < h.joints.size(); ++t) {
+      valid[t] = static_cast<size_t>(t) < h.valid.size() ? static_cast<bool>(h.valid[t]) : true;
+      joints[t] = (h.joints[t] * R.transpose()).eval();
+      joints[t].col(2).array() -= floor_h;
+    }
+  };
   r.right_valid.assign(T, false);
   r.right_joints.assign(T, Joints21::Zero());
-  if (b.hand_right) {
-    const HandTrack& h = *b.hand_right;
-    for (int t = 0; t < T && static_cast<size_t>(t) < h.joints.size(); ++t) {
-      r.right_valid[t] = static_cast<size_t>(t) < h.valid.size() ? static_cast<bool>(h.valid[t]) : true;
-      r.right_joints[t] = (h.joints[t] * R.transpose()).eval();
-      r.right_joints[t].col(2).array() -= floor_h;
-    }
-  }
+  if (b.hand_right) place(*b.hand_right, r.right_valid, r.right_joints);
+  if (b.hand_left) place(*b.hand_left, r.left_valid, r.left_joints);
   r.floor_z = 0;
 
   int posed = 0;

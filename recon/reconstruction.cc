@@ -32,17 +32,45 @@ auto Checked(const std::filesystem::path& file, Fn&& fn) {
   }
 }
 
+// Reads <side>_valid (t) and <side>_joints (t, 21, 3); valid frames must be finite.
+void ReadHand(const NpzArchive& npz, const std::filesystem::path& file, const std::string& side,
+              std::int64_t t, std::vector<bool>& valid, std::vector<Joints21>& joints) {
+  const std::string name = file.string(), valid_key = side + "_valid", joints_key = side + "_joints";
+  const NpyArray& v = RequireKey(npz, valid_key, name);
+  CheckInteger(v, name, valid_key);
+  CheckShape(v, {t}, name, valid_key);
+  const NpyArray& j = RequireKey(npz, joints_key, name);
+  CheckFloat(j, name, joints_key);
+  CheckShape(j, {t, 21, 3}, name, joints_key);
+  const std::vector<double> values = j.AsDoubleVector();
+  for (std::int64_t f = 0; f < t; ++f) {
+    valid.push_back(v.AsInt(f) != 0);
+    const Joints21 k = Eigen::Map<const Joints21>(values.data() + f * 63);
+    if (valid.back() && !k.allFinite()) Bad(file, joints_key, "non-finite joint in valid frame " + std::to_string(f));
+    joints.push_back(k);
+  }
+}
+
 }  // namespace
 
 void WriteReconstruction(const Reconstruction& r, const std::filesystem::path& dir) {
   const auto t = static_cast<std::int64_t>(r.right_valid.size());
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  std::vector<double> joints(static_cast<size_t>(t) * 63, kNaN);
-  for (std::int64_t f = 0; f < t && f < static_cast<std::int64_t>(r.right_joints.size()); ++f) {
-    if (!r.right_valid[f]) continue;
-    std::copy(r.right_joints[f].data(), r.right_joints[f].data() + 63, joints.begin() + f * 63);
-  }
+  NpzArchive npz;
+  // A hand's arrays: <side>_valid (T) and <side>_joints (T, 21, 3), NaN where not seen.
+  const auto write_hand = [&](const std::string& side, std::vector<bool> valid,
+                              const std::vector<Joints21>& hand) {
+    valid.resize(static_cast<size_t>(t), false);
+    std::vector<double> joints(static_cast<size_t>(t) * 63, kNaN);
+    for (std::int64_t f = 0; f < t && f < static_cast<std::int64_t>(hand.size()); ++f) {
+      if (valid[f]) std::copy(hand[f].data(), hand[f].data() + 63, joints.begin() + f * 63);
+    }
+    npz[side + "_valid"] = MakeArray<std::uint8_t>({t}, Bytes(valid));
+    npz[side + "_joints"] = MakeArray<double>({t, 21, 3}, joints);
+  };
+  write_hand("right", r.right_valid, r.right_joints);
+  if (!r.left_valid.empty()) write_hand("left", r.left_valid, r.left_joints);
   std::vector<double> poses(static_cast<size_t>(t) * 7, kNaN);
   for (std::int64_t f = 0; f < t && f < static_cast<std::int64_t>(r.object_poses.size()); ++f) {
     if (!r.object_valid.empty() && !r.object_valid[f]) continue;
@@ -52,10 +80,7 @@ void WriteReconstruction(const Reconstruction& r, const std::filesystem::path& d
   }
   std::vector<bool> object_valid = r.object_valid;
   object_valid.resize(static_cast<size_t>(t), false);
-  NpzArchive npz;
   npz["fps"] = MakeArray<double>({1}, {r.fps});
-  npz["right_valid"] = MakeArray<std::uint8_t>({t}, Bytes(r.right_valid));
-  npz["right_joints"] = MakeArray<double>({t, 21, 3}, joints);
   npz["object_valid"] = MakeArray<std::uint8_t>({t}, Bytes(object_valid));
   npz["object_poses"] = MakeArray<double>({t, 7}, poses);
   npz["floor_z"] = MakeArray<double>({1}, {r.floor_z});
@@ -90,9 +115,10 @@ Reconstruction ReadReconstruction(const std::filesystem::path& dir) {
     CheckInteger(valid, name, "right_valid");
     CheckShape(valid, {-1}, name, "right_valid");
     const std::int64_t t = valid.shape[0];
-    const NpyArray& joints = RequireKey(npz, "right_joints", name);
-    CheckFloat(joints, name, "right_joints");
-    CheckShape(joints, {t, 21, 3}, name, "right_joints");
+    ReadHand(npz, file, "right", t, r.right_valid, r.right_joints);
+    if (npz.count("left_valid") || npz.count("left_joints")) {
+      ReadHand(npz, file, "left", t, r.left_valid, r.left_joints);
+    }
     const NpyArray& ovalid = RequireKey(npz, "object_valid", name);
     CheckInteger(ovalid, name, "object_valid");
     CheckShape(ovalid, {t}, name, "object_valid");
@@ -102,15 +128,8 @@ Reconstruction ReadReconstruction(const std::filesystem::path& dir) {
     const NpyArray& floor = RequireKey(npz, "floor_z", name);
     CheckFloat(floor, name, "floor_z");
     r.floor_z = floor.AsDouble(0);
-    const std::vector<double> j = joints.AsDoubleVector();
     const std::vector<double> p = poses.AsDoubleVector();
     for (std::int64_t f = 0; f < t; ++f) {
-      r.right_valid.push_back(valid.AsInt(f) != 0);
-      Joints21 k = Eigen::Map<const Joints21>(j.data() + f * 63);
-      if (r.right_valid.back() && !k.allFinite()) {
-        Bad(file, "right_joints", "non-finite joint in valid frame " + std::to_string(f));
-      }
-      r.right_joints.push_back(k);
       r.object_valid.push_back(ovalid.AsInt(f) != 0);
       Pose pose;
       pose.t = Vec3(p[f * 7], p[f * 7 + 1], p[f * 7 + 2]);

@@ -7,6 +7,7 @@
 //     fps            (1,)      f8
 //     right_valid    (T,)      u1   right hand seen in frame t
 //     right_joints   (T,21,3)  f8   OpenPose-21, world frame, metres (NaN rows when not valid)
+//     left_valid, left_joints   the left hand the same way; absent when the clip has none
 //     object_valid   (T,)      u1   object pose known in frame t
 //     object_poses   (T,7)     f8   object->world: t xyz + quaternion wxyz (NaN when not valid)
 //     floor_z        (1,)      f8   height of the support surface (0 by construction)
@@ -31,6 +32,10 @@ struct Reconstruction {
   double fps = 30;
   std::vector<bool> right_valid;          // (T)
   std::vector<Joints21> right_joints;     // (T) world frame, metres
+  // The left hand, the same way; both empty when the clip has none (and in
+  // files written before it was recorded).
+  std::vector<bool> left_valid;           // (T) or empty
+  std::vector<Joints21> left_joints;      // (T) or empty
   std::vector<bool> object_valid;         // (T)
   std::vector<Pose> object_poses;         // (T) object->world
   double floor_z = 0;

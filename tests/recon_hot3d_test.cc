@@ -221,6 +221,48 @@ TEST_F(Hot3dBundleTest, RecordingBecomesAReconstruction) {
   EXPECT_GT(mirrored.mesh.Volume(), 0);
 }
 
+// Both hands as one reference: the right hand in right_joints, the left in
+// left_joints, each the same joints a one-hand reference of it holds; right
+// and left of opposite chirality; mirrored, the slots swap, and each hand is
+// the other's reflection.
+TEST_F(Hot3dBundleTest, BothHandsBecomeOneTwoHandReference) {
+  const Hot3dRecording rec = ReadHot3dRecording(Recording());
+  const auto library = Sample() / "object_library";
+  Hot3dReferenceOptions o;
+  o.hand = "left";
+  o.object_uid = "228358276546933";
+  o.stand_in = synth::MakeSphere(0.05);
+  const Reconstruction left_only = Hot3dToReconstruction(rec, library, o).reconstruction;
+  o.both_hands = true;
+  const Hot3dReference both = Hot3dToReconstruction(rec, library, o);
+  const Reconstruction& r = both.reconstruction;
+  ASSERT_EQ(r.frames(), 68);
+  ASSERT_EQ(r.left_valid.size(), 68u);
+  int right_seen = 0;
+  for (int t = 0; t < 68; ++t) {
+    EXPECT_TRUE(r.left_valid[t]);
+    EXPECT_EQ(r.left_joints[t], left_only.right_joints[t]) << "frame " << t;
+    if (!r.right_valid[t]) continue;
+    ++right_seen;
+    EXPECT_LT(Chirality(r.left_joints[t]) * Chirality(r.right_joints[t]), 0) << "frame " << t;
+    // Two hands of one person: their wrists 10 to 80 cm apart.
+    const double apart = (r.left_joints[t].row(0) - r.right_joints[t].row(0)).norm();
+    EXPECT_GT(apart, 0.1);
+    EXPECT_LT(apart, 0.8);
+  }
+  std::printf("both hands: right hand seen in %d of 68 frames\n", right_seen);
+  EXPECT_GT(right_seen, 60);
+  EXPECT_EQ(r.info["both_hands"], true);
+
+  o.mirror = true;
+  const Reconstruction m = Hot3dToReconstruction(rec, library, o).reconstruction;
+  for (int t = 0; t < 68; t += 11) {
+    EXPECT_EQ(m.right_valid[t], r.left_valid[t]);
+    EXPECT_NEAR(m.right_joints[t](8, 1), -r.left_joints[t](8, 1), 1e-12);
+    EXPECT_NEAR(m.left_joints[t](8, 0), r.right_joints[t](8, 0), 1e-12);
+  }
+}
+
 TEST_F(Hot3dBundleTest, MalformedRowsAreNamed) {
   TempDir dir;
   for (const char* f : {"dynamic_objects.csv", "umetrack_hand_pose_trajectory.jsonl", "umetrack_hand_user_profile.json"}) {

@@ -57,6 +57,51 @@ TEST(ReconReconstruction, RoundTripsEveryArray) {
   EXPECT_TRUE(back.object_mesh.empty());
 }
 
+// Both hands: the left one round-trips beside the right one and numpy
+// (Debian's python3-numpy, an independent reader) sees the same arrays; a
+// file without a left hand reads with none; a NaN joint in a valid left
+// frame is named.
+TEST(ReconReconstruction, TheLeftHandRoundTripsAndNumpyReadsIt) {
+  TempDir dir;
+  Reconstruction r = Sample();
+  for (int f = 0; f < 5; ++f) {
+    r.left_valid.push_back(f != 1);
+    r.left_joints.push_back(r.right_joints[f].array() * -1.0 + 0.5);
+  }
+  WriteReconstruction(r, dir / "recon");
+  const Reconstruction back = ReadReconstruction(dir / "recon");
+  EXPECT_EQ(back.left_valid, r.left_valid);
+  for (int f = 0; f < 5; ++f) {
+    if (r.left_valid[f]) {
+      EXPECT_EQ(back.left_joints[f], r.left_joints[f]);
+    }
+  }
+  testing::WriteFile(dir / "read.py",
+                     "import numpy, sys\n"
+                     "z = numpy.load(sys.argv[1])\n"
+                     "print(z['left_joints'].shape, z['left_valid'].tolist())\n"
+                     "print(bool(numpy.isnan(z['left_joints'][1]).all()))\n"
+                     "print(repr(float(z['left_joints'][3, 20, 0])))\n");
+  const std::string out = testing::ShellOk("/usr/bin/python3 " + (dir / "read.py").string() + " " +
+                                           (dir / "recon/reconstruction.npz").string());
+  EXPECT_EQ(out.substr(0, out.rfind('\n', out.size() - 2) + 1), "(5, 21, 3) [1, 0, 1, 1, 1]\nTrue\n") << out;
+  EXPECT_EQ(std::stod(out.substr(out.rfind('\n', out.size() - 2) + 1)), r.left_joints[3](20, 0)) << out;
+
+  Reconstruction one = Sample();
+  WriteReconstruction(one, dir / "one");
+  EXPECT_TRUE(ReadReconstruction(dir / "one").left_valid.empty());
+
+  r.left_joints[2](4, 1) = std::nan("");
+  WriteReconstruction(r, dir / "bad");
+  try {
+    ReadReconstruction(dir / "bad");
+    ADD_FAILURE() << "a NaN joint in a valid left frame was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_reconstruction");
+    EXPECT_EQ(e.site().field, "left_joints");
+  }
+}
+
 TEST(ReconReconstruction, RefusesNonFiniteValidJointsNamingTheArray) {
   TempDir dir;
   WriteReconstruction(Sample(), dir / "recon");

@@ -5,6 +5,7 @@
 #include "recon/recon_stage.h"
 
 #include <cmath>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -43,6 +44,34 @@ TEST(ReconStage, ExactBundleGivesScaleOneAndAReadableReconstruction) {
   EXPECT_EQ(rec.frames(), 24);
   EXPECT_FALSE(rec.object_mesh.empty());
   EXPECT_EQ(rec.info["object_pose_source"], "bundle");
+}
+
+// Both hands come through in the same frame: here the left hand is the
+// clip's hand track moved 30 cm, so every left joint sits the same 30-cm
+// vector (turned by gravity alignment) from its right twin.
+TEST(ReconStage, BothHandsGetTheSameFrame) {
+  TempDir root;
+  ClipBundle b = Clip();
+  ASSERT_TRUE(b.hand_right || b.hand_left);
+  const HandTrack hand = b.hand_right ? *b.hand_right : *b.hand_left;
+  b.hand_right = hand;
+  b.hand_left = hand;
+  for (auto& j : b.hand_left->joints) j.rowwise() += Eigen::RowVector3d(0.3, 0, 0);
+  const ClipContext c = Context(root, b);
+  EXPECT_EQ(ReconStage().Run(c).verdict, Verdict::kPass);
+  const Reconstruction rec = ReadReconstruction(c.artifact_dir);
+  ASSERT_EQ(rec.left_valid, rec.right_valid);
+  std::optional<Eigen::RowVector3d> offset;
+  for (int t = 0; t < rec.frames(); ++t) {
+    if (!rec.right_valid[t]) continue;
+    for (int k = 0; k < 21; ++k) {
+      const Eigen::RowVector3d d = rec.left_joints[t].row(k) - rec.right_joints[t].row(k);
+      if (!offset) offset = d;
+      EXPECT_LT((d - *offset).norm(), 1e-9) << "frame " << t << " joint " << k;
+    }
+  }
+  ASSERT_TRUE(offset.has_value());
+  EXPECT_NEAR(offset->norm(), 0.3, 1e-9);
 }
 
 TEST(ReconStage, UsesTheTrackersPosesWhenPresent) {

@@ -1,15 +1,19 @@
-// doasido deploy plan | stream: the digital twin (UR3e + hand, MuJoCo) and
-// the 50 Hz LCM command stream (deploy/plan.h, deploy/stream.h).
+// doasido deploy plan | plan-two | stream: the digital twin (UR3e + hand,
+// MuJoCo; two of them for two hands) and the 50 Hz LCM command stream
+// (deploy/plan.h, deploy/bimanual.h, deploy/stream.h).
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <algorithm>
 #include <memory>
+#include <optional>
 
 #include "cli/commands.h"
 #include "core/config_check.h"
 #include "core/error.h"
 #include "db/database.h"
+#include "deploy/bimanual.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/trajectory_source.h"
@@ -133,6 +137,65 @@ void AddPlan(CLI::App& deploy) {
   });
 }
 
+void AddPlanTwo(CLI::App& deploy) {
+  struct Args {
+    std::string left, right, left_hand, right_hand, robots_dir, out;
+    deploy::BimanualConfig config;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = deploy.add_subcommand(
+      "plan-two", "Two arms for two hands: place two UR3e arms side by side, solve each arm's IK for\n"
+                  "its hand's trajectory, check reach, joint speeds and arm-arm collisions, write one plan");
+  cmd->add_option("--left", a->left, "The left hand's trajectory.json")->required();
+  cmd->add_option("--right", a->right, "The right hand's trajectory.json")->required();
+  cmd->add_option("--left-hand", a->left_hand, "Left embodiment (default: the trajectory's)");
+  cmd->add_option("--right-hand", a->right_hand, "Right embodiment (default: the trajectory's)");
+  cmd->add_option("--robots-dir", a->robots_dir, "Folder of robot hand descriptions");
+  cmd->add_option("--out", a->out, "Plan file to write (JSON)")->required();
+  cmd->add_option("--base-distance", a->config.base_distance, "Metres between the two arms' bases")
+      ->capture_default_str();
+  cmd->add_option("--clearance", a->config.clearance, "Metres the arms and hands must keep apart")
+      ->capture_default_str();
+  cmd->add_option("--rate", a->config.plan.rate_hz, "Command rate, Hz")->capture_default_str();
+  cmd->footer(
+      "The bases stand side by side, the left arm at +base-distance/2 and the right at -base-distance/2\n"
+      "across the table, both trajectories placed once (deploy/bimanual.h). Each arm is its link capsules\n"
+      "and the hand a capsule along the flange; frames where the arms come closer than the clearance are\n"
+      "listed with their times and the command exits non-zero (the plan is written either way);\n"
+      "`deploy stream` refuses such a plan and sends one doasido_lcm.bimanual_command per tick otherwise.\n\n"
+      "Example:\n"
+      "  doasido deploy plan-two --left work/left/trajectory.json --right work/right/trajectory.json \\\n"
+      "      --out work/two.json --base-distance 0.6\n"
+      "  doasido deploy stream --plan work/two.json");
+  cmd->callback([a] {
+    deploy::CheckConfig(a->config, "deploy");
+    const retarget::HandTrajectory left = retarget::ReadTrajectoryJson(a->left);
+    const retarget::HandTrajectory right = retarget::ReadTrajectoryJson(a->right);
+    const std::string robots = a->robots_dir.empty() ? retarget::DefaultRobotsDir() : a->robots_dir;
+    const retarget::Embodiment lh = retarget::FindEmbodiment(a->left_hand.empty() ? left.embodiment : a->left_hand, robots);
+    const retarget::Embodiment rh = retarget::FindEmbodiment(a->right_hand.empty() ? right.embodiment : a->right_hand, robots);
+    deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, lh, rh, a->config);
+    plan.left.source = a->left;
+    plan.right.source = a->right;
+    deploy::WriteBimanualPlanJson(plan, a->config, a->out);
+    const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
+    std::printf("%s + %s: %zu commands at %.0f Hz, bases %.3f m apart, closest approach %.3f m\n",
+                lh.name.c_str(), rh.name.c_str(), plan.right.times.size(), plan.right.rate_hz,
+                a->config.base_distance, closest);
+    for (const auto* side : {&plan.left, &plan.right}) PrintIssues(*side);
+    for (const auto& c : plan.collisions) {
+      std::printf("collision    frame %5d  t=%7.3f s  arms %.1f mm apart (clearance %.1f mm)\n", c.frame, c.time,
+                  1000 * c.value, 1000 * c.limit);
+    }
+    std::printf("%s: %zu collision frames -> %s\n", plan.ok ? "ok" : "FAILED checks", plan.collisions.size(),
+                a->out.c_str());
+    if (!plan.ok) {
+      throw Error("plan_failed_checks", "the two-arm plan was written but fails its checks (see above); "
+                  "`deploy stream` will refuse it", {.file = a->out});
+    }
+  });
+}
+
 void AddStream(CLI::App& deploy) {
   struct StreamArgs {
     std::string plan;
@@ -152,27 +215,39 @@ void AddStream(CLI::App& deploy) {
                   "(no network, no waiting)");
   cmd->footer(
       "Messages are doasido_lcm.arm_hand_command (deploy/arm_hand_command.lcm):\n"
-      "timestamp_us, sequence, plan_time, arm_q[6], hand_q[num_hand]. A plan that failed\n"
-      "its checks is refused. Ctrl-C stops after the current message.\n\n"
+      "timestamp_us, sequence, plan_time, arm_q[6], hand_q[num_hand]; for a plan from\n"
+      "`deploy plan-two`, doasido_lcm.bimanual_command (deploy/bimanual_command.lcm): both arms\n"
+      "and both hands in one message per tick. A plan that failed its checks is refused.\n"
+      "Ctrl-C stops after the current message.\n\n"
       "Examples:\n"
       "  lcm-logger --lcm-url='udpm://239.255.76.67:7667?ttl=0' run.lcmlog &\n"
       "  doasido deploy stream --plan work/plan12.json\n"
       "  doasido deploy stream --plan work/plan12.json --dry-run work/plan12.lcmlog");
   cmd->callback([a] {
-    const deploy::Plan plan = deploy::ReadPlanJson(a->plan);
+    const Json file = deploy::ReadPlanFile(a->plan);
+    const bool two = file.is_object() && file.value("format", "") == deploy::kBimanualPlanFormat;
+    std::optional<deploy::Plan> one;
+    std::optional<deploy::BimanualPlan> pair;
+    if (two) {
+      pair = deploy::BimanualPlanFromJson(file, a->plan);
+    } else {
+      one = deploy::PlanFromJson(file, a->plan);
+    }
+    const size_t commands = two ? pair->right.arm.size() : one->arm.size();
     deploy::StreamOptions options = a->options;
     options.dry_run_log = a->dry_run;
     g_stop = false;
     auto previous = std::signal(SIGINT, OnSigint);
     std::signal(SIGTERM, OnSigint);
     if (a->dry_run.empty()) {
-      std::fprintf(stderr, "streaming %zu commands on %s; Ctrl-C stops after the current one\n",
-                   plan.arm.size(), options.channel.c_str());
+      std::fprintf(stderr, "streaming %zu %scommands on %s; Ctrl-C stops after the current one\n", commands,
+                   two ? "two-arm " : "", options.channel.c_str());
     }
-    const deploy::StreamResult r = deploy::StreamPlan(plan, options, g_stop);
+    const deploy::StreamResult r = two ? deploy::StreamBimanualPlan(*pair, options, g_stop)
+                                       : deploy::StreamPlan(*one, options, g_stop);
     std::signal(SIGINT, previous);
-    std::printf("%s %d of %zu commands on %s%s\n", r.stopped ? "stopped after" : "sent", r.sent,
-                plan.arm.size(), options.channel.c_str(),
+    std::printf("%s %d of %zu commands on %s%s\n", r.stopped ? "stopped after" : "sent", r.sent, commands,
+                options.channel.c_str(),
                 a->dry_run.empty() ? (" (" + options.url + ")").c_str() : (" -> " + a->dry_run).c_str());
   });
 }
@@ -183,6 +258,7 @@ void AddDeployCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("deploy", "Digital twin and robot commands: arm IK plans and LCM streaming");
   cmd->require_subcommand(1);
   AddPlan(*cmd);
+  AddPlanTwo(*cmd);
   AddStream(*cmd);
 }
 

@@ -150,8 +150,15 @@ Pose WristPose(const retarget::HandTrajectory& t, int frame) {
   return {r, Vec3(q[idx[0]], q[idx[1]], q[idx[2]])};
 }
 
+Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wrists, double base_height) {
+  Vec3 centre = Vec3::Zero();
+  for (const Pose& p : wrists) centre += p.t;
+  centre /= static_cast<double>(std::max<size_t>(1, wrists.size()));
+  return PlacementPose(yaw, x, y, centre, base_height);
+}
+
 Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
-              const PlanConfig& config) {
+              const PlanConfig& config, const Placement* placement) {
   CheckConfig(config, "deploy");
   if (trajectory.qpos.empty() || !(trajectory.fps > 0)) {
     throw Error("bad_trajectory", "trajectory has no frames or no frame rate", {.field = "qpos"});
@@ -179,7 +186,7 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
     wrists.push_back(s.wrist);
     qpos.push_back(s.qpos);
   }
-  plan.placement = SearchPlacement(wrists, config);
+  plan.placement = placement ? *placement : SearchPlacement(wrists, config);
 
   ArmIk ik(config.ik);
   ArmQ q = Home(config);
@@ -203,6 +210,10 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
   }
   progress.Finish();
   CheckSpeeds(plan, ik.limits());
+  if (placement) {
+    plan.placement.reachable_fraction = 1.0 - static_cast<double>(plan.unreachable.size()) / commands;
+    plan.placement.candidates = 1;
+  }
   plan.ok = plan.unreachable.empty() && plan.too_fast.empty();
   return plan;
 }

@@ -113,8 +113,15 @@ Pose WristPose(const retarget::HandTrajectory& t, int frame);
 // joints are those of `embodiment`'s model, filled from the trajectory's
 // qpos by name (a joint the trajectory lacks keeps 0). Throws
 // Error("bad_trajectory") for an empty trajectory or one without a wrist.
+// `placement` (may be null) fixes the placement instead of step 1's search.
+// A fixed placement's reachable_fraction is the share of all command
+// frames the IK reached, its candidates 1.
 Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
-              const PlanConfig& config);
+              const PlanConfig& config, const Placement* placement = nullptr);
+
+// The placement p_base = Rz(yaw) (p - c) + (x, y, -base_height) of step 1,
+// c the mean of `wrists` on the table (z = 0).
+Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wrists, double base_height);
 
 // Step 4 on a plan made from `trajectory`; fills plan.replay.
 void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
@@ -130,5 +137,10 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
 void WritePlanJson(const Plan& plan, const std::filesystem::path& path);
 // Throws Error("bad_plan") naming the file and field.
 Plan ReadPlanJson(const std::filesystem::path& path);
+// The same as JSON values (a two-arm plan holds two; bimanual.h), and a
+// plan file's JSON (Error("bad_plan") when unreadable or not JSON).
+Json PlanToJson(const Plan& plan);
+Plan PlanFromJson(const Json& j, const std::string& file);
+Json ReadPlanFile(const std::filesystem::path& path);
 
 }  // namespace doasido::deploy

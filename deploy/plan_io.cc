@@ -46,7 +46,7 @@ std::vector<FrameIssue> ReadIssues(const Json& j, bool speed) {
 
 }  // namespace
 
-void WritePlanJson(const Plan& plan, const std::filesystem::path& path) {
+Json PlanToJson(const Plan& plan) {
   Json j;
   j["format"] = kFormat;
   j["version"] = 1;
@@ -77,19 +77,19 @@ void WritePlanJson(const Plan& plan, const std::filesystem::path& path) {
                  {"object_rotation_error_max", r.object_rotation_error_max},
                  {"success", r.success}};
   j["ok"] = plan.ok;
+  return j;
+}
+
+void WritePlanJson(const Plan& plan, const std::filesystem::path& path) {
   std::ofstream out(path);
-  out << j.dump(1) << "\n";
+  out << PlanToJson(plan).dump(1) << "\n";
   if (!out) throw Error("io", "cannot write plan", {.file = path.string()});
 }
 
-Plan ReadPlanJson(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::ifstream in(path);
-  if (!in) throw Error("bad_plan", "cannot read plan", {.file = file});
+Plan PlanFromJson(const Json& j, const std::string& file) {
   Plan plan;
   std::string field = "format";
   try {
-    const Json j = Json::parse(in);
     if (j.at("format") != kFormat) throw Error("bad_plan", "not a doasido deploy plan", {.file = file, .field = field});
     field = "version";
     if (j.at("version").get<int>() != 1) throw Error("bad_plan", "unknown plan version", {.file = file, .field = field});
@@ -150,5 +150,17 @@ Plan ReadPlanJson(const std::filesystem::path& path) {
   }
   return plan;
 }
+
+Json ReadPlanFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("bad_plan", "cannot read plan", {.file = path.string()});
+  try {
+    return Json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error("bad_plan", std::string("invalid plan JSON: ") + e.what(), {.file = path.string()});
+  }
+}
+
+Plan ReadPlanJson(const std::filesystem::path& path) { return PlanFromJson(ReadPlanFile(path), path.string()); }
 
 }  // namespace doasido::deploy

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstring>
 #include <ctime>
+#include <functional>
 
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -43,31 +44,48 @@ void SleepUntil(const timespec& start, double seconds) {
   }
 }
 
-StreamResult WriteDryRun(const Plan& plan, const StreamOptions& options, double rate,
-                         const std::atomic<bool>& stop) {
-  lcm::LogFile log(options.dry_run_log.string(), "w");
-  if (!log.good()) throw Error("io", "cannot write LCM log", {.file = options.dry_run_log.string()});
+}  // namespace
+
+StreamResult StreamEncoded(size_t count, double rate, const StreamOptions& options,
+                           const std::atomic<bool>& stop,
+                           const std::function<std::vector<uint8_t>(size_t, int64_t)>& encode) {
   StreamResult result;
-  const int64_t start = WallMicros();
-  for (size_t k = 0; k < plan.arm.size() && !stop; ++k) {
-    const int64_t t = start + static_cast<int64_t>(k * 1e6 / rate + 0.5);
-    const doasido_lcm::arm_hand_command msg = Message(plan, k, t);
-    std::vector<uint8_t> buffer(msg.getEncodedSize());
-    msg.encode(buffer.data(), 0, buffer.size());
-    lcm::LogEvent event{};
-    event.eventnum = static_cast<int64_t>(k);
-    event.timestamp = t;
-    event.channel = options.channel;
-    event.datalen = static_cast<int32_t>(buffer.size());
-    event.data = buffer.data();
-    if (log.writeEvent(&event) != 0) throw Error("io", "cannot write LCM log event", {.file = options.dry_run_log.string()});
-    ++result.sent;
+  if (!options.dry_run_log.empty()) {
+    lcm::LogFile log(options.dry_run_log.string(), "w");
+    if (!log.good()) throw Error("io", "cannot write LCM log", {.file = options.dry_run_log.string()});
+    const int64_t start = WallMicros();
+    for (size_t k = 0; k < count && !stop; ++k) {
+      const int64_t t = start + static_cast<int64_t>(k * 1e6 / rate + 0.5);
+      std::vector<uint8_t> buffer = encode(k, t);
+      lcm::LogEvent event{};
+      event.eventnum = static_cast<int64_t>(k);
+      event.timestamp = t;
+      event.channel = options.channel;
+      event.datalen = static_cast<int32_t>(buffer.size());
+      event.data = buffer.data();
+      if (log.writeEvent(&event) != 0) {
+        throw Error("io", "cannot write LCM log event", {.file = options.dry_run_log.string()});
+      }
+      ++result.sent;
+    }
+  } else {
+    lcm::LCM lcm(options.url);
+    if (!lcm.good()) throw Error("lcm", "cannot start LCM on " + options.url, {.field = "url"});
+    timespec start{};
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    for (size_t k = 0; k < count && !stop; ++k) {
+      SleepUntil(start, k / rate);
+      if (stop) break;
+      const std::vector<uint8_t> buffer = encode(k, WallMicros());
+      if (lcm.publish(options.channel, buffer.data(), static_cast<unsigned>(buffer.size())) != 0) {
+        throw Error("lcm", "publish failed on " + options.url, {.field = options.channel});
+      }
+      ++result.sent;
+    }
   }
-  result.stopped = result.sent < static_cast<int>(plan.arm.size());
+  result.stopped = result.sent < static_cast<int>(count);
   return result;
 }
-
-}  // namespace
 
 StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const std::atomic<bool>& stop) {
   if (!plan.ok) {
@@ -77,23 +95,8 @@ StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const st
                 {.file = plan.source, .field = "ok"});
   }
   const double rate = options.rate_hz > 0 ? options.rate_hz : plan.rate_hz;
-  if (!options.dry_run_log.empty()) return WriteDryRun(plan, options, rate, stop);
-  lcm::LCM lcm(options.url);
-  if (!lcm.good()) throw Error("lcm", "cannot start LCM on " + options.url, {.field = "url"});
-  StreamResult result;
-  timespec start{};
-  clock_gettime(CLOCK_MONOTONIC, &start);
-  for (size_t k = 0; k < plan.arm.size() && !stop; ++k) {
-    SleepUntil(start, k / rate);
-    if (stop) break;
-    const doasido_lcm::arm_hand_command msg = Message(plan, k, WallMicros());
-    if (lcm.publish(options.channel, &msg) != 0) {
-      throw Error("lcm", "publish failed on " + options.url, {.field = options.channel});
-    }
-    ++result.sent;
-  }
-  result.stopped = result.sent < static_cast<int>(plan.arm.size());
-  return result;
+  return StreamEncoded(plan.arm.size(), rate, options, stop,
+                       [&](size_t k, int64_t t) { return EncodeLcm(Message(plan, k, t)); });
 }
 
 std::vector<CommandRecord> ReadCommandLog(const std::filesystem::path& path, const std::string& channel) {

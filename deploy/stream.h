@@ -8,6 +8,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -36,6 +37,21 @@ struct StreamResult {
 // sent), Error("lcm") when LCM cannot start or publish, Error("io") for an
 // unwritable log. Returns early, cleanly, when `stop` becomes true.
 StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const std::atomic<bool>& stop);
+
+// An lcm-gen message's bytes.
+template <typename Message>
+std::vector<uint8_t> EncodeLcm(const Message& msg) {
+  std::vector<uint8_t> buffer(msg.getEncodedSize());
+  msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+  return buffer;
+}
+
+// The engine under StreamPlan (and the two-arm stream, bimanual.h): sends
+// `count` messages, message k's bytes from encode(k, timestamp_us), paced
+// at `rate` Hz, or writes them to options.dry_run_log. Throws as StreamPlan.
+StreamResult StreamEncoded(size_t count, double rate, const StreamOptions& options,
+                           const std::atomic<bool>& stop,
+                           const std::function<std::vector<uint8_t>(size_t, int64_t)>& encode);
 
 // One decoded command, as read back from an LCM log.
 struct CommandRecord {

@@ -56,6 +56,25 @@ Pose DhForwardPose(const ArmQ& q, const DhParameters& dh) {
   return {Quat(Mat3(m.topLeftCorner<3, 3>())).normalized(), m.topRightCorner<3, 1>()};
 }
 
+std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh) {
+  std::array<Vec3, 7> out;
+  Mat4 m = Mat4::Identity();
+  out[0] = Vec3::Zero();
+  for (int i = 0; i < 6; ++i) {
+    DhParameters one;  // frame i+1 from frame i: the product's i-th factor alone
+    ArmQ qi = ArmQ::Zero();
+    qi[0] = q[i];
+    one.d = {dh.d[i], 0, 0, 0, 0, 0};
+    one.a = {dh.a[i], 0, 0, 0, 0, 0};
+    one.alpha = {dh.alpha[i], 0, 0, 0, 0, 0};
+    m = m * DhForward<double>(qi.data(), one);
+    out[i + 1] = m.topRightCorner<3, 1>();
+  }
+  return out;
+}
+
+const std::array<double, 6>& Ur3eLinkRadii() { return kRadius; }
+
 std::string Ur3eMjcf(const Pose& base, const DhParameters& dh, const ArmLimits& limits) {
   XMLDocument doc;
   XMLElement* root = doc.NewElement("mujoco");

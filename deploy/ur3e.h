@@ -75,6 +75,12 @@ Eigen::Matrix<T, 4, 4> DhForward(const T* q, const DhParameters& dh = {}) {
 }
 Pose DhForwardPose(const ArmQ& q, const DhParameters& dh = {});
 
+// The origins of the DH frames 0..6 in the base frame at `q` (0: the base,
+// 6: the flange); link i (0-based) runs from origin i to origin i + 1.
+std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh = {});
+// The links' capsule radii (m), the MJCF's and the collision check's.
+const std::array<double, 6>& Ur3eLinkRadii();
+
 // MJCF of the bare arm (base body "ur3e_base" at `base`, flange body
 // "ur3e_flange"), 2.2.2-compatible, joint ranges from `limits`.
 std::string Ur3eMjcf(const Pose& base = {}, const DhParameters& dh = {},

@@ -329,7 +329,7 @@ Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const Hand
     if (spec.two_hands) {
       const Side other = side == Side::kRight ? Side::kLeft : Side::kRight;
       const double drift = spec.static_scene ? 0.0 : std::sin(2 * kPi * 1.3 * f / T);
-      const Vec3 pos(rest.t.x() - sx * 0.2 + 0.01 * drift, rest.t.y() - 0.06, 0.045);
+      const Vec3 pos(rest.t.x() - sx * spec.second_hand_offset + 0.01 * drift, rest.t.y() - 0.06, 0.045);
       const Vec3 d = Vec3(sx * 0.35, 1, 0).normalized();
       fr.hands[static_cast<int>(other)] =
           RelaxedPose(Pose{Quat(HandFrame(d, -Vec3::UnitZ())), pos});

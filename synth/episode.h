@@ -28,6 +28,7 @@ struct EpisodeSpec {
   int frames = 90;
   Side active = Side::kRight;
   bool two_hands = false;
+  double second_hand_offset = 0.2;       // m: how far to the side the second hand rests
   bool touch = true;                     // false: the hand hovers near the object, never touching
   bool static_scene = false;             // nothing moves: the hand rests beside the object
   LeaveFrame leave = LeaveFrame::kNone;  // who leaves the view mid-episode

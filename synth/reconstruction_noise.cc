@@ -8,13 +8,21 @@ recon::Reconstruction EpisodeReconstruction(const Episode& episode, double fps,
                                             const HandShape& shape) {
   recon::Reconstruction r;
   r.fps = fps;
+  bool left_seen = false;
   for (const EpisodeFrame& f : episode.frames) {
-    const auto& hand = f.hands[static_cast<int>(Side::kRight)];
-    r.right_valid.push_back(hand.has_value());
-    r.right_joints.push_back(hand ? HandJointPositions(*hand, Side::kRight, shape)
-                                  : recon::Joints21::Constant(std::nan("")));
+    for (const Side side : {Side::kRight, Side::kLeft}) {
+      const auto& hand = f.hands[static_cast<int>(side)];
+      (side == Side::kRight ? r.right_valid : r.left_valid).push_back(hand.has_value());
+      (side == Side::kRight ? r.right_joints : r.left_joints)
+          .push_back(hand ? HandJointPositions(*hand, side, shape) : recon::Joints21::Constant(std::nan("")));
+      left_seen |= side == Side::kLeft && hand.has_value();
+    }
     r.object_valid.push_back(true);
     r.object_poses.push_back(f.object_pose);
+  }
+  if (!left_seen) {
+    r.left_valid.clear();
+    r.left_joints.clear();
   }
   return r;
 }
@@ -33,10 +41,12 @@ void AddReconstructionNoise(recon::Reconstruction& r, const ReconstructionNoise&
   const double lift = r.object_poses.empty() ? 0.0 : r.object_poses[0].t.z() - scaled(r.object_poses[0].t).z();
   for (int t = 0; t < frames; ++t) {
     const Vec3 shift = Vec3(0, 0, lift) + (t >= jump_frame ? jump : Vec3::Zero());
-    if (r.right_valid[t]) {
+    for (auto* hand : {&r.right_joints, &r.left_joints}) {
+      const std::vector<bool>& valid = hand == &r.right_joints ? r.right_valid : r.left_valid;
+      if (hand->empty() || !valid[t]) continue;
       for (int k = 0; k < 21; ++k) {
-        const Vec3 p = r.right_joints[t].row(k).transpose();
-        r.right_joints[t].row(k) = (scaled(p) + shift + offset + gauss3(noise.jitter)).transpose();
+        const Vec3 p = (*hand)[t].row(k).transpose();
+        (*hand)[t].row(k) = (scaled(p) + shift + offset + gauss3(noise.jitter)).transpose();
       }
     }
     if (r.object_valid[t]) {

@@ -14,7 +14,8 @@
 
 namespace doasido::synth {
 
-// The episode's right hand and object in the world frame (floor z = 0).
+// The episode's hands (left_* only when it has a left hand) and object in the
+// world frame (floor z = 0).
 // object_mesh is left empty (the caller knows the mesh).
 recon::Reconstruction EpisodeReconstruction(const Episode& episode, double fps,
                                             const HandShape& shape = {});

@@ -5,21 +5,24 @@
 #include <csignal>
 #include <thread>
 
-#include <fcntl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
 
+#include "deploy/bimanual.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/ur3e.h"
-#include "test_util.h"
+#include "tests/test_util.h"
+#include "tests/two_hand_episode.h"
 
 namespace doasido {
 namespace {
 
+using testing::LoopbackLcmUrl;
 using testing::RunDoasido;
+using testing::Spawn;
+using testing::WaitFor;
 using testing::TempDir;
 
 // A 10-s plan at 50 Hz with distinct values in every cell.
@@ -44,33 +47,6 @@ deploy::Plan TenSecondPlan(bool ok) {
   return p;
 }
 
-// Starts `argv` with stdout and stderr to `log`; returns its pid.
-pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(fd, 1);
-    dup2(fd, 2);
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execvp(argv[0], argv.data());
-    _exit(127);
-  }
-  return pid;
-}
-
-int Wait(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-// A multicast port of our own so parallel runs do not hear each other.
-std::string Url() {
-  return "udpm://239.255.76.67:" + std::to_string(7700 + getpid() % 2000) + "?ttl=0";
-}
-
 void ExpectEqualsPlan(const std::vector<deploy::CommandRecord>& got, const deploy::Plan& plan) {
   for (const deploy::CommandRecord& r : got) {
     ASSERT_GE(r.sequence, 0);
@@ -87,7 +63,7 @@ TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
   TempDir dir;
   const deploy::Plan plan = TenSecondPlan(true);
   deploy::WritePlanJson(plan, dir / "plan.json");
-  const std::string url = Url(), channel = "DOASIDO_TEST_" + std::to_string(getpid());
+  const std::string url = LoopbackLcmUrl(), channel = "DOASIDO_TEST_" + std::to_string(getpid());
   const pid_t logger = Spawn({"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel,
                               (dir / "run.lcmlog").string()}, dir / "logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
@@ -95,7 +71,7 @@ TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
                              "--channel", channel});
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   kill(logger, SIGINT);
-  Wait(logger);
+  WaitFor(logger);
   ASSERT_EQ(r.exit_code, 0) << r.err << testing::ReadFile(dir / "logger.txt");
   EXPECT_NE(r.out.find("sent 500 of 500"), std::string::npos) << r.out;
 
@@ -140,7 +116,7 @@ TEST(DeployStream, StopsCleanlyOnSigint) {
   TempDir dir;
   deploy::WritePlanJson(TenSecondPlan(true), dir / "plan.json");
   const pid_t pid = Spawn({testing::DoasidoBin().string(), "deploy", "stream", "--plan",
-                           (dir / "plan.json").string(), "--url", Url(), "--channel",
+                           (dir / "plan.json").string(), "--url", LoopbackLcmUrl(), "--channel",
                            "DOASIDO_SIGINT_" + std::to_string(getpid())}, dir / "out.txt");
   // Once it says it streams (its Ctrl-C handler is in place), and a little later.
   for (int i = 0; i < 600 && testing::ReadFile(dir / "out.txt").find("streaming") == std::string::npos;
@@ -149,7 +125,7 @@ TEST(DeployStream, StopsCleanlyOnSigint) {
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   kill(pid, SIGINT);
-  const int code = Wait(pid);
+  const int code = WaitFor(pid);
   const std::string out = testing::ReadFile(dir / "out.txt");
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("stopped after"), std::string::npos) << out;
@@ -182,6 +158,44 @@ TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
   for (const auto& u : plan.unreachable) times.push_back(u.time);
   EXPECT_EQ(times, (std::vector<double>{1.0, 1.1, 1.2, 1.3, 1.4})) << r.out;
   EXPECT_NE(r.out.find("unreachable  frame    10  t=  1.000 s"), std::string::npos) << r.out;
+}
+
+// Two hands: `deploy plan-two` places two arms, `deploy stream` sends one
+// bimanual_command per tick (dry run here; the live stream is recorded by
+// lcm-logger in deploy_bimanual_test); bases 5 cm apart are refused with
+// the colliding frames' times.
+TEST(DeployPlanTwo, PlansTwoArmsAndStreamsThemAsOne) {
+  TempDir dir;
+  const testing::TwoHands& h = testing::TwoHandEpisode();
+  retarget::WriteTrajectoryJson(h.left, dir / "left.json");
+  retarget::WriteTrajectoryJson(h.right, dir / "right.json");
+  const std::vector<std::string> plan_two = {"deploy", "plan-two", "--left", (dir / "left.json").string(),
+                                             "--right", (dir / "right.json").string(), "--robots-dir",
+                                             (testing::SharedData() / "robots").string()};
+  std::vector<std::string> args = plan_two;
+  args.insert(args.end(), {"--out", (dir / "two.json").string()});
+  const auto ok = RunDoasido(args);
+  ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
+  EXPECT_NE(ok.out.find("sharpa_left + sharpa_right: 199 commands at 50 Hz, bases 0.600 m apart"),
+            std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("ok: 0 collision frames"), std::string::npos) << ok.out;
+  const auto stream = RunDoasido({"deploy", "stream", "--plan", (dir / "two.json").string(), "--dry-run",
+                                  (dir / "two.lcmlog").string()});
+  ASSERT_EQ(stream.exit_code, 0) << stream.err;
+  EXPECT_NE(stream.out.find("sent 199 of 199"), std::string::npos) << stream.out;
+  EXPECT_EQ(deploy::ReadBimanualLog(dir / "two.lcmlog").size(), 199u);
+
+  args = plan_two;
+  args.insert(args.end(), {"--out", (dir / "close.json").string(), "--base-distance", "0.05"});
+  const auto close = RunDoasido(args);
+  EXPECT_NE(close.exit_code, 0);
+  EXPECT_NE(close.out.find("collision    frame     0  t=  0.000 s"), std::string::npos) << close.out;
+  EXPECT_NE(close.err.find("plan_failed_checks"), std::string::npos) << close.err;
+  const auto refused = RunDoasido({"deploy", "stream", "--plan", (dir / "close.json").string(), "--dry-run",
+                                   (dir / "close.lcmlog").string()});
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("199 arm-arm collision frames (0.000000 s, 0.020000 s"), std::string::npos)
+      << refused.err;
 }
 
 }  // namespace

@@ -103,6 +103,31 @@ std::string ShellOk(const std::string& command) {
   return out;
 }
 
+int Spawn(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
+    dup2(fd, 2);
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+int WaitFor(int pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::string LoopbackLcmUrl() {
+  return "udpm://239.255.76.67:" + std::to_string(7700 + getpid() % 2000) + "?ttl=0";
+}
+
 std::string ErrorCode(const std::function<void()>& f) {
   try {
     f();

@@ -52,6 +52,15 @@ std::string ReadFile(const std::filesystem::path& path);
 // quotes inside cells).
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path);
 
+// Starts `args` (argv[0] looked up in PATH) with stdout and stderr to
+// `log`; returns its pid.
+int Spawn(const std::vector<std::string>& args, const std::filesystem::path& log);
+// Waits for `pid`; its exit status, or 128 + the signal that ended it.
+int WaitFor(int pid);
+// A loopback-only LCM multicast URL (ttl=0) on a port of this process's
+// own, so parallel test runs do not hear each other.
+std::string LoopbackLcmUrl();
+
 // The code of the doasido::Error `f` throws, or "no error".
 std::string ErrorCode(const std::function<void()>& f);
 

@@ -1,0 +1,93 @@
+// Two arms, two hands (the seed's bimanual setup: two UR3e arms, each with
+// a hand, commanded at 50 Hz): a left and a right robot hand trajectory in
+// one world become one plan for two arms whose bases stand `base_distance`
+// apart, checked for arm-arm collisions, and streamed as one LCM message
+// per tick.
+//
+// Placement: the bases stand on the table side by side, facing +x of a
+// common frame, the left arm at y = +base_distance / 2 and the right at
+// -base_distance / 2. The common frame is placed like one arm's base in
+// plan.h (offset from the workspace config, around the mean of both
+// wrists), turned so that the mean line from the right wrist to the left
+// one points along its +y (then by the workspace's yaw), without the search:
+// the two arms keep one placement. Each arm's plan is then plan.h's steps
+// 2-3 (IK, reach and speed checks).
+//
+// Collision check: every command frame, each arm is its six link capsules
+// (ur3e.h: from each joint's origin to the next, with the links' radii)
+// plus the hand as a capsule of `hand_radius` along the flange's z axis for
+// `hand_length`; the least distance between a capsule of one arm and one of
+// the other, surfaces to surfaces, must stay above `clearance`. Frames where
+// it does not are listed with their times; the plan is ok only without
+// them and with both arms' plans ok.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "deploy/plan.h"
+#include "deploy/stream.h"
+
+namespace doasido::deploy {
+
+struct BimanualConfig {
+  double base_distance = 0.6;  // m between the two bases
+  double clearance = 0.02;     // m the arms (and hands) keep from each other
+  // The hand's envelope: a capsule along the flange's z axis (the fingers'
+  // direction); a Sharpa-sized hand is ~17 cm from wrist to fingertip and
+  // 9 cm across.
+  double hand_length = 0.17;   // m
+  double hand_radius = 0.045;  // m
+  PlanConfig plan;             // rate, IK, workspace (x, y, yaw, base height) of the pair
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BimanualConfig, base_distance, clearance, hand_length,
+                                                hand_radius, plan)
+void CheckConfig(const BimanualConfig& c, const std::string& section);
+
+struct BimanualPlan {
+  Plan left, right;                  // same command times
+  std::vector<FrameIssue> collisions;  // value: distance (m), limit: clearance
+  std::vector<double> arm_distance;    // per command frame, m (surfaces; negative: overlapping)
+  bool ok = false;
+};
+
+// Makes both plans and checks them. Trajectories must have the same frame
+// rate and length (one clip). Throws Error("bad_trajectory") otherwise.
+BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
+                              const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
+                              const BimanualConfig& config);
+
+// The least surface distance between the two arms (and hands) at joint
+// angles `left`, `right` with bases `left_base`, `right_base` (base->world).
+double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right, const Pose& right_base,
+                      const BimanualConfig& config);
+
+// Streams doasido_lcm::bimanual_command (deploy/bimanual_command.lcm), one
+// message per tick carrying both arms and both hands, as StreamPlan does
+// for one arm (real-time pacing, or a dry-run log). Throws
+// Error("plan_failed_checks") for a plan that is not ok.
+StreamResult StreamBimanualPlan(const BimanualPlan& plan, const StreamOptions& options,
+                                const std::atomic<bool>& stop);
+
+// JSON: {"format": "doasido_bimanual_plan", "version": 1, "base_distance",
+// "clearance", "left": <plan.h plan>, "right": <plan>, "arm_distance": [...],
+// "collisions": [{frame, time, distance}], "ok"}. Throws Error("io") /
+// Error("bad_plan") naming the file and field.
+inline constexpr const char* kBimanualPlanFormat = "doasido_bimanual_plan";
+void WriteBimanualPlanJson(const BimanualPlan& plan, const BimanualConfig& config,
+                           const std::filesystem::path& path);
+BimanualPlan BimanualPlanFromJson(const Json& j, const std::string& file);
+
+struct BimanualRecord {
+  int64_t log_time_us = 0, timestamp_us = 0, sequence = 0;
+  double plan_time = 0;
+  ArmQ left_arm = ArmQ::Zero(), right_arm = ArmQ::Zero();
+  std::vector<double> left_hand, right_hand;
+};
+// Every bimanual_command on `channel` in an LCM log. Throws Error("bad_log").
+std::vector<BimanualRecord> ReadBimanualLog(const std::filesystem::path& path,
+                                            const std::string& channel = kCommandChannel);
+
+}  // namespace doasido::deploy

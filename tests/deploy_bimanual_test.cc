@@ -1,0 +1,124 @@
+// Two arms (deploy/bimanual.h) on a synthetic two-hand episode (synth
+// module: the right hand picks the object, the left one hovers beside it),
+// each hand retargeted onto its side's robot hand: bases 60 cm apart plan
+// without an arm-arm collision; bases 5 cm apart overlap in every frame and
+// the stream refuses the plan naming the frames' times; Debian's
+// lcm-logger (an independent process) records both arms' commands at 50 Hz.
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "deploy/bimanual.h"
+#include "tests/test_util.h"
+#include "tests/two_hand_episode.h"
+
+namespace doasido::deploy {
+namespace {
+
+using doasido::testing::TempDir;
+
+using doasido::testing::TwoHandEpisode;
+using doasido::testing::TwoHands;
+
+TEST(Bimanual, ArmsSixtyCentimetresApartDoNotCollide) {
+  const TwoHands& h = TwoHandEpisode();
+  BimanualConfig config;
+  const BimanualPlan plan = MakeBimanualPlan(h.left, h.right, h.left_hand, h.right_hand, config);
+  ASSERT_EQ(plan.arm_distance.size(), plan.right.arm.size());
+  const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
+  for (const auto& f : plan.right.too_fast) std::printf("too fast right k %d t %.2f joint %d %.2f > %.2f\n", f.frame, f.time, f.joint, f.value, f.limit);
+  for (const auto& f : plan.left.too_fast) std::printf("too fast left k %d t %.2f joint %d %.2f > %.2f\n", f.frame, f.time, f.joint, f.value, f.limit);
+  std::printf("two-arm plan: %zu commands, closest approach of the arms %.3f m; unreachable left %zu right %zu\n",
+              plan.right.arm.size(), closest, plan.left.unreachable.size(), plan.right.unreachable.size());
+  EXPECT_TRUE(plan.collisions.empty());
+  EXPECT_GT(closest, config.clearance);
+  EXPECT_TRUE(plan.left.ok);
+  EXPECT_TRUE(plan.right.ok);
+  EXPECT_TRUE(plan.ok);
+  // The bases are where the config puts them: base_distance apart, level.
+  const Vec3 left_base = plan.left.placement.world_to_base.Inverse().t;
+  const Vec3 right_base = plan.right.placement.world_to_base.Inverse().t;
+  EXPECT_NEAR((left_base - right_base).norm(), 0.6, 1e-12);
+  EXPECT_NEAR(left_base.z(), right_base.z(), 1e-12);
+}
+
+// Bases 5 cm apart: the two base links (radius 4.5 cm, vertical from the
+// base) overlap by 4 cm whatever the joints do, so every frame collides.
+TEST(Bimanual, ArmsPlacedTooCloseAreRefusedWithTheFrameTimes) {
+  const TwoHands& h = TwoHandEpisode();
+  BimanualConfig config;
+  config.base_distance = 0.05;
+  const BimanualPlan plan = MakeBimanualPlan(h.left, h.right, h.left_hand, h.right_hand, config);
+  ASSERT_EQ(plan.collisions.size(), plan.right.arm.size());
+  for (const FrameIssue& c : plan.collisions) {
+    EXPECT_LE(c.value, 0.05 - 2 * 0.045 + 1e-9);
+    EXPECT_DOUBLE_EQ(c.time, plan.right.times[c.frame]);
+  }
+  EXPECT_FALSE(plan.ok);
+  try {
+    std::atomic<bool> stop{false};
+    StreamBimanualPlan(plan, {.dry_run_log = "/nonexistent/never.lcmlog"}, stop);
+    ADD_FAILURE() << "a colliding plan was streamed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "plan_failed_checks");
+    const std::string what = e.what();
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NE(what.find(std::to_string(plan.right.times[k]) + " s"), std::string::npos) << what;
+    }
+  }
+}
+
+void ExpectEqualsPlan(const BimanualRecord& r, const BimanualPlan& plan) {
+  ASSERT_GE(r.sequence, 0);
+  ASSERT_LT(r.sequence, static_cast<int64_t>(plan.right.arm.size()));
+  const size_t k = static_cast<size_t>(r.sequence);
+  EXPECT_EQ(r.left_arm, plan.left.arm[k]);
+  EXPECT_EQ(r.right_arm, plan.right.arm[k]);
+  const Eigen::VectorXd& l = plan.left.hand[k];
+  const Eigen::VectorXd& rh = plan.right.hand[k];
+  EXPECT_EQ(r.left_hand, std::vector<double>(l.data(), l.data() + l.size()));
+  EXPECT_EQ(r.right_hand, std::vector<double>(rh.data(), rh.data() + rh.size()));
+  EXPECT_EQ(r.plan_time, plan.right.times[k]);
+}
+
+TEST(Bimanual, LcmLoggerRecordsBothArmsAtFiftyHertz) {
+  TempDir dir;
+  const TwoHands& h = TwoHandEpisode();
+  const BimanualPlan plan = MakeBimanualPlan(h.left, h.right, h.left_hand, h.right_hand, {});
+  ASSERT_TRUE(plan.ok);
+  const std::string url = testing::LoopbackLcmUrl(), channel = "DOASIDO_BIMANUAL_" + std::to_string(getpid());
+  const int logger = testing::Spawn(
+      {"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel, (dir / "run.lcmlog").string()},
+      dir / "logger.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  std::atomic<bool> stop{false};
+  const StreamResult sent = StreamBimanualPlan(plan, {.url = url, .channel = channel}, stop);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  kill(logger, SIGINT);
+  testing::WaitFor(logger);
+  EXPECT_EQ(sent.sent, static_cast<int>(plan.right.arm.size()));
+
+  const std::vector<BimanualRecord> got = ReadBimanualLog(dir / "run.lcmlog", channel);
+  ASSERT_GE(got.size(), 2u) << testing::ReadFile(dir / "logger.txt");
+  const double interval_ms = (got.back().log_time_us - got.front().log_time_us) / 1000.0 / (got.size() - 1);
+  std::printf("lcm-logger: %zu two-arm commands of %zu, mean interval %.4f ms\n", got.size(),
+              plan.right.arm.size(), interval_ms);
+  EXPECT_NEAR(static_cast<double>(got.size()), static_cast<double>(plan.right.arm.size()), 1.0);
+  EXPECT_NEAR(interval_ms, 20.0, 0.4);
+  for (const BimanualRecord& r : got) ExpectEqualsPlan(r, plan);
+  for (size_t i = 1; i < got.size(); ++i) EXPECT_GT(got[i].sequence, got[i - 1].sequence);
+
+  // The dry run writes the same messages at the planned times.
+  StreamBimanualPlan(plan, {.dry_run_log = dir / "dry.lcmlog"}, stop);
+  const std::vector<BimanualRecord> dry = ReadBimanualLog(dir / "dry.lcmlog");
+  ASSERT_EQ(dry.size(), plan.right.arm.size());
+  for (const BimanualRecord& r : dry) ExpectEqualsPlan(r, plan);
+  EXPECT_EQ(dry.back().log_time_us - dry.front().log_time_us,
+            static_cast<int64_t>(dry.size() - 1) * 20000);
+}
+
+}  // namespace
+}  // namespace doasido::deploy

@@ -104,14 +104,19 @@ std::vector<Pose> FilledObjectPoses(const recon::Reconstruction& r) {
 
 std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<Pose>& object,
                               const TriMesh& mesh, double epsilon) {
+  return LabelInHand(r.right_joints, r.right_valid, object, mesh, epsilon);
+}
+
+std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const std::vector<bool>& valid,
+                              const std::vector<Pose>& object, const TriMesh& mesh, double epsilon) {
   const std::vector<Vec3> surface = SurfaceSamples(mesh, 4000);
-  std::vector<bool> out(r.frames(), false);
-  for (int t = 0; t < r.frames(); ++t) {
-    if (!r.right_valid[t]) continue;
+  std::vector<bool> out(valid.size(), false);
+  for (size_t t = 0; t < valid.size(); ++t) {
+    if (!valid[t]) continue;
     const Pose inv = object[t].Inverse();
     double best2 = 1e30;  // squared
     for (int k = 0; k < 21 && best2 >= epsilon * epsilon; ++k) {
-      const Vec3 p = inv * Vec3(r.right_joints[t].row(k).transpose());
+      const Vec3 p = inv * Vec3(joints[t].row(k).transpose());
       for (const Vec3& s : surface) best2 = std::min(best2, (p - s).squaredNorm());
     }
     out[t] = best2 < epsilon * epsilon;

@@ -70,9 +70,11 @@ std::vector<Pose> FilledObjectPoses(const recon::Reconstruction& r);
 
 // Per frame: whether a valid reconstructed hand joint lies within `epsilon`
 // of the object surface (`mesh` in the object frame, posed by `object`).
-// Invalid hand frames are "resting".
+// Invalid hand frames are "resting". The first form labels the right hand.
 std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<Pose>& object,
                               const TriMesh& mesh, double epsilon);
+std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const std::vector<bool>& valid,
+                              const std::vector<Pose>& object, const TriMesh& mesh, double epsilon);
 
 // Samples `kinematic` (HandTrajectory from KinematicRetargeter, whose
 // qpos_names name the actuated joints), `object` and `in_hand` (one per

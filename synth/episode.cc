@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <tuple>
 
 #include "synth/objects.h"
 
@@ -216,7 +218,141 @@ Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevat
   return g;
 }
 
+namespace {
+
+// One hand's grasp of the object and the poses around it.
+struct HandPlan {
+  Grasp grasp;
+  Vec3 a;  // approach direction (world)
+  Pose At(const Pose& object_pose) const { return object_pose * grasp.wrist_in_object; }
+  // Backed off along the approach by `far` (and raised 4 cm when far).
+  Pose Back(const Pose& object_pose, double far) const {
+    return Translated(At(object_pose), a * far + Vec3(0, 0, far > 0.1 ? 0.04 : 0));
+  }
+  // Reach from far away to the grasp over [u0, u1] (60% of it to 6 cm off).
+  Pose Reach(const Pose& object_pose, double u, double u0, double u1) const {
+    const double mid = u0 + 0.6 * (u1 - u0);
+    return u <= mid ? Interpolate(Back(object_pose, 0.16), Back(object_pose, 0.06), MinJerk(Seg(u, u0, mid)))
+                    : Interpolate(Back(object_pose, 0.06), At(object_pose), MinJerk(Seg(u, mid, u1)));
+  }
+};
+
+HandPlan PlanHand(const TriMesh& object, Side side, double azimuth, double elevation, double yaw,
+                  const HandShape& shape) {
+  return {SolveGrasp(object, side, azimuth, elevation, yaw, shape), ApproachDirection(side, azimuth, elevation)};
+}
+
+// Curl closing over [c0, c1], open until c0, closed until o0, opening over [o0, o1].
+double Closing(double u, double c0, double c1, double o0, double o1) {
+  return u <= o0 ? MinJerk(Seg(u, c0, c1)) : 1 - MinJerk(Seg(u, o0, o1));
+}
+
+}  // namespace
+
+const char* TwoHandTaskName(TwoHandTask task) {
+  switch (task) {
+    case TwoHandTask::kNone:
+      return "none";
+    case TwoHandTask::kHandover:
+      return "handover";
+    case TwoHandTask::kCarry:
+      return "carry";
+    case TwoHandTask::kHoldAndAct:
+      return "hold_and_act";
+  }
+  return "unknown";
+}
+
+Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {
+  Episode ep;
+  ep.spec = spec;
+  const Pose rest = RestPose(spec);
+  const HandPlan left = PlanHand(object, Side::kLeft, spec.approach_azimuth, spec.approach_elevation,
+                                 spec.object_yaw, shape);
+  const double right_elevation =
+      spec.two_hand_task == TwoHandTask::kHoldAndAct ? kPi / 2 - 0.2 : spec.approach_elevation;
+  const HandPlan right = PlanHand(object, Side::kRight, spec.approach_azimuth, right_elevation, spec.object_yaw, shape);
+  ep.grasp = right.grasp;
+  const double T = std::max(spec.frames - 1, 1);
+  for (int i = 0; i < spec.frames; ++i) {
+    const double u = i / T;
+    EpisodeFrame fr;
+    Pose wr, wl;
+    double cr = 0, cl = 0;
+    bool touch_r = false, touch_l = false;
+    switch (spec.two_hand_task) {
+      case TwoHandTask::kHandover: {
+        const Pose offer = Translated(rest, Vec3(-0.08, 0, 0.12));
+        const Pose placed = Translated(rest, Vec3(-0.22, 0.02, 0));
+        fr.object_pose = u <= 0.24   ? rest
+                         : u <= 0.44 ? Interpolate(rest, offer, MinJerk(Seg(u, 0.24, 0.44)))
+                         : u <= 0.66 ? offer
+                                     : Interpolate(offer, placed, MinJerk(Seg(u, 0.66, 0.86)));
+        wr = u <= 0.18 ? right.Reach(rest, u, 0, 0.18)
+             : u <= 0.66 ? right.At(fr.object_pose)
+                         : Interpolate(right.At(offer), right.Back(offer, 0.16), MinJerk(Seg(u, 0.66, 0.80)));
+        cr = u <= 0.66 ? Closing(u, 0.18, 0.24, 0.60, 0.66) : 0;
+        wl = u <= 0.30 ? left.Back(offer, 0.16)
+             : u <= 0.50 ? left.Reach(offer, u, 0.30, 0.50)
+             : u <= 0.92 ? left.At(fr.object_pose)
+                         : Interpolate(left.At(placed), left.Back(placed, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
+        cl = u > 0.50 && u <= 0.92 ? Closing(u, 0.50, 0.56, 0.86, 0.92) : 0;
+        touch_r = u >= 0.24 && u < 0.60;
+        touch_l = u >= 0.56 && u < 0.86;
+        fr.phase = u < 0.24 ? "reach" : u < 0.44 ? "carry" : u < 0.56 ? "offer" : u < 0.66 ? "handover"
+                 : u < 0.86 ? "carry" : "release";
+        break;
+      }
+      case TwoHandTask::kCarry: {
+        const Pose up = Translated(rest, Vec3(0.05, 0.05, 0.15));
+        const Pose down = Translated(rest, Vec3(0.10, 0.05, 0));
+        fr.object_pose = u <= 0.24   ? rest
+                         : u <= 0.50 ? Interpolate(rest, up, MinJerk(Seg(u, 0.24, 0.50)))
+                         : u <= 0.76 ? Interpolate(up, down, MinJerk(Seg(u, 0.50, 0.76)))
+                                     : down;
+        for (const auto& [hand, wrist, curl] : {std::tie(right, wr, cr), std::tie(left, wl, cl)}) {
+          wrist = u <= 0.18 ? hand.Reach(rest, u, 0, 0.18)
+                  : u <= 0.82 ? hand.At(fr.object_pose)
+                              : Interpolate(hand.At(down), hand.Back(down, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
+          curl = u <= 0.82 ? Closing(u, 0.18, 0.24, 0.76, 0.82) : 0;
+        }
+        touch_r = touch_l = u >= 0.24 && u < 0.76;
+        fr.phase = u < 0.24 ? "reach" : u < 0.76 ? "carry" : "release";
+        break;
+      }
+      case TwoHandTask::kHoldAndAct: {
+        fr.object_pose = rest;
+        wl = u <= 0.18 ? left.Reach(rest, u, 0, 0.18)
+             : u <= 0.92 ? left.At(rest)
+                         : Interpolate(left.At(rest), left.Back(rest, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
+        cl = u <= 0.92 ? Closing(u, 0.18, 0.24, 0.86, 0.92) : 0;
+        // Twisting about the object's own vertical axis keeps a round object's surface under the fingers.
+        const double twist = u > 0.48 && u < 0.76 ? 0.4 * std::sin(2 * kPi * 2 * Seg(u, 0.48, 0.76)) : 0.0;
+        const Pose turned = rest * Pose{Quat(Eigen::AngleAxisd(twist, Vec3::UnitZ())), Vec3::Zero()};
+        wr = u <= 0.24 ? right.Back(rest, 0.16)
+             : u <= 0.42 ? right.Reach(rest, u, 0.24, 0.42)
+             : u <= 0.82 ? right.At(turned)
+                         : Interpolate(right.At(rest), right.Back(rest, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
+        cr = u > 0.42 && u <= 0.82 ? Closing(u, 0.42, 0.48, 0.76, 0.82) : 0;
+        touch_l = u >= 0.24 && u < 0.86;
+        touch_r = u >= 0.48 && u < 0.76;
+        fr.phase = u < 0.24 ? "reach" : u < 0.48 ? "steady" : u < 0.76 ? "act" : "release";
+        break;
+      }
+      case TwoHandTask::kNone:
+        throw std::logic_error("ScriptTwoHands needs a two-hand task");
+    }
+    fr.hands[static_cast<int>(Side::kRight)] = WithCurl(wr, right.grasp.curl, cr);
+    fr.hands[static_cast<int>(Side::kLeft)] = WithCurl(wl, left.grasp.curl, cl);
+    fr.contact[static_cast<int>(Side::kRight)] = touch_r;
+    fr.contact[static_cast<int>(Side::kLeft)] = touch_l;
+    ep.frames.push_back(std::move(fr));
+  }
+  return ep;
+}
+
 Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {
+  if (spec.two_hand_task != TwoHandTask::kNone) return ScriptTwoHands(spec, object, shape);
   Episode ep;
   ep.spec = spec;
   const Side side = spec.active;

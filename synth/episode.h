@@ -23,12 +23,19 @@ const char* VerbName(Verb verb);
 
 enum class LeaveFrame { kNone, kHand, kObject };
 
+// Bimanual episodes (ScriptTwoHands).
+enum class TwoHandTask { kNone, kHandover, kCarry, kHoldAndAct };
+const char* TwoHandTaskName(TwoHandTask task);
+
 struct EpisodeSpec {
   Verb verb = Verb::kPickPlace;
   int frames = 90;
   Side active = Side::kRight;
   bool two_hands = false;
   double second_hand_offset = 0.2;       // m: how far to the side the second hand rests
+  // A task for both hands (ScriptTwoHands); kNone: one active hand as above.
+  // `verb`, `active`, `two_hands` and `leave` do not apply to the others.
+  TwoHandTask two_hand_task = TwoHandTask::kNone;
   bool touch = true;                     // false: the hand hovers near the object, never touching
   bool static_scene = false;             // nothing moves: the hand rests beside the object
   LeaveFrame leave = LeaveFrame::kNone;  // who leaves the view mid-episode
@@ -69,6 +76,25 @@ struct Episode {
 };
 
 Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape = {});
+
+// The tasks of EpisodeSpec::two_hand_task, the right hand approaching from
+// its side and the left from the mirrored one; EpisodeFrame::contact is
+// exact for each hand. Phases as fractions of the clip:
+//  - kHandover: right reach 0-0.18, close 0.18-0.24, carry to the handover
+//    pose (12 cm up, 8 cm to the left) 0.24-0.44; left reach 0.30-0.50,
+//    close 0.50-0.56 (both hold 0.56-0.60); right opens 0.60-0.66 and
+//    withdraws; left carries the object down 22 cm left of where it started
+//    0.66-0.86, opens 0.86-0.92, withdraws.
+//  - kCarry: both reach 0-0.18, close 0.18-0.24, lift (15 cm) and carry the
+//    object 0.24-0.50, set it down 10 cm further 0.50-0.76, open 0.76-0.82,
+//    withdraw.
+//  - kHoldAndAct: the left hand steadies the object (reach 0-0.18, close
+//    0.18-0.24, holds until 0.86, opens 0.86-0.92); the right hand grasps it
+//    from above (approach 0.2 rad under the vertical) 0.24-0.48 and twists
+//    back and forth about the object's vertical axis (+-0.4 rad, a lid
+//    being turned) 0.48-0.76, opens 0.76-0.82, withdraws; the object never
+//    moves.
+Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape = {});
 
 // Minimum-jerk profile s(t) = 10t^3 - 15t^4 + 6t^5 for t clamped to [0, 1].
 double MinJerk(double t);

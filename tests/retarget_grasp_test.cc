@@ -2,6 +2,7 @@
 // object surface they measure (object_surface.h): signed distances against
 // a box whose answer is known, then a synthetic pick-and-place reference
 // (synth module) retargeted with and without the terms.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -118,6 +119,43 @@ TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
   EXPECT_NEAR(on.touching_mean, -config.contact_depth, 0.001);
   EXPECT_GT(off.touching_mean, on.touching_mean + 0.001);
   EXPECT_GT(on.kept_out_min, -0.002);
+}
+
+// A synthetic handover (synth ScriptHandover) through its reconstruction:
+// labelled in-hand per hand as the retargeting labels frames, the right hand
+// touches the object first and the left hand last, the two hold it together
+// in between, and the labels follow the episode's exact contact flags.
+TEST(Bimanual, AHandoverTouchesTheRightHandFirstAndTheLeftLast) {
+  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
+  synth::EpisodeSpec spec;
+  spec.frames = 90;
+  spec.two_hand_task = synth::TwoHandTask::kHandover;
+  const synth::Episode episode = synth::ScriptEpisode(spec, cylinder);
+  const recon::Reconstruction r = synth::EpisodeReconstruction(episode, 30.0);
+  ASSERT_EQ(r.left_valid.size(), 90u);
+  const double epsilon = 0.02;
+  const std::vector<bool> right = LabelInHand(r.right_joints, r.right_valid, r.object_poses, cylinder, epsilon);
+  const std::vector<bool> left = LabelInHand(r.left_joints, r.left_valid, r.object_poses, cylinder, epsilon);
+  const auto first = [](const std::vector<bool>& v) { return int(std::find(v.begin(), v.end(), true) - v.begin()); };
+  const auto last = [](const std::vector<bool>& v) { return int(v.rend() - std::find(v.rbegin(), v.rend(), true)) - 1; };
+  int both = 0, agree = 0, contacts = 0;
+  for (int t = 0; t < 90; ++t) {
+    both += right[t] && left[t];
+    for (int side = 0; side < 2; ++side) {
+      const bool truth = episode.frames[t].contact[side];
+      const bool label = side == static_cast<int>(synth::Side::kRight) ? right[t] : left[t];
+      contacts += truth;
+      agree += truth && label;
+    }
+  }
+  std::printf("handover: right touches frames %d-%d, left %d-%d, both %d frames; %d of %d true contacts labelled\n",
+              first(right), last(right), first(left), last(left), both, agree, contacts);
+  EXPECT_LT(first(right), first(left));
+  EXPECT_GT(last(left), last(right));
+  EXPECT_GT(both, 0);
+  EXPECT_EQ(agree, contacts) << "every frame a hand holds the object is labelled in-hand";
+  // The object ends 22 cm to the left of where it started, on the table.
+  EXPECT_NEAR((r.object_poses.back().t - r.object_poses.front().t).norm(), std::hypot(0.22, 0.02), 1e-9);
 }
 
 }  // namespace

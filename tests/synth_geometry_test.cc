@@ -216,5 +216,69 @@ TEST(Grasp, FingertipsEndOnTheSurface) {
   }
 }
 
+// Finger clearance of `side`'s hand in `frame` against the posed object:
+// the least over its fingers' capsules (m; negative inside).
+double FingerClearance(const EpisodeFrame& frame, Side side, const TriMesh& object) {
+  const TriMesh posed = object.Transformed(frame.object_pose);
+  const PosedHand hand = PoseHand(*frame.hands[static_cast<int>(side)], side);
+  double clearance = 1e9;
+  for (int c = 0; c < 15; ++c) {
+    const Capsule& cap = hand.capsules[c];
+    for (int k = 0; k <= 8; ++k) {
+      const Vec3 p = cap.a + (cap.b - cap.a) * (k / 8.0);
+      clearance = std::min(clearance, (InsideMesh(posed, p) ? -1 : 1) * DistanceToMesh(posed, p) - cap.radius);
+    }
+  }
+  return clearance;
+}
+
+// The two-hand tasks' ground truth: a hand flagged in contact has its
+// fingers on the object's surface; the object moves only while a hand
+// holds it (both hands, when it is carried together; holding in the frame
+// before or after the step); a hand that holds nothing is not inside it.
+TEST(TwoHands, ContactFlagsAreExactForEveryTask) {
+  const TriMesh object = MakeCylinder(0.035, 0.12);
+  for (const TwoHandTask task : {TwoHandTask::kHandover, TwoHandTask::kCarry, TwoHandTask::kHoldAndAct}) {
+    EpisodeSpec spec;
+    spec.frames = 60;
+    spec.two_hand_task = task;
+    const Episode ep = ScriptEpisode(spec, object);
+    ASSERT_EQ(ep.frames.size(), 60u);
+    int moved = 0, both = 0;
+    for (size_t t = 0; t < ep.frames.size(); ++t) {
+      const EpisodeFrame& f = ep.frames[t];
+      ASSERT_TRUE(f.hands[0] && f.hands[1]) << TwoHandTaskName(task);
+      for (const Side side : {Side::kLeft, Side::kRight}) {
+        const double clearance = FingerClearance(f, side, object);
+        if (f.contact[static_cast<int>(side)]) {
+          EXPECT_LT(std::abs(clearance), 0.0015) << TwoHandTaskName(task) << " frame " << t;
+        } else {
+          EXPECT_GT(clearance, -0.0015) << TwoHandTaskName(task) << " frame " << t << " finger inside";
+        }
+      }
+      both += f.contact[0] && f.contact[1];
+      if (t == 0) continue;
+      const EpisodeFrame& prev = ep.frames[t - 1];
+      const bool moves = (f.object_pose.t - prev.object_pose.t).norm() > 1e-9 ||
+                         f.object_pose.q.angularDistance(prev.object_pose.q) > 1e-9;
+      if (!moves) continue;
+      ++moved;
+      // Moving from frame t-1 to t: held in one of the two.
+      const bool left = prev.contact[0] || f.contact[0], right = prev.contact[1] || f.contact[1];
+      EXPECT_TRUE(left || right) << TwoHandTaskName(task) << " moves free in frame " << t;
+      if (task == TwoHandTask::kCarry) {
+        EXPECT_TRUE(left && right) << "frame " << t;
+      }
+    }
+    std::printf("%s: object moves in %d frames, both hands hold it in %d\n", TwoHandTaskName(task), moved, both);
+    EXPECT_GT(both, 0) << TwoHandTaskName(task);
+    if (task == TwoHandTask::kHoldAndAct) {
+      EXPECT_EQ(moved, 0);
+    } else {
+      EXPECT_GT(moved, 10);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace doasido::synth

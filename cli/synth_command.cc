@@ -31,6 +31,10 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--meshes", cfg->mesh_dir,
                   "Folder of object meshes (.obj/.ply/.glb/.stl, metres) to draw objects from "
                   "besides the built-in box, cylinder, sphere and mug");
+  cmd->add_option("--two-hand-task", cfg->two_hand_task,
+                  "Every clip a task for both hands: handover, carry or hold_and_act (exact contact per hand)")
+      ->check(CLI::IsMember({"none", "handover", "carry", "hold_and_act"}))
+      ->capture_default_str();
   cmd->add_option("--png-every", cfg->png_every,
                   "Also write every n-th frame as PNG under <out>/png (0: none)")
       ->capture_default_str();

@@ -173,8 +173,8 @@ void BuiltinHandObjectDetector::Consume(FrameContext& context) {
 }
 
 Json ToJson(const InteractionSignals& s) {
-  return Json{
-      {"covered", s.covered}, {"hands", s.hands}, {"objects", s.objects}, {"contact", s.contact}};
+  return Json{{"covered", s.covered}, {"hands", s.hands},           {"objects", s.objects},
+              {"contact", s.contact}, {"in_contact", s.in_contact}};
 }
 
 InteractionSignals InteractionSignalsFromJson(const Json& j) {
@@ -183,8 +183,10 @@ InteractionSignals InteractionSignalsFromJson(const Json& j) {
   s.hands = IntArray(j, "hands");
   s.objects = IntArray(j, "objects");
   s.contact = IntArray(j, "contact");
+  if (j.contains("in_contact")) s.in_contact = IntArray(j, "in_contact");
   const size_t n = s.covered.size();
-  if (s.hands.size() != n || s.objects.size() != n || s.contact.size() != n) {
+  if (s.hands.size() != n || s.objects.size() != n || s.contact.size() != n ||
+      (!s.in_contact.empty() && s.in_contact.size() != n)) {
     throw Error("bad_measurements", "per-frame arrays differ in length", {.field = "interaction"});
   }
   return s;
@@ -192,13 +194,15 @@ InteractionSignals InteractionSignalsFromJson(const Json& j) {
 
 void InteractionExtractor::Consume(FrameContext& context) {
   const FrameBoxes& b = context.boxes;
-  int mask = 0;
+  int mask = 0, touching = 0;
   for (size_t i = 0; i < b.hands.size(); ++i) {
     const int state = i < b.hand_contact.size() ? b.hand_contact[i] : -1;
     if (state >= 0 && state <= 4) {
       mask |= 1 << state;
+      touching += state == 3 || state == 4;
     } else if (TouchedObject(b.hands[i], b.objects) >= 0) {
       mask |= 1 << 3;  // unknown state, object at the hand: a portable object
+      ++touching;
     } else {
       mask |= 1 << 5;
     }
@@ -207,6 +211,7 @@ void InteractionExtractor::Consume(FrameContext& context) {
   signals_.hands.push_back(static_cast<int>(b.hands.size()));
   signals_.objects.push_back(static_cast<int>(b.objects.size()));
   signals_.contact.push_back(mask);
+  signals_.in_contact.push_back(touching);
 }
 
 double InteractionFraction(const InteractionSignals& s, const std::vector<int>& contact_states,
@@ -231,10 +236,11 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
   RequireAnalysis(measurements, kInteractionStageName);
   const InteractionSignals s = InteractionSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
-  size_t covered = 0, with_hands = 0;
+  size_t covered = 0, with_hands = 0, two_hands = 0;
   for (std::int64_t i = span.first; i <= span.last; ++i) {
     covered += s.covered[i] != 0;
     with_hands += (s.covered[i] && s.hands[i] > 0) ? 1 : 0;
+    two_hands += s.covered[i] && !s.in_contact.empty() && s.in_contact[i] >= 2;
   }
   const double n = std::max<double>(1.0, static_cast<double>(span.last - span.first + 1));
   const double covered_fraction = static_cast<double>(covered) / n;
@@ -245,6 +251,8 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
       {"covered_fraction", covered_fraction},
       {"hand_fraction", covered > 0 ? static_cast<double>(with_hands) / covered : 0.0},
       {"interaction_fraction", fraction},
+      // Covered frames where both hands touch an object (bimanual clips).
+      {"two_hand_fraction", s.in_contact.empty() ? Json() : Json(covered > 0 ? double(two_hands) / covered : 0.0)},
       {"scores",
        {ScoreEntry("interaction_fraction", fraction, false, c.min_interaction_fraction),
         ScoreEntry("covered_fraction", covered_fraction, false, c.min_covered_fraction)}}};

@@ -111,8 +111,13 @@ class BuiltinHandObjectDetector : public FrameConsumer {
   std::vector<Detection> detections_;
 };
 
+// Per frame: covered by a detector (0/1), hands, objects, the contact
+// states present (bit mask, bit 5 = a hand with no state and no object at
+// it), and how many hands touch an object (states 3 "portable" and 4
+// "stationary", or a hand without a state whose box meets an object's).
+// in_contact is empty in analyses made before it was measured.
 struct InteractionSignals {
-  std::vector<int> covered, hands, objects, contact;
+  std::vector<int> covered, hands, objects, contact, in_contact;
 };
 Json ToJson(const InteractionSignals& s);
 InteractionSignals InteractionSignalsFromJson(const Json& j);  // throws Error("bad_measurements")

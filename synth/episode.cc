@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/error.h"
 #include "synth/objects.h"
 
 namespace doasido::synth {
@@ -261,6 +262,14 @@ const char* TwoHandTaskName(TwoHandTask task) {
       return "hold_and_act";
   }
   return "unknown";
+}
+
+TwoHandTask TwoHandTaskFromName(const std::string& name) {
+  for (const TwoHandTask t : {TwoHandTask::kNone, TwoHandTask::kHandover, TwoHandTask::kCarry, TwoHandTask::kHoldAndAct}) {
+    if (name == TwoHandTaskName(t)) return t;
+  }
+  throw Error("bad_config", "two_hand_task must be none, handover, carry or hold_and_act, not '" + name + "'",
+              {.field = "two_hand_task"});
 }
 
 Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {

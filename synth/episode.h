@@ -26,6 +26,8 @@ enum class LeaveFrame { kNone, kHand, kObject };
 // Bimanual episodes (ScriptTwoHands).
 enum class TwoHandTask { kNone, kHandover, kCarry, kHoldAndAct };
 const char* TwoHandTaskName(TwoHandTask task);
+// The task TwoHandTaskName gives `name`; throws Error("bad_config") otherwise.
+TwoHandTask TwoHandTaskFromName(const std::string& name);
 
 struct EpisodeSpec {
   Verb verb = Verb::kPickPlace;

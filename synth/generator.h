@@ -42,6 +42,9 @@ struct SynthConfig {
   std::string mesh_dir;       // optional folder of .obj/.ply/.glb objects to draw from
   double sensor_noise = 2.0;  // 8-bit levels
   double two_hand_fraction = 0.3;
+  // "none", or a two-hand task every clip performs ("handover", "carry",
+  // "hold_and_act"; episode.h TwoHandTask).
+  std::string two_hand_task = "none";
   int track_points = 64;
   bool write_bundles = true;
   bool write_annotations = true;
@@ -56,7 +59,7 @@ struct SynthConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, clips, width, height, fps,
                                                 frames, mix, genre, mesh_dir, sensor_noise,
-                                                two_hand_fraction, track_points, write_bundles,
+                                                two_hand_fraction, two_hand_task, track_points, write_bundles,
                                                 write_annotations, png_every, model_bundles,
                                                 candidates, depth_noise, hand_noise)
 

@@ -6,7 +6,8 @@
 
 #include "core/error.h"
 #include "filters/interaction.h"
-#include "test_util.h"
+#include "synth/generator.h"
+#include "tests/test_util.h"
 
 namespace doasido::filters {
 namespace {
@@ -123,6 +124,59 @@ TEST(Interaction, ContactStatesDecide) {
   EXPECT_EQ(strict.Redecide(m)->reason, "no_interaction");
   InteractionStage any({.contact_states = {3, 4}, .min_interaction_fraction = 0.5});
   EXPECT_EQ(any.Redecide(m)->verdict, Verdict::kPass);
+}
+
+// A rendered handover clip (synth: the right hand picks the object up, the
+// left takes it over): from its 100DOH-style boxes the extractor counts the
+// hands touching the object in every frame, as the clip's ground truth
+// (contact flags of the visible hands) has it, and the stage's summary says
+// in what share of the frames both hands hold it.
+TEST(Interaction, CountsTheHandsInContactOnATwoHandClip) {
+  synth::SynthConfig cfg;
+  cfg.width = 160;
+  cfg.height = 120;
+  cfg.frames = 48;
+  cfg.seed = 5;
+  cfg.two_hand_task = "handover";
+  const synth::RenderedClip clip = synth::RenderClip(cfg, 0, synth::DefectKind::kClean);
+  InteractionExtractor extractor;
+  int expected_both = 0;
+  std::vector<int> expected;
+  for (int t = 0; t < cfg.frames; ++t) {
+    FrameContext context;
+    context.boxes.known = true;
+    for (const synth::VocHand& h : clip.voc[t].hands) {
+      context.boxes.hands.emplace_back(h.box.x0, h.box.y0, h.box.x1 - h.box.x0 + 1, h.box.y1 - h.box.y0 + 1);
+      context.boxes.hand_contact.push_back(h.contact_state);
+    }
+    for (const synth::VocObject& o : clip.voc[t].objects) {
+      context.boxes.objects.emplace_back(o.box.x0, o.box.y0, o.box.x1 - o.box.x0 + 1, o.box.y1 - o.box.y0 + 1);
+    }
+    extractor.Consume(context);
+    const Json& facts = clip.gt.at("per_frame").at(t);
+    int touching = 0;
+    for (int side = 0; side < 2; ++side) {
+      touching += facts.at("contact")[side].get<bool>() && facts.at("hand_pixels")[side].get<int>() > 0;
+    }
+    expected.push_back(touching);
+    expected_both += touching == 2;
+  }
+  EXPECT_EQ(extractor.signals().in_contact, expected);
+  std::printf("handover clip: hands in contact per frame:");
+  for (int n : expected) std::printf(" %d", n);
+  std::printf("\n");
+  EXPECT_GT(expected_both, 0);
+  EXPECT_GT(std::count(expected.begin(), expected.end(), 1), 0);
+  const Json m = {{"clip", {{"first_frame", 0}, {"frames", cfg.frames}}}, {"signals", ToJson(extractor.signals())}};
+  const auto decided = InteractionStage().Redecide(m);
+  ASSERT_TRUE(decided.has_value());
+  EXPECT_DOUBLE_EQ(decided->measurements.at("summary").at("two_hand_fraction").get<double>(),
+                   double(expected_both) / cfg.frames);
+  EXPECT_EQ(decided->verdict, Verdict::kPass);
+  // An analysis stored before hands in contact were counted still decides.
+  Json old = m;
+  old["signals"].erase("in_contact");
+  EXPECT_TRUE(InteractionStage().Redecide(old)->measurements.at("summary").at("two_hand_fraction").is_null());
 }
 
 }  // namespace

@@ -152,10 +152,8 @@ DynamicRetargetRun RunOne(const recon::Reconstruction& r, const TriMesh& mesh,
   return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label);
 }
 
-// Hand-object contacts when the hand stands at `traj`'s joints of frame k
-// and the object at `object` (for --verbose): how many, and the deepest.
-std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajectory& traj, int k,
-                                const Pose& object) {
+// Resets `d` to the hand at `traj`'s joints of frame k and the object at `object`.
+void PoseAt(const mjModel* m, mjData* d, const HandTrajectory& traj, int k, const Pose& object) {
   const SceneIndex index = IndexScene(m);
   mj_resetData(m, d);
   for (size_t i = 0; i < traj.qpos_names.size(); ++i) {
@@ -164,6 +162,14 @@ std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajector
   double* o = d->qpos + index.object_qpos;
   o[0] = object.t.x(), o[1] = object.t.y(), o[2] = object.t.z();
   o[3] = object.q.w(), o[4] = object.q.x(), o[5] = object.q.y(), o[6] = object.q.z();
+}
+
+// Hand-object contacts when the hand stands at `traj`'s joints of frame k
+// and the object at `object` (for --verbose): how many, and the deepest.
+std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajectory& traj, int k,
+                                const Pose& object) {
+  const SceneIndex index = IndexScene(m);
+  PoseAt(m, d, traj, k, object);
   mj_forward(m, d);
   int n = 0;
   double deepest = 0;
@@ -253,17 +259,12 @@ double RawStepsPerSecond(const mjModel* m, int threads, double seconds,
                          const DynamicRetargetRun* run = nullptr) {
   RolloutPool pool(m, threads);
   std::vector<long long> steps(threads, 0);
-  const SceneIndex index = IndexScene(m);
   const auto start = [&](mjData* d) {
-    mj_resetData(m, d);
-    if (!run) return;
-    const HandTrajectory& t = run->trajectory;
-    for (size_t j = 0; j < t.qpos_names.size(); ++j) {
-      d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, t.qpos_names[j].c_str())]] = t.qpos[0][j];
+    if (run) {
+      PoseAt(m, d, run->trajectory, 0, run->trajectory.object_poses[0]);
+    } else {
+      mj_resetData(m, d);
     }
-    const Pose& o = t.object_poses[0];
-    double* q = d->qpos + index.object_qpos;
-    q[0] = o.t.x(), q[1] = o.t.y(), q[2] = o.t.z(), q[3] = o.q.w(), q[4] = o.q.x(), q[5] = o.q.y(), q[6] = o.q.z();
   };
   const int steps_per_frame = run ? std::max(1, static_cast<int>(std::lround(1.0 / (run->trajectory.fps * m->opt.timestep)))) : 1;
   const auto t0 = Clock::now();
@@ -364,13 +365,8 @@ void Wall(const Flags& f) {
 double HoldDrop(const mjModel* m, mjData* d, const HandTrajectory& kinematic, int k,
                 const Pose& object, double seconds) {
   const SceneIndex index = IndexScene(m);
-  mj_resetData(m, d);
-  for (size_t j = 0; j < kinematic.qpos_names.size(); ++j) {
-    d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, kinematic.qpos_names[j].c_str())]] = kinematic.qpos[k][j];
-  }
-  double* o = d->qpos + index.object_qpos;
-  o[0] = object.t.x(), o[1] = object.t.y(), o[2] = object.t.z();
-  o[3] = object.q.w(), o[4] = object.q.x(), o[5] = object.q.y(), o[6] = object.q.z();
+  PoseAt(m, d, kinematic, k, object);
+  const double* o = d->qpos + index.object_qpos;
   for (int a = 0; a < m->nu; ++a) d->ctrl[a] = d->qpos[index.act_qpos[a]];
   const int steps = static_cast<int>(std::lround(seconds / m->opt.timestep));
   for (int s = 0; s < steps; ++s) mj_step(m, d);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tinyxml2.h>
 
 #include "core/error.h"
 #include "core/file_text.h"
@@ -16,6 +17,7 @@
 #include "retarget/hand_mirror.h"
 #include "retarget/mj_model.h"
 #include "retarget/mjcf_compat.h"
+#include "retarget/mjcf_text.h"
 #include "retarget/urdf_import.h"
 #include "tests/two_finger_hand.h"
 #include "tests/test_util.h"
@@ -231,6 +233,61 @@ TEST(HandMirror, AnImportedUrdfHandMirrorsAndPassesTheCheck) {
   const Deviation d = MirrorDeviation(Compile(Prepared(right)).get(), Compile(Prepared(left.embodiment)).get(), 1);
   EXPECT_LT(d.position, 1e-6);
   EXPECT_LT(d.rotation, 1e-6);
+}
+
+// A right hand and its mirror image share every name; prefixed, both fit in
+// one model (a bimanual scene), each moving exactly as it did alone: every
+// body of the prefixed copy at the original's pose for the same joint
+// angles. Shadow has default classes, a main default and meshes named by
+// their files; the every-attribute model sets a joint axis in its main
+// default, which its mirror image sets the other way.
+TEST(HandMirror, PrefixedHandsMergeIntoOneModel) {
+  for (const char* name : {"every_attribute", "sharpa_right", "shadow_right"}) {
+    const std::string right = std::string(name) == "every_attribute" ? kEveryAttribute : Prepared(Hand(name));
+    const std::string left = MirrorMjcf(right, 'y', name);
+    tinyxml2::XMLDocument both;
+    ParseMjcfText(PrefixMjcfNames(right, "r_", name), name, both);
+    AppendRootChildren(both, PrefixMjcfNames(left, "l_", name), name);
+    const ModelPtr merged = Compile(PrintMjcf(both));
+    for (const auto& [prefix, xml] : {std::pair<std::string, std::string>{"r_", right}, {"l_", left}}) {
+      const ModelPtr original = Compile(xml);
+      ASSERT_EQ(merged->nbody, 2 * original->nbody - 1) << name;
+      ASSERT_EQ(merged->nu, 2 * original->nu) << name;
+      ASSERT_EQ(merged->nmesh, 2 * original->nmesh) << name;
+      DataPtr d0 = MakeData(original.get()), d1 = MakeData(merged.get());
+      std::mt19937 rng(4);
+      for (int j = 0; j < original->njnt; ++j) {
+        const double q = std::uniform_real_distribution<double>(original->jnt_range[2 * j],
+                                                                original->jnt_range[2 * j + 1])(rng);
+        d0->qpos[original->jnt_qposadr[j]] = q;
+        const std::string joint = mj_id2name(original.get(), mjOBJ_JOINT, j);
+        d1->qpos[merged->jnt_qposadr[NameToId(merged.get(), mjOBJ_JOINT, prefix + joint)]] = q;
+      }
+      for (int a = 0; a < original->nu; ++a) {  // the actuators' classes survive the prefix
+        const int m = NameToId(merged.get(), mjOBJ_ACTUATOR, prefix + mj_id2name(original.get(), mjOBJ_ACTUATOR, a));
+        ASSERT_GE(m, 0);
+        EXPECT_EQ(merged->actuator_gainprm[m * mjNGAIN], original->actuator_gainprm[a * mjNGAIN]) << prefix << a;
+        EXPECT_EQ(merged->actuator_ctrlrange[2 * m + 1], original->actuator_ctrlrange[2 * a + 1]) << prefix << a;
+      }
+      mj_kinematics(original.get(), d0.get());
+      mj_kinematics(merged.get(), d1.get());
+      double worst = 0;
+      for (int b = 1; b < original->nbody; ++b) {
+        const int m = NameToId(merged.get(), mjOBJ_BODY, prefix + mj_id2name(original.get(), mjOBJ_BODY, b));
+        ASSERT_GE(m, 0);
+        worst = std::max(worst, (Eigen::Map<const Vec3>(d1->xpos + 3 * m) - Eigen::Map<const Vec3>(d0->xpos + 3 * b)).norm());
+      }
+      EXPECT_LT(worst, 1e-12) << name << " " << prefix;
+      for (int g = 0; g < original->ngeom; ++g) {  // the classes' geom defaults came along
+        const char* geom = mj_id2name(original.get(), mjOBJ_GEOM, g);
+        if (!geom) continue;
+        const int m = NameToId(merged.get(), mjOBJ_GEOM, prefix + geom);
+        ASSERT_GE(m, 0) << geom;
+        EXPECT_EQ(merged->geom_contype[m], original->geom_contype[g]) << geom;
+        EXPECT_EQ(merged->geom_size[3 * m], original->geom_size[3 * g]) << geom;
+      }
+    }
+  }
 }
 
 }  // namespace

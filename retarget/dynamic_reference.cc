@@ -50,14 +50,19 @@ SceneIndex IndexScene(const mjModel* m) {
   const int free = m->body_jntadr[s.object_body];
   s.object_qpos = m->jnt_qposadr[free];
   s.object_dof = m->jnt_dofadr[free];
-  const int mount = NameToId(m, mjOBJ_BODY, "doasido_wrist_mount");
+  // Wrist mounts: the one hand's, or each hand's under its prefix.
+  const auto is_mount = [&](int body) {
+    const char* name = mj_id2name(m, mjOBJ_BODY, body);
+    const std::string n = name ? name : "", suffix = kWristMountBody;
+    return n.size() >= suffix.size() && n.compare(n.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
   for (int a = 0; a < m->nu; ++a) {
     if (m->actuator_trntype[a] != mjTRN_JOINT) {
       throw Error("bad_mjcf", "actuator " + std::to_string(a) + " does not drive a joint");
     }
     const int j = m->actuator_trnid[2 * a];
     s.act_qpos.push_back(m->jnt_qposadr[j]);
-    s.act_kind.push_back(m->jnt_bodyid[j] != mount             ? kFinger
+    s.act_kind.push_back(!is_mount(m->jnt_bodyid[j])             ? kFinger
                          : m->jnt_type[j] == mjJNT_SLIDE ? kBasePos
                                                          : kBaseRot);
     const bool limited = m->actuator_ctrllimited[a];

@@ -6,18 +6,15 @@
 #include "retarget/config_checks.h"
 
 namespace doasido::retarget {
-namespace {
 
-Error WithClip(const Error& e, const std::string& label) {
+Error NamingClip(const Error& e, const std::string& label) {
   ErrorSite site = e.site();
   if (site.clip.empty()) site.clip = label;
   return Error(e.code(), e.message(), site);
 }
 
-// The simulated trajectory at the reference's frames, in the kinematic
-// trajectory's variable order.
-HandTrajectory Resample(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
-                        const DynamicResult& result, const HandTrajectory& kinematic) {
+HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
+                                   const DynamicResult& result, const HandTrajectory& kinematic) {
   HandTrajectory out;
   out.embodiment = kinematic.embodiment;
   out.fps = kinematic.fps;
@@ -45,8 +42,6 @@ HandTrajectory Resample(const mjModel* m, const SceneIndex& index, const Dynamic
   }
   return out;
 }
-
-}  // namespace
 
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
   if (!c.preset.empty()) SamplerPreset(c.preset);  // throws on an unknown name
@@ -93,12 +88,12 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
         BuildReference(m, run.kinematic, object, in_hand, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
-    run.trajectory = Resample(m, index, ref, result, run.kinematic);
+    run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);
     std::vector<bool> valid(r.frames());
     for (int t = 0; t < r.frames(); ++t) valid[t] = r.object_valid[t];
     run.metrics = ObjectTrackingMetrics(run.trajectory.object_poses, object, valid);
   } catch (const Error& e) {
-    throw WithClip(e, label);
+    throw NamingClip(e, label);
   }
   run.trajectory.metrics = {{"e_pos", run.metrics.e_pos},
                             {"e_rot", run.metrics.e_rot},

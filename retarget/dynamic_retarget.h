@@ -17,8 +17,10 @@
 #include <string>
 
 #include "core/config.h"
+#include "core/error.h"
 #include "recon/reconstruction.h"
 #include "retarget/annealed_sampler.h"
+#include "retarget/dynamic_reference.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/retarget_metrics.h"
@@ -54,6 +56,14 @@ struct DynamicRetargetRun {
   // object (KinematicConfig contact_weight; all 0 when off).
   std::vector<int> grasp_contacts;
 };
+
+// `e`, naming `label` as its clip when it names none.
+Error NamingClip(const Error& e, const std::string& label);
+
+// The simulated trajectory (result's states) at the reference's frames, in
+// the kinematic trajectory's variable order, with the controls (step 5).
+HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
+                                   const DynamicResult& result, const HandTrajectory& kinematic);
 
 // Runs steps 1-5. `mesh` is the object in its own frame; scene files go to
 // `scene_dir`. `label` names the clip in errors. Throws Error("bad_reference"),

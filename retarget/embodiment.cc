@@ -31,9 +31,6 @@ const std::map<int, Vec3> kCanonicalPalm = {{0, {0.0, 0.0, 0.0}},
                                             {13, {0.0091, -0.0205, 0.0906}},
                                             {17, {0.017, -0.0355, 0.0747}}};
 
-const char* kWristJoints[6] = {"doasido_wrist_x",  "doasido_wrist_y",  "doasido_wrist_z",
-                               "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
-
 std::string Fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.9g", v);
@@ -69,7 +66,7 @@ std::string AddFloatingBase(const std::string& xml, const Mat3& mount, const Bas
   XMLElement* world = root->FirstChildElement("worldbody");
   if (!world) throw Error("bad_mjcf", "model has no <worldbody>", {.file = label});
   XMLElement* base = doc.NewElement("body");
-  base->SetAttribute("name", "doasido_wrist_mount");
+  base->SetAttribute("name", kWristMountBody);
   XMLElement* inertial = base->InsertNewChildElement("inertial");
   inertial->SetAttribute("pos", "0 0 0");
   inertial->SetAttribute("mass", "0.01");

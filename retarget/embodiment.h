@@ -87,6 +87,13 @@ struct ModelPoint {
   bool fingertip = false;
 };
 
+// The body BuildHandModel adds for the floating wrist (a bimanual scene has
+// one per hand, its name prefixed; see bimanual_retarget.h).
+inline constexpr const char* kWristMountBody = "doasido_wrist_mount";
+// Its joints: slides x, y, z, then hinges x, y, z (world axes).
+inline constexpr const char* kWristJoints[6] = {"doasido_wrist_x",  "doasido_wrist_y",  "doasido_wrist_z",
+                                                "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
+
 struct HandModel {
   Embodiment embodiment;
   std::string xml;  // the prepared MJCF with the floating wrist, self-contained

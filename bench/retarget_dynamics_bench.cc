@@ -21,11 +21,16 @@
 //     per in-hand frame, the deepest penetration, and whether the grasp at
 //     the highest frame holds the object for a second: a reference whose own
 //     grasp drops the object cannot be tracked into a lift.
+//  6. two hands (--sections=bimanual): synthetic handover, carry and
+//     hold-and-act episodes (clean and noisy) and the HOT3D sample's two
+//     hands, both robot hands in one scene (bimanual_retarget.h), rows as
+//     the ablation's; success, E_pos, E_rot of the object, each wrist's
+//     distance from its reference;
 // Episodes' motions are scaled by --lift_scale (default 2: lifts of ~20 cm),
 // so that an object left on the floor fails the 0.1 m success threshold.
 // Sizes are flags, so a short run is possible:
 //   retarget_dynamics_bench --refs=30 --frames=60 --samples=16 --iterations=3
-//       --horizon=0.5 --threads=2 --clip_seconds=10 --sections=ablation,throughput,wall,hot3d,grasp
+//       --horizon=0.5 --threads=2 --clip_seconds=10 --sections=ablation,throughput,wall,hot3d,grasp,bimanual
 //   [--contact_weight=W --contact_depth=D --contact_epsilon=E] (grasp terms in every section)
 //   [--elevation=RAD] (the synthetic hand's approach above the horizontal; 0.55)
 #include <algorithm>
@@ -39,6 +44,7 @@
 
 #include "core/error.h"
 #include "recon/hot3d_recording.h"
+#include "retarget/bimanual_retarget.h"
 #include "retarget/dynamic_retarget.h"
 #include "retarget/rollout_pool.h"
 #include "synth/objects.h"
@@ -61,7 +67,7 @@ struct Flags {
   bool seed_wall = false, verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
   std::string wall_preset = "fast";
-  std::string sections = "ablation,throughput,wall,hot3d,grasp";
+  std::string sections = "ablation,throughput,wall,hot3d,grasp,bimanual";
 };
 
 Flags Parse(int argc, char** argv) {
@@ -418,6 +424,88 @@ void Grasp(const Flags& f) {
   }
 }
 
+void Bimanual(const Flags& f) {
+  const char* rows[] = {"annealed sampling", "+ warmup", "+ perturbation", "+ transition reward"};
+  const synth::TwoHandTask tasks[] = {synth::TwoHandTask::kHandover, synth::TwoHandTask::kCarry,
+                                      synth::TwoHandTask::kHoldAndAct};
+  struct Row { Tally tally; double wrists = 0; };
+  std::map<std::pair<int, int>, Row> table;  // (row, noisy)
+  const auto robots = kData / "robots";
+  const Embodiment left = FindEmbodiment("sharpa_left", robots), right = FindEmbodiment("sharpa_right", robots);
+  const auto dir = std::filesystem::temp_directory_path() / "doasido-dynamics-bench-bimanual";
+  const auto t0 = Clock::now();
+  for (int i = 0; i < f.refs; ++i) {
+    synth::EpisodeSpec spec;
+    spec.frames = f.frames;
+    spec.two_hand_task = tasks[i % 3];
+    spec.object_yaw = 0.4 * i;
+    spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
+    const TriMesh mesh = i % 2 ? synth::MakeBox(0.06, 0.06, 0.09) : synth::MakeCylinder(0.035, 0.10, 16);
+    const recon::Reconstruction clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
+    recon::Reconstruction noisy = clean;
+    synth::AddReconstructionNoise(noisy, {}, 2000 + i);
+    for (int row = 0; row < 4; ++row) {
+      DynamicRetargetConfig config = BaseConfig(f);
+      config.sampler.warmup = row >= 1;
+      config.sampler.warmup_seconds = f.horizon;
+      config.sampler.perturb = row >= 2;
+      config.sampler.reward.transition = row >= 3;
+      for (int n = 0; n < 2; ++n) {
+        Row& r = table[{row, n}];
+        try {
+          const BimanualRun run = RetargetBimanual(n ? noisy : clean, mesh, left, right, config, dir, "bimanual");
+          r.tally.Add(run.metrics);
+          r.wrists += 0.5 * (run.left_wrist_error + run.right_wrist_error);
+        } catch (const Error& e) {
+          ++r.tally.errors;
+          std::fprintf(stderr, "bimanual ref %d row %d: %s\n", i, row, e.what());
+        }
+      }
+    }
+    std::fprintf(stderr, "\rbimanual: %d/%d references (%.0f s)", i + 1, f.refs,
+                 std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  std::printf("\n== Two hands: %d synthetic references (handover, carry, hold-and-act in turn), %d frames,\n"
+              "   both Sharpa hands and the object in one scene, %d samples x %d iterations\n",
+              f.refs, f.frames, f.samples, f.iterations);
+  std::printf("%-22s | %-36s | %-36s\n", "", "noisy: succ  E_pos  E_rot  wrists", "clean: succ  E_pos  E_rot  wrists");
+  for (int row = 0; row < 4; ++row) {
+    std::printf("%-22s", rows[row]);
+    for (int n = 1; n >= 0; --n) {
+      const Row& r = table[{row, n}];
+      const int k = std::max(1, r.tally.n);
+      std::printf(" |       %.2f  %.3f  %.3f  %5.1f mm%s", double(r.tally.success) / std::max(1, r.tally.n + r.tally.errors),
+                  r.tally.e_pos / k, r.tally.e_rot / k, 1000 * r.wrists / k, r.tally.errors ? "*" : " ");
+    }
+    std::printf("\n");
+  }
+  // The HOT3D sample's two hands, the pot (a 5-cm sphere stands in) as the object.
+  const auto sample = kData / "hot3d_sample";
+  const auto recording = sample / "Aria" / "P0003_c701bd11";
+  if (!std::filesystem::exists(recording)) return;
+  recon::Hot3dReferenceOptions o;
+  o.hand = "left";
+  o.both_hands = true;
+  o.object_uid = "228358276546933";
+  o.stand_in = synth::MakeSphere(0.05);
+  const recon::Hot3dReference ref = recon::Hot3dToReconstruction(recon::ReadHot3dRecording(recording),
+                                                                 sample / "object_library", o);
+  for (int row : {0, 3}) {
+    DynamicRetargetConfig config = BaseConfig(f);
+    config.sampler.warmup = row >= 1;
+    config.sampler.warmup_seconds = f.horizon;
+    config.sampler.perturb = row >= 2;
+    config.sampler.reward.transition = row >= 3;
+    const auto t1 = Clock::now();
+    const BimanualRun run = RetargetBimanual(ref.reconstruction, ref.mesh, left, right, config, dir, "hot3d");
+    std::printf("HOT3D two hands, %-20s: succ %d, E_pos %.3f, E_rot %.3f, wrists %.1f / %.1f mm, in-hand %d / %d "
+                "of %d frames, %.1f s\n", rows[row], run.metrics.success, run.metrics.e_pos, run.metrics.e_rot,
+                1000 * run.left_wrist_error, 1000 * run.right_wrist_error, run.left_in_hand_frames,
+                run.right_in_hand_frames, ref.reconstruction.frames(),
+                std::chrono::duration<double>(Clock::now() - t1).count());
+  }
+}
+
 constexpr const char* kCoffeePot = "228358276546933";
 
 void Hot3d(const Flags& f) {
@@ -486,5 +574,6 @@ int main(int argc, char** argv) {
   if (f.sections.find("wall") != std::string::npos) Wall(f);
   if (f.sections.find("hot3d") != std::string::npos) Hot3d(f);
   if (f.sections.find("grasp") != std::string::npos) Grasp(f);
+  if (f.sections.find("bimanual") != std::string::npos) Bimanual(f);
   return 0;
 }

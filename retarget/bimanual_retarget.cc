@@ -26,7 +26,7 @@ void CheckLeftHand(const recon::Reconstruction& r, const std::string& label) {
 // One trajectory over both hands' variables, names prefixed.
 HandTrajectory Combined(const HandTrajectory& left, const HandTrajectory& right) {
   HandTrajectory out = right;
-  out.embodiment = left.embodiment + "+" + right.embodiment;
+  out.embodiment = left.embodiment + kBimanualSeparator + right.embodiment;
   out.qpos_names.clear();
   for (const std::string& n : left.qpos_names) out.qpos_names.push_back(kLeftPrefix + n);
   for (const std::string& n : right.qpos_names) out.qpos_names.push_back(kRightPrefix + n);

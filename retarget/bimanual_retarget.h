@@ -29,6 +29,11 @@ namespace doasido::retarget {
 
 inline constexpr const char* kLeftPrefix = "l_";
 inline constexpr const char* kRightPrefix = "r_";
+// A two-hand trajectory's embodiment: "<left>+<right>".
+inline constexpr char kBimanualSeparator = '+';
+inline bool IsBimanualEmbodiment(const std::string& name) {
+  return name.find(kBimanualSeparator) != std::string::npos;
+}
 
 struct BimanualRun {
   // Both hands at the reference fps: qpos_names and ctrl_names prefixed

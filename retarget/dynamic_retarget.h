@@ -30,6 +30,10 @@ namespace doasido::retarget {
 
 struct DynamicRetargetConfig {
   std::string hand = "sharpa_right";  // embodiment name or description path
+  // "" retargets the right hand only; a robot hand (e.g. "sharpa_left")
+  // retargets both hands of a reconstruction that has a left one, this
+  // hand on the left and `hand` on the right (bimanual_retarget.h).
+  std::string left_hand;
   std::string robots_dir;             // "" = DefaultRobotsDir()
   // "seed" or "fast" replaces `sampler` by that preset (annealed_sampler.h
   // SamplerPreset); "" uses `sampler` as written.
@@ -38,7 +42,7 @@ struct DynamicRetargetConfig {
   KinematicConfig kinematic;
   SceneConfig scene;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DynamicRetargetConfig, hand, robots_dir, preset,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DynamicRetargetConfig, hand, left_hand, robots_dir, preset,
                                                 sampler, kinematic, scene)
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section);
 

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "retarget/bimanual_retarget.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::retarget {
@@ -38,19 +39,39 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   }
   const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;
   std::filesystem::create_directories(context.artifact_dir);
-  const DynamicRetargetRun run = RetargetReconstruction(
-      r, mesh, FindEmbodiment(config_.hand, robots), config_, context.artifact_dir / "scene", clip);
+  bool left_seen = false;
+  for (bool v : r.left_valid) left_seen |= v;
+  DynamicRetargetRun run;
+  Json& m = result.measurements;
+  if (!config_.left_hand.empty() && left_seen) {
+    BimanualRun both = RetargetBimanual(r, mesh, FindEmbodiment(config_.left_hand, robots),
+                                        FindEmbodiment(config_.hand, robots), config_,
+                                        context.artifact_dir / "scene", clip);
+    WriteTrajectoryJson(both.left_kinematic, context.artifact_dir / "kinematic_reference_left.json");
+    result.artifacts.push_back({"kinematic_reference_left", "kinematic_reference_left.json"});
+    m["left_wrist_error"] = both.left_wrist_error;
+    m["right_wrist_error"] = both.right_wrist_error;
+    m["left_in_hand_frames"] = both.left_in_hand_frames;
+    run.trajectory = std::move(both.trajectory);
+    run.kinematic = std::move(both.right_kinematic);
+    run.metrics = both.metrics;
+    run.stats = both.stats;
+    run.robot_scene_xml = std::move(both.robot_scene_xml);
+    run.in_hand_frames = both.right_in_hand_frames;
+  } else {
+    run = RetargetReconstruction(r, mesh, FindEmbodiment(config_.hand, robots), config_,
+                                 context.artifact_dir / "scene", clip);
+  }
 
   WriteTrajectoryJson(run.trajectory, context.artifact_dir / "trajectory.json");
   WriteTrajectoryCsv(run.trajectory, context.artifact_dir / "trajectory.csv");
   WriteTrajectoryJson(run.kinematic, context.artifact_dir / "kinematic_reference.json");
   std::ofstream(context.artifact_dir / "robot_scene.xml") << run.robot_scene_xml;
-  result.artifacts = {{"trajectory", "trajectory.json"},
-                      {"trajectory_csv", "trajectory.csv"},
-                      {"kinematic_reference", "kinematic_reference.json"},
-                      {"scene", "scene/scene.xml"},
-                      {"robot_scene", "robot_scene.xml"}};
-  Json& m = result.measurements;
+  result.artifacts.insert(result.artifacts.begin(), {{"trajectory", "trajectory.json"},
+                                                     {"trajectory_csv", "trajectory.csv"},
+                                                     {"kinematic_reference", "kinematic_reference.json"},
+                                                     {"scene", "scene/scene.xml"},
+                                                     {"robot_scene", "robot_scene.xml"}});
   m["e_pos"] = run.metrics.e_pos;
   m["e_rot"] = run.metrics.e_rot;
   m["success"] = run.metrics.success;

@@ -12,6 +12,12 @@
 //   scene/scene.xml + hull OBJs, robot_scene.xml  the scene it ran in
 // Measurements: e_pos, e_rot, success, frames, in_hand_frames, plans,
 // iterations, rollouts, sim_steps, optimizer_seconds, rollout_steps_per_second.
+// With config.left_hand set and a left hand in the reconstruction, both
+// hands are retargeted in one scene (bimanual_retarget.h): the trajectory
+// holds both (names prefixed l_ / r_, embodiment "<left>+<right>"),
+// kinematic_reference.json is the right hand's and
+// kinematic_reference_left.json the left's; measurements add
+// left_wrist_error, right_wrist_error (m) and left_in_hand_frames.
 // Verdict: pass on success (E_pos < 0.1 m and E_rot < 0.5 rad); reject with
 // kReasonTrackingFailed otherwise, kReasonNoRightHand / kReasonNoObject when
 // there is nothing to retarget. Errors (the clip fails, the batch goes on):

@@ -152,6 +152,7 @@ function buildScene(data) {
     scene3.add(skeleton);
   }
   state.skeleton = skeleton;  // for tests and the console
+  state.groups = groups;      // one per body, data.bodies' order
   // Orbit around the hand's mean position.
   const p = data.poses, c = new THREE.Vector3(); let n = 0;
   for (let f = 0; f < p.length; f += Math.max(1, Math.floor(p.length / 30))) {

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/file_text.h"
 #include "deploy/trajectory_source.h"
+#include "retarget/bimanual_retarget.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
@@ -121,16 +122,24 @@ Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
                 {.clip = std::to_string(clip), .field = "stage"});
   }
   const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files->trajectory);
-  const std::string scene_xml = deploy::ReadSceneXml(files->scene_dir);
-  const retarget::HandModel hand = retarget::BuildHandModel(
-      retarget::FindEmbodiment(t.embodiment, retarget::DefaultRobotsDir()), scene_xml,
-      files->scene_dir);
-  Json out = Geometry(hand.model.get());
+  // Two hands ran in the scene the stage wrote beside the trajectory; one
+  // hand is rebuilt from its description and the object scene.
+  retarget::ModelPtr model;
+  if (retarget::IsBimanualEmbodiment(t.embodiment)) {
+    const auto xml = files->trajectory.parent_path() / "robot_scene.xml";
+    model = retarget::CompileMjcfText(ReadFileOrThrow(xml, "no_such_trajectory", "no robot scene beside a two-hand "
+                                                      "trajectory"), xml.string());
+  } else {
+    model = retarget::BuildHandModel(retarget::FindEmbodiment(t.embodiment, retarget::DefaultRobotsDir()),
+                                     deploy::ReadSceneXml(files->scene_dir), files->scene_dir)
+                .model;
+  }
+  Json out = Geometry(model.get());
   out["fps"] = t.fps;
   out["frames"] = t.qpos.size();
   out["embodiment"] = t.embodiment;
-  out["poses"] = Replay(hand.model.get(), t);
-  out["object_body"] = retarget::NameToId(hand.model.get(), mjOBJ_BODY, "object");
+  out["poses"] = Replay(model.get(), t);
+  out["object_body"] = retarget::NameToId(model.get(), mjOBJ_BODY, "object");
   Json ref = Json::array();
   for (const Pose& p : t.object_poses) ref.push_back(PoseJson(p));
   out["object_reference"] = ref;

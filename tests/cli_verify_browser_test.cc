@@ -17,6 +17,14 @@
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
 #include "retarget/mug_mesh.h"
+#include "retarget/bimanual_retarget.h"
+#include "retarget/dynamic_stage.h"
+#include "recon/recon_stage.h"
+#include "recon/reconstruction.h"
+#include "core/mesh.h"
+#include "synth/episode.h"
+#include "synth/objects.h"
+#include "synth/reconstruction_noise.h"
 #include "retarget/scene_builder.h"
 #include "review/server.h"
 #include "tests/test_util.h"
@@ -237,6 +245,85 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
   ASSERT_TRUE(refused);
   EXPECT_EQ(refused->status, 403);
   EXPECT_EQ(client.Get("/api/verify/scene/1x")->status, 404);
+}
+
+// Two hands: the retarget stage, given a left robot hand, retargets a
+// synthetic two-handed carry's reconstruction with both hands in one scene,
+// and the verification page draws both robot hands (hiding either one's
+// bodies changes the picture).
+TEST(VerifyBrowser, ATwoHandTrajectoryShowsBothHands) {
+  if (!testing::ChromiumAvailable()) GTEST_SKIP() << "needs Debian's chromium and chromium-driver";
+  TempDir dir;
+  ASSERT_EQ(RunDoasido({"synth", "--out", (dir / "synth").string(), "--clips", "1", "--frames", "30",
+                        "--width", "160", "--height", "120", "--seed", "4", "--mix", "clean=1",
+                        "--no-bundles"}).exit_code, 0);
+  const auto db_path = dir / "work" / "d.db";
+  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline",
+                        std::string("probe,") + retarget::kRetargetStageName}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()})
+                .exit_code, 0);
+  Database db(db_path);
+  auto probe = pipeline::MakeStage("probe", Json::object());
+  while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
+    ASSERT_TRUE(db.Complete(*claim, "test", "h", probe->Run(db.LoadContext(claim->clip_id, "probe")), 0.0));
+  }
+  auto claim = db.ClaimNext("test", {retarget::kRetargetStageName}, 60, 3);
+  ASSERT_TRUE(claim.has_value());
+  // The clip's reconstruction: a two-handed carry of a cylinder.
+  const TriMesh cylinder = synth::MakeCylinder(0.035, 0.12, 16);
+  synth::EpisodeSpec spec;
+  spec.frames = 30;
+  spec.two_hand_task = synth::TwoHandTask::kCarry;
+  recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
+  const auto recon_dir = db.ArtifactDir(claim->clip_id, recon::kReconStageName);
+  std::filesystem::create_directories(recon_dir);
+  SaveObj(cylinder, recon_dir / recon::kReconstructionMesh);
+  r.object_mesh = recon_dir / recon::kReconstructionMesh;
+  recon::WriteReconstruction(r, recon_dir);
+  retarget::DynamicRetargetConfig config;
+  config.preset = "";
+  config.left_hand = "sharpa_left";
+  config.robots_dir = (testing::SharedData() / "robots").string();
+  config.kinematic.restarts = 1;
+  config.sampler.num_samples = 4;
+  config.sampler.max_num_iterations = 1;
+  config.sampler.horizon = 0.2;
+  config.sampler.knot_dt = 0.1;
+  config.sampler.ctrl_dt = 0.1;
+  config.sampler.threads = 2;
+  const StageResult result =
+      retarget::DynamicRetargetStage(config).Run(db.LoadContext(claim->clip_id, retarget::kRetargetStageName));
+  ASSERT_TRUE(result.measurements.contains("left_wrist_error")) << result.measurements.dump();
+  ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
+
+  ChromeDriver driver(dir / "chromedriver.log");
+  review::ReviewServer server(db_path, {.port = 0, .reviewer = "vera"});
+  server.Start();
+  WebDriverSession session(driver, 1400, 900,
+                           {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+                            "--ignore-gpu-blocklist"});
+  session.Navigate(server.Origin() + "/verify");
+  EXPECT_EQ(session.WaitFor("document.body.dataset.ready === '1' && document.body.dataset.loaded === '1'"
+                            " && window.doasidoVerify.queue.length", "the verification queue", 60),
+            1);
+  if (const char* shots = std::getenv("DOASIDO_SHOTS_DIR")) {
+    session.Screenshot(std::filesystem::path(shots) / "verify_two_hands.png");
+  }
+  for (const std::string prefix : {retarget::kLeftPrefix, retarget::kRightPrefix}) {
+    const int bodies = session.Execute(
+        "return window.doasidoVerify.scene.bodies.filter(b => b.name.startsWith(arguments[0])"
+        " && b.geoms.length).length;", Json::array({prefix})).get<int>();
+    EXPECT_GT(bodies, 10) << prefix << " hand bodies with geometry";
+    SnapshotView(session, "both_" + prefix);
+    session.Execute(
+        "const s = window.doasidoVerify; s.scene.bodies.forEach((b, i) => {"
+        " if (b.name.startsWith(arguments[0])) s.groups[i].visible = false; }); s.render();",
+        Json::array({prefix}));
+    const int pixels = ChangedPixels(session, "both_" + prefix);
+    std::printf("hiding the %s hand changes %d pixels\n", prefix.c_str(), pixels);
+    EXPECT_GT(pixels, 200) << prefix;
+    session.Execute("window.doasidoVerify.groups.forEach(g => { g.visible = true; }); window.doasidoVerify.render();");
+  }
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/trajectory_source.h"
+#include "retarget/bimanual_retarget.h"
 #include "retarget/embodiment.h"
 #include "retarget/kinematic_stage.h"
 
@@ -139,15 +140,18 @@ void AddPlan(CLI::App& deploy) {
 
 void AddPlanTwo(CLI::App& deploy) {
   struct Args {
-    std::string left, right, left_hand, right_hand, robots_dir, out;
+    std::string trajectory, left, right, left_hand, right_hand, robots_dir, out;
     deploy::BimanualConfig config;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = deploy.add_subcommand(
       "plan-two", "Two arms for two hands: place two UR3e arms side by side, solve each arm's IK for\n"
                   "its hand's trajectory, check reach, joint speeds and arm-arm collisions, write one plan");
-  cmd->add_option("--left", a->left, "The left hand's trajectory.json")->required();
-  cmd->add_option("--right", a->right, "The right hand's trajectory.json")->required();
+  auto* both = cmd->add_option("--trajectory", a->trajectory,
+                               "A two-hand trajectory.json (the retarget stage's with [retarget] left_hand)");
+  auto* left_option = cmd->add_option("--left", a->left, "Or the left hand's trajectory.json");
+  auto* right_option = cmd->add_option("--right", a->right, "and the right hand's");
+  both->excludes(left_option)->excludes(right_option);
   cmd->add_option("--left-hand", a->left_hand, "Left embodiment (default: the trajectory's)");
   cmd->add_option("--right-hand", a->right_hand, "Right embodiment (default: the trajectory's)");
   cmd->add_option("--robots-dir", a->robots_dir, "Folder of robot hand descriptions");
@@ -163,20 +167,25 @@ void AddPlanTwo(CLI::App& deploy) {
       "and the hand a capsule along the flange; frames where the arms come closer than the clearance are\n"
       "listed with their times and the command exits non-zero (the plan is written either way);\n"
       "`deploy stream` refuses such a plan and sends one doasido_lcm.bimanual_command per tick otherwise.\n\n"
-      "Example:\n"
+      "Examples:\n"
+      "  doasido deploy plan-two --trajectory work/doasido/artifacts/12/retarget/trajectory.json --out work/two.json\n"
       "  doasido deploy plan-two --left work/left/trajectory.json --right work/right/trajectory.json \\\n"
       "      --out work/two.json --base-distance 0.6\n"
       "  doasido deploy stream --plan work/two.json");
   cmd->callback([a] {
     deploy::CheckConfig(a->config, "deploy");
-    const retarget::HandTrajectory left = retarget::ReadTrajectoryJson(a->left);
-    const retarget::HandTrajectory right = retarget::ReadTrajectoryJson(a->right);
+    if (a->trajectory.empty() && (a->left.empty() || a->right.empty())) {
+      throw Error("bad_arguments", "give --trajectory, or --left and --right", {.field = "--trajectory"});
+    }
+    const auto [left, right] = a->trajectory.empty()
+                                   ? std::pair(retarget::ReadTrajectoryJson(a->left), retarget::ReadTrajectoryJson(a->right))
+                                   : retarget::SplitBimanualTrajectory(retarget::ReadTrajectoryJson(a->trajectory));
     const std::string robots = a->robots_dir.empty() ? retarget::DefaultRobotsDir() : a->robots_dir;
     const retarget::Embodiment lh = retarget::FindEmbodiment(a->left_hand.empty() ? left.embodiment : a->left_hand, robots);
     const retarget::Embodiment rh = retarget::FindEmbodiment(a->right_hand.empty() ? right.embodiment : a->right_hand, robots);
     deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, lh, rh, a->config);
-    plan.left.source = a->left;
-    plan.right.source = a->right;
+    plan.left.source = a->trajectory.empty() ? a->left : a->trajectory;
+    plan.right.source = a->trajectory.empty() ? a->right : a->trajectory;
     deploy::WriteBimanualPlanJson(plan, a->config, a->out);
     const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
     std::printf("%s + %s: %zu commands at %.0f Hz, bases %.3f m apart, closest approach %.3f m\n",

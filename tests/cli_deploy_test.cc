@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "deploy/bimanual.h"
+#include "retarget/bimanual_retarget.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/ur3e.h"
@@ -184,6 +185,17 @@ TEST(DeployPlanTwo, PlansTwoArmsAndStreamsThemAsOne) {
   ASSERT_EQ(stream.exit_code, 0) << stream.err;
   EXPECT_NE(stream.out.find("sent 199 of 199"), std::string::npos) << stream.out;
   EXPECT_EQ(deploy::ReadBimanualLog(dir / "two.lcmlog").size(), 199u);
+
+  // The retarget stage's two-hand trajectory.json plans the same.
+  retarget::WriteTrajectoryJson(retarget::CombineBimanualTrajectories(h.left, h.right), dir / "both.json");
+  const auto one_file = RunDoasido({"deploy", "plan-two", "--trajectory", (dir / "both.json").string(),
+                                    "--robots-dir", (testing::SharedData() / "robots").string(), "--out",
+                                    (dir / "both_plan.json").string()});
+  ASSERT_EQ(one_file.exit_code, 0) << one_file.out << one_file.err;
+  const auto from_one = deploy::BimanualPlanFromJson(deploy::ReadPlanFile(dir / "both_plan.json"), "both");
+  const auto from_two = deploy::BimanualPlanFromJson(deploy::ReadPlanFile(dir / "two.json"), "two");
+  EXPECT_EQ(from_one.left.arm, from_two.left.arm);
+  EXPECT_EQ(from_one.right.arm, from_two.right.arm);
 
   args = plan_two;
   args.insert(args.end(), {"--out", (dir / "close.json").string(), "--base-distance", "0.05"});

@@ -21,6 +21,7 @@
 namespace doasido::retarget {
 namespace {
 
+using doasido::testing::ErrorCode;
 using doasido::testing::SharedData;
 using doasido::testing::TempDir;
 
@@ -204,6 +205,17 @@ TEST(Bimanual, ACarryIsRetargetedWithBothHandsInOneScene) {
   // apart, so a hand on the other's wrist would be off by more than that.
   EXPECT_LT(run.left_wrist_error, 0.15);
   EXPECT_LT(run.right_wrist_error, 0.15);
+  // The two-hand trajectory splits into each hand's own: names without
+  // their prefix, the same positions; combining the halves gives it back.
+  const auto [l, rt] = SplitBimanualTrajectory(run.trajectory);
+  EXPECT_EQ(l.embodiment, "sharpa_left");
+  EXPECT_EQ(rt.embodiment, "sharpa_right");
+  EXPECT_EQ(l.qpos_names, run.left_kinematic.qpos_names);
+  EXPECT_EQ(rt.ctrl_names.size() + l.ctrl_names.size(), run.trajectory.ctrl_names.size());
+  const HandTrajectory rejoined = CombineBimanualTrajectories(l, rt);
+  EXPECT_EQ(rejoined.qpos_names, run.trajectory.qpos_names);
+  for (size_t t = 0; t < run.trajectory.qpos.size(); ++t) EXPECT_EQ(rejoined.qpos[t], run.trajectory.qpos[t]);
+  EXPECT_EQ(ErrorCode([&] { SplitBimanualTrajectory(run.left_kinematic); }), "bad_trajectory");
   const BimanualRun again = RetargetBimanual(r, cylinder, left, right, config, dir / "scene2", "carry");
   for (size_t t = 0; t < run.trajectory.qpos.size(); ++t) {
     EXPECT_EQ(again.trajectory.qpos[t], run.trajectory.qpos[t]) << "frame " << t;

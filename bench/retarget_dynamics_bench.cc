@@ -141,6 +141,18 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   return c;
 }
 
+// The ablation's row `row` (0-3): annealed sampling, then + warmup, +
+// perturbation, + transition reward (seed Table 3).
+const char* const kAblationRows[] = {"annealed sampling", "+ warmup", "+ perturbation", "+ transition reward"};
+DynamicRetargetConfig AblationRow(const Flags& f, int row) {
+  DynamicRetargetConfig config = BaseConfig(f);
+  config.sampler.warmup = row >= 1;
+  config.sampler.warmup_seconds = f.horizon;
+  config.sampler.perturb = row >= 2;
+  config.sampler.reward.transition = row >= 3;
+  return config;
+}
+
 struct Tally {
   int n = 0, success = 0, errors = 0;
   double e_pos = 0, e_rot = 0;
@@ -190,17 +202,13 @@ std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajector
 }
 
 void Ablation(const Flags& f) {
-  const char* rows[] = {"annealed sampling", "+ warmup", "+ perturbation", "+ transition reward"};
+  const auto& rows = kAblationRows;
   std::map<std::pair<int, int>, Tally> tally;  // (row, noisy)
   const auto t0 = Clock::now();
   for (int i = 0; i < f.refs; ++i) {
     const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation);
     for (int row = 0; row < 4; ++row) {
-      DynamicRetargetConfig config = BaseConfig(f);
-      config.sampler.warmup = row >= 1;
-      config.sampler.warmup_seconds = f.horizon;
-      config.sampler.perturb = row >= 2;
-      config.sampler.reward.transition = row >= 3;
+      const DynamicRetargetConfig config = AblationRow(f, row);
       for (int noisy = 0; noisy < 2; ++noisy) {
         Tally& t = tally[{row, noisy}];
         try {
@@ -425,7 +433,7 @@ void Grasp(const Flags& f) {
 }
 
 void Bimanual(const Flags& f) {
-  const char* rows[] = {"annealed sampling", "+ warmup", "+ perturbation", "+ transition reward"};
+  const auto& rows = kAblationRows;
   const synth::TwoHandTask tasks[] = {synth::TwoHandTask::kHandover, synth::TwoHandTask::kCarry,
                                       synth::TwoHandTask::kHoldAndAct};
   struct Row { Tally tally; double wrists = 0; };
@@ -445,11 +453,7 @@ void Bimanual(const Flags& f) {
     recon::Reconstruction noisy = clean;
     synth::AddReconstructionNoise(noisy, {}, 2000 + i);
     for (int row = 0; row < 4; ++row) {
-      DynamicRetargetConfig config = BaseConfig(f);
-      config.sampler.warmup = row >= 1;
-      config.sampler.warmup_seconds = f.horizon;
-      config.sampler.perturb = row >= 2;
-      config.sampler.reward.transition = row >= 3;
+      const DynamicRetargetConfig config = AblationRow(f, row);
       for (int n = 0; n < 2; ++n) {
         Row& r = table[{row, n}];
         try {
@@ -491,11 +495,7 @@ void Bimanual(const Flags& f) {
   const recon::Hot3dReference ref = recon::Hot3dToReconstruction(recon::ReadHot3dRecording(recording),
                                                                  sample / "object_library", o);
   for (int row : {0, 3}) {
-    DynamicRetargetConfig config = BaseConfig(f);
-    config.sampler.warmup = row >= 1;
-    config.sampler.warmup_seconds = f.horizon;
-    config.sampler.perturb = row >= 2;
-    config.sampler.reward.transition = row >= 3;
+    const DynamicRetargetConfig config = AblationRow(f, row);
     const auto t1 = Clock::now();
     const BimanualRun run = RetargetBimanual(ref.reconstruction, ref.mesh, left, right, config, dir, "hot3d");
     std::printf("HOT3D two hands, %-20s: succ %d, E_pos %.3f, E_rot %.3f, wrists %.1f / %.1f mm, in-hand %d / %d "

@@ -120,23 +120,28 @@ int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
   )js", Json::array({before_var})).get<int>();
 }
 
-TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
-  if (!testing::ChromiumAvailable()) GTEST_SKIP() << "needs Debian's chromium and chromium-driver";
-  TempDir dir;
-  ASSERT_EQ(RunDoasido({"synth", "--out", (dir / "synth").string(), "--clips", "2", "--frames", "30",
-                        "--width", "160", "--height", "120", "--seed", "3", "--mix", "clean=1",
-                        "--no-bundles"}).exit_code, 0);
+// `clips` rendered synthetic clips (30 frames, 160 x 120) in a database
+// whose pipeline is probe then `stage`, probed; returns the database.
+std::filesystem::path ProbedClips(const TempDir& dir, int clips, int seed, const std::string& stage) {
+  EXPECT_EQ(RunDoasido({"synth", "--out", (dir / "synth").string(), "--clips", std::to_string(clips), "--frames",
+                        "30", "--width", "160", "--height", "120", "--seed", std::to_string(seed), "--mix",
+                        "clean=1", "--no-bundles"}).exit_code, 0);
   const auto db_path = dir / "work" / "d.db";
-  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline",
-                        std::string("probe,") + retarget::kKinematicStageName}).exit_code, 0);
-  ASSERT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()})
-                .exit_code, 0);
+  EXPECT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline", "probe," + stage}).exit_code, 0);
+  EXPECT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()}).exit_code, 0);
   Database db(db_path);
   auto probe = pipeline::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
-    const StageResult result = probe->Run(db.LoadContext(claim->clip_id, "probe"));
-    ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
+    EXPECT_TRUE(db.Complete(*claim, "test", "h", probe->Run(db.LoadContext(claim->clip_id, "probe")), 0.0));
   }
+  return db_path;
+}
+
+TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
+  if (!testing::ChromiumAvailable()) GTEST_SKIP() << "needs Debian's chromium and chromium-driver";
+  TempDir dir;
+  const auto db_path = ProbedClips(dir, 2, 3, retarget::kKinematicStageName);
+  Database db(db_path);
   std::vector<ClipId> clips;
   while (auto claim = db.ClaimNext("test", {retarget::kKinematicStageName}, 60, 3)) {
     const ClipId id = claim->clip_id;
@@ -254,19 +259,8 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
 TEST(VerifyBrowser, ATwoHandTrajectoryShowsBothHands) {
   if (!testing::ChromiumAvailable()) GTEST_SKIP() << "needs Debian's chromium and chromium-driver";
   TempDir dir;
-  ASSERT_EQ(RunDoasido({"synth", "--out", (dir / "synth").string(), "--clips", "1", "--frames", "30",
-                        "--width", "160", "--height", "120", "--seed", "4", "--mix", "clean=1",
-                        "--no-bundles"}).exit_code, 0);
-  const auto db_path = dir / "work" / "d.db";
-  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline",
-                        std::string("probe,") + retarget::kRetargetStageName}).exit_code, 0);
-  ASSERT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()})
-                .exit_code, 0);
+  const auto db_path = ProbedClips(dir, 1, 4, retarget::kRetargetStageName);
   Database db(db_path);
-  auto probe = pipeline::MakeStage("probe", Json::object());
-  while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
-    ASSERT_TRUE(db.Complete(*claim, "test", "h", probe->Run(db.LoadContext(claim->clip_id, "probe")), 0.0));
-  }
   auto claim = db.ClaimNext("test", {retarget::kRetargetStageName}, 60, 3);
   ASSERT_TRUE(claim.has_value());
   // The clip's reconstruction: a two-handed carry of a cylinder.

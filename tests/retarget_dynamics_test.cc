@@ -15,6 +15,7 @@
 #include "retarget/kinematic_stage.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
+#include "tests/small_retarget_config.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {
@@ -34,24 +35,7 @@ recon::Reconstruction Reference(int frames = kFrames) {
   return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, Cylinder()), 30.0);
 }
 
-// A tiny but complete configuration: every component on, a handful of samples.
-DynamicRetargetConfig SmallConfig(int threads = 2) {
-  DynamicRetargetConfig c;
-  c.preset = "";
-  c.robots_dir = (SharedData() / "robots").string();
-  c.kinematic.restarts = 1;
-  AnnealedSamplerConfig& s = c.sampler;
-  s.num_samples = 8;
-  s.max_num_iterations = 2;
-  s.horizon = 0.2;
-  s.knot_dt = 0.1;
-  s.ctrl_dt = 0.1;
-  s.warmup_seconds = 0.1;
-  s.num_perturb_samples = 2;
-  s.threads = threads;
-  s.seed = 3;
-  return c;
-}
+DynamicRetargetConfig SmallConfig(int threads = 2) { return testing::SmallRetargetConfig(threads); }
 
 DynamicRetargetRun Retarget(const recon::Reconstruction& r, const DynamicRetargetConfig& c,
                        const TempDir& dir) {

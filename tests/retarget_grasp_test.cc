@@ -16,6 +16,7 @@
 #include "synth/episode.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
+#include "tests/small_retarget_config.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {
@@ -170,19 +171,7 @@ TEST(Bimanual, ACarryIsRetargetedWithBothHandsInOneScene) {
   spec.frames = 30;
   spec.two_hand_task = synth::TwoHandTask::kCarry;
   const recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
-  DynamicRetargetConfig config;
-  config.preset = "";
-  config.robots_dir = (SharedData() / "robots").string();
-  config.kinematic.restarts = 1;
-  AnnealedSamplerConfig& s = config.sampler;
-  s.num_samples = 8;
-  s.max_num_iterations = 2;
-  s.horizon = 0.2;
-  s.knot_dt = 0.1;
-  s.ctrl_dt = 0.1;
-  s.warmup_seconds = 0.1;
-  s.threads = 2;
-  s.seed = 3;
+  const DynamicRetargetConfig config = testing::SmallRetargetConfig();
   const Embodiment left = FindEmbodiment("sharpa_left", config.robots_dir);
   const Embodiment right = FindEmbodiment("sharpa_right", config.robots_dir);
   const BimanualRun run = RetargetBimanual(r, cylinder, left, right, config, dir / "scene", "carry");

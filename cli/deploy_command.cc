@@ -74,6 +74,12 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
     files = *found;
   }
   const retarget::HandTrajectory trajectory = retarget::ReadTrajectoryJson(files.trajectory);
+  if (retarget::IsBimanualEmbodiment(trajectory.embodiment) && a.hand.empty()) {
+    throw Error("two_hand_trajectory",
+                "the trajectory holds two hands (" + trajectory.embodiment + "); plan them with `doasido deploy "
+                "plan-two --trajectory " + files.trajectory.string() + " --out PLAN`",
+                {.file = files.trajectory.string(), .field = "embodiment"});
+  }
   const std::string robots = a.robots_dir.empty() ? retarget::DefaultRobotsDir() : a.robots_dir;
   const retarget::Embodiment hand =
       retarget::FindEmbodiment(a.hand.empty() ? trajectory.embodiment : a.hand, robots);

@@ -197,6 +197,14 @@ TEST(DeployPlanTwo, PlansTwoArmsAndStreamsThemAsOne) {
   EXPECT_EQ(from_one.left.arm, from_two.left.arm);
   EXPECT_EQ(from_one.right.arm, from_two.right.arm);
 
+  // `deploy plan` (one arm) names the command for it.
+  const auto one_arm = RunDoasido({"deploy", "plan", "--trajectory", (dir / "both.json").string(), "--out",
+                                   (dir / "one.json").string()});
+  EXPECT_EQ(one_arm.exit_code, 1) << one_arm.err;
+  EXPECT_NE(one_arm.err.find("two_hand_trajectory"), std::string::npos) << one_arm.err;
+  EXPECT_NE(one_arm.err.find("deploy plan-two --trajectory " + (dir / "both.json").string()), std::string::npos)
+      << one_arm.err;
+
   args = plan_two;
   args.insert(args.end(), {"--out", (dir / "close.json").string(), "--base-distance", "0.05"});
   const auto close = RunDoasido(args);

@@ -120,6 +120,17 @@ int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
   )js", Json::array({before_var})).get<int>();
 }
 
+// Chromium flags for WebGL through SwiftShader.
+const std::vector<std::string> kWebGlFlags = {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+                                              "--ignore-gpu-blocklist"};
+
+// Opens the verification page and waits for its queue; returns its length.
+int OpenVerifyQueue(WebDriverSession& session, const review::ReviewServer& server) {
+  session.Navigate(server.Origin() + "/verify");
+  return session.WaitFor("document.body.dataset.ready === '1' && document.body.dataset.loaded === '1'"
+                         " && window.doasidoVerify.queue.length", "the verification queue", 60).get<int>();
+}
+
 // `clips` rendered synthetic clips (30 frames, 160 x 120) in a database
 // whose pipeline is probe then `stage`, probed; returns the database.
 std::filesystem::path ProbedClips(const TempDir& dir, int clips, int seed, const std::string& stage) {
@@ -156,13 +167,8 @@ TEST(VerifyBrowser, ReplayBesideVideoScrubAndKeyboardVerdicts) {
   ChromeDriver driver(dir / "chromedriver.log");
   review::ReviewServer server(db_path, {.port = 0, .reviewer = "vera"});
   server.Start();
-  WebDriverSession session(driver, 1400, 900,
-                           {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-                            "--ignore-gpu-blocklist"});
-  session.Navigate(server.Origin() + "/verify");
-  EXPECT_EQ(session.WaitFor("document.body.dataset.ready === '1' && document.body.dataset.loaded === '1'"
-                            " && window.doasidoVerify.queue.length", "the verification queue", 60),
-            2);
+  WebDriverSession session(driver, 1400, 900, kWebGlFlags);
+  EXPECT_EQ(OpenVerifyQueue(session, server), 2);
   // The clip's video is loaded beside the view.
   const Json video = session.WaitFor(
       "(() => { const v = document.getElementById('video'); return v.readyState >= 1 &&"
@@ -293,13 +299,8 @@ TEST(VerifyBrowser, ATwoHandTrajectoryShowsBothHands) {
   ChromeDriver driver(dir / "chromedriver.log");
   review::ReviewServer server(db_path, {.port = 0, .reviewer = "vera"});
   server.Start();
-  WebDriverSession session(driver, 1400, 900,
-                           {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-                            "--ignore-gpu-blocklist"});
-  session.Navigate(server.Origin() + "/verify");
-  EXPECT_EQ(session.WaitFor("document.body.dataset.ready === '1' && document.body.dataset.loaded === '1'"
-                            " && window.doasidoVerify.queue.length", "the verification queue", 60),
-            1);
+  WebDriverSession session(driver, 1400, 900, kWebGlFlags);
+  EXPECT_EQ(OpenVerifyQueue(session, server), 1);
   if (const char* shots = std::getenv("DOASIDO_SHOTS_DIR")) {
     session.Screenshot(std::filesystem::path(shots) / "verify_two_hands.png");
   }

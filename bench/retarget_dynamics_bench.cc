@@ -31,8 +31,10 @@
 // Sizes are flags, so a short run is possible:
 //   retarget_dynamics_bench --refs=30 --frames=60 --samples=16 --iterations=3
 //       --horizon=0.5 --threads=2 --clip_seconds=10 --sections=ablation,throughput,wall,hot3d,grasp,bimanual
-//   [--contact_weight=W --contact_depth=D --contact_epsilon=E] (grasp terms in every section)
+//   [--contact_weight=16 --contact_depth=0.01 --contact_epsilon=E] (grasp terms in every section)
 //   [--elevation=RAD] (the synthetic hand's approach above the horizontal; 0.55)
+//   [--grasp=pinch|wrap] (the synthetic hand's grasp, synth::GraspType)
+//   [--density=400] (kg/m^3 of the synthetic objects)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -46,6 +48,7 @@
 #include "recon/hot3d_recording.h"
 #include "retarget/bimanual_retarget.h"
 #include "retarget/dynamic_retarget.h"
+#include "retarget/reference_hold.h"
 #include "retarget/rollout_pool.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
@@ -63,7 +66,15 @@ struct Flags {
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
   // The kinematic reference's grasp terms (KinematicConfig); < 0 keeps the default.
   double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
-  double contact_weight = -1, contact_depth = -1, contact_epsilon = -1;
+  // The synthetic references are grasped so that a robot hand copying them
+  // can hold the object: the hand pinches (thumb against two fingers), the
+  // kinematic reference presses touching fingertips 1 cm into the surface
+  // (the grip a position-controlled hand needs), and the objects weigh what
+  // hollow household objects of their size do (80-140 g). --grasp=wrap
+  // --contact_weight=0 --density=1000 measure the references without.
+  std::string grasp = "pinch";  // the synthetic hand's grasp (synth::GraspTypeName)
+  double density = 400;         // kg/m^3 of the object (SceneConfig)
+  double contact_weight = 16, contact_depth = 0.01, contact_epsilon = -1;
   bool seed_wall = false, verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
   std::string wall_preset = "fast";
@@ -87,6 +98,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
     else if (k == "--lift_scale") f.lift_scale = std::stod(v);
     else if (k == "--elevation") f.elevation = std::stod(v);
+    else if (k == "--grasp") f.grasp = v;
+    else if (k == "--density") f.density = std::stod(v);
     else if (k == "--contact_weight") f.contact_weight = std::stod(v);
     else if (k == "--contact_depth") f.contact_depth = std::stod(v);
     else if (k == "--contact_epsilon") f.contact_epsilon = std::stod(v);
@@ -105,7 +118,7 @@ struct Case {
 };
 
 // Reference i: verb, object and approach vary with i; noise seeded by i.
-Case MakeCase(int i, int frames, double lift_scale, double elevation) {
+Case MakeCase(int i, int frames, double lift_scale, double elevation, const std::string& grasp) {
   const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
   Case c;
   c.mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
@@ -115,6 +128,7 @@ Case MakeCase(int i, int frames, double lift_scale, double elevation) {
   spec.manipulation_scale = lift_scale;
   spec.object_yaw = 0.4 * i;
   spec.approach_elevation = elevation;
+  spec.grasp = synth::GraspTypeFromName(grasp);
   spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
   c.clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, c.mesh), 30.0);
   c.noisy = c.clean;
@@ -130,6 +144,7 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   if (f.contact_weight >= 0) c.kinematic.contact_weight = f.contact_weight;
   if (f.contact_depth >= 0) c.kinematic.contact_depth = f.contact_depth;
   if (f.contact_epsilon >= 0) c.kinematic.contact_epsilon = f.contact_epsilon;
+  c.scene.density = f.density;
   AnnealedSamplerConfig& s = c.sampler;
   s.num_samples = f.samples;
   s.max_num_iterations = f.iterations;
@@ -170,24 +185,12 @@ DynamicRetargetRun RunOne(const recon::Reconstruction& r, const TriMesh& mesh,
   return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label);
 }
 
-// Resets `d` to the hand at `traj`'s joints of frame k and the object at `object`.
-void PoseAt(const mjModel* m, mjData* d, const HandTrajectory& traj, int k, const Pose& object) {
-  const SceneIndex index = IndexScene(m);
-  mj_resetData(m, d);
-  for (size_t i = 0; i < traj.qpos_names.size(); ++i) {
-    d->qpos[m->jnt_qposadr[mj_name2id(m, mjOBJ_JOINT, traj.qpos_names[i].c_str())]] = traj.qpos[k][i];
-  }
-  double* o = d->qpos + index.object_qpos;
-  o[0] = object.t.x(), o[1] = object.t.y(), o[2] = object.t.z();
-  o[3] = object.q.w(), o[4] = object.q.x(), o[5] = object.q.y(), o[6] = object.q.z();
-}
-
 // Hand-object contacts when the hand stands at `traj`'s joints of frame k
 // and the object at `object` (for --verbose): how many, and the deepest.
 std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajectory& traj, int k,
                                 const Pose& object) {
   const SceneIndex index = IndexScene(m);
-  PoseAt(m, d, traj, k, object);
+  PoseHandAndObject(m, d, traj, k, object);
   mj_forward(m, d);
   int n = 0;
   double deepest = 0;
@@ -206,7 +209,7 @@ void Ablation(const Flags& f) {
   std::map<std::pair<int, int>, Tally> tally;  // (row, noisy)
   const auto t0 = Clock::now();
   for (int i = 0; i < f.refs; ++i) {
-    const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation);
+    const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation, f.grasp);
     for (int row = 0; row < 4; ++row) {
       const DynamicRetargetConfig config = AblationRow(f, row);
       for (int noisy = 0; noisy < 2; ++noisy) {
@@ -275,7 +278,7 @@ double RawStepsPerSecond(const mjModel* m, int threads, double seconds,
   std::vector<long long> steps(threads, 0);
   const auto start = [&](mjData* d) {
     if (run) {
-      PoseAt(m, d, run->trajectory, 0, run->trajectory.object_poses[0]);
+      PoseHandAndObject(m, d, run->trajectory, 0, run->trajectory.object_poses[0]);
     } else {
       mj_resetData(m, d);
     }
@@ -309,7 +312,7 @@ double RawStepsPerSecond(const mjModel* m, int threads, double seconds,
 }
 
 void Throughput(const Flags& f) {
-  const Case c = MakeCase(0, f.frames, f.lift_scale, f.elevation);
+  const Case c = MakeCase(0, f.frames, f.lift_scale, f.elevation, f.grasp);
   std::printf("\n== Simulation throughput: sim steps/s inside the optimiser vs raw mj_step, same scene\n");
   std::printf("%-8s | %-14s | %-22s | %-22s\n", "threads", "optimiser", "raw: replayed / ratio",
               "raw: at rest / ratio");
@@ -330,7 +333,7 @@ void Throughput(const Flags& f) {
 
 void Wall(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
-  const Case c = MakeCase(0, frames, f.lift_scale, f.elevation);
+  const Case c = MakeCase(0, frames, f.lift_scale, f.elevation, f.grasp);
   std::printf("\n== Wall time for a %.0f-s clip (%d frames), %d threads\n", f.clip_seconds, frames,
               f.threads);
   DynamicRetargetConfig fast = BaseConfig(f);
@@ -372,19 +375,38 @@ void Wall(const Flags& f) {
   }
 }
 
-// How far the object falls in `seconds` when the hand stands at the
-// kinematic reference's pose of frame k, its actuators targeting that pose,
-// and the object starts at the reference's pose: whether the reference's
-// grasp can hold the object at all.
-double HoldDrop(const mjModel* m, mjData* d, const HandTrajectory& kinematic, int k,
-                const Pose& object, double seconds) {
+// For --verbose: where the human fingertips and the robot's contacts sit
+// around the object at frame k (angle about the object's vertical axis from
+// its centre, height; robot contacts with their normal's angle).
+void DescribeGrasp(const mjModel* m, mjData* d, const HandTrajectory& traj,
+                   const recon::Reconstruction& r, const TriMesh& mesh, int k) {
+  const Pose& o = r.object_poses[k];
+  const Vec3 centre = o * Vec3(0.5 * (mesh.Min() + mesh.Max()));
+  auto angle = [&](const Vec3& p) {
+    const Vec3 l = o.q.inverse() * (p - centre);
+    return std::make_pair(std::atan2(l.y(), l.x()) * 180 / 3.14159265, l.z());
+  };
+  const Vec3 palm = (Vec3(r.right_joints[k].row(0).transpose()) + Vec3(r.right_joints[k].row(9).transpose())) * 0.5;
+  std::fprintf(stderr, "  human: palm %.0f deg z %.3f;", angle(palm).first, angle(palm).second);
+  for (int tip : {4, 8, 12, 16, 20}) {
+    const Vec3 p = r.right_joints[k].row(tip).transpose();
+    const double dist = synth::DistanceToMesh(mesh.Transformed(o), p);
+    std::fprintf(stderr, " tip%d %.0f deg z %.3f d %.3f;", tip, angle(p).first, angle(p).second, dist);
+  }
   const SceneIndex index = IndexScene(m);
-  PoseAt(m, d, kinematic, k, object);
-  const double* o = d->qpos + index.object_qpos;
-  for (int a = 0; a < m->nu; ++a) d->ctrl[a] = d->qpos[index.act_qpos[a]];
-  const int steps = static_cast<int>(std::lround(seconds / m->opt.timestep));
-  for (int s = 0; s < steps; ++s) mj_step(m, d);
-  return object.t.z() - o[2];
+  PoseHandAndObject(m, d, traj, k, o);
+  mj_forward(m, d);
+  std::fprintf(stderr, "\n  robot:");
+  for (int c = 0; c < d->ncon; ++c) {
+    const mjContact& con = d->contact[c];
+    const int b1 = m->geom_bodyid[con.geom1], b2 = m->geom_bodyid[con.geom2];
+    if ((b1 == index.object_body) == (b2 == index.object_body) || b1 == 0 || b2 == 0) continue;
+    const int hand_geom = b1 == index.object_body ? con.geom2 : con.geom1;
+    const Vec3 p(con.pos[0], con.pos[1], con.pos[2]);
+    std::fprintf(stderr, " %s(%.0f deg z %.3f d %.4f)", mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[hand_geom]),
+                 angle(p).first, angle(p).second, con.dist);
+  }
+  std::fprintf(stderr, "\n");
 }
 
 // The kinematic reference's grasps with and without the grasp terms
@@ -403,7 +425,7 @@ void Grasp(const Flags& f) {
     double deepest = 0;
     for (int i = 0; i < f.refs; ++i) {
       if (i % 3 == 2) continue;  // slides never leave the floor
-      const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation);
+      const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation, f.grasp);
       DynamicRetargetConfig config = BaseConfig(f);
       config.sampler.num_samples = 1;
       config.sampler.max_num_iterations = 1;
@@ -422,7 +444,8 @@ void Grasp(const Flags& f) {
         contacts += n;
         deepest = std::min(deepest, depth);
       }
-      const double drop = HoldDrop(m.get(), d.get(), run.kinematic, top, c.clean.object_poses[top], 1.0);
+      if (f.verbose) DescribeGrasp(m.get(), d.get(), run.kinematic, c.clean, c.mesh, top);
+      const double drop = ReferenceHoldDrop(m.get(), d.get(), run.kinematic, top, c.clean.object_poses[top], 1.0);
       ++refs;
       holds += drop < 0.02;
       if (f.verbose) std::fprintf(stderr, "ref %d terms %g: frame %d, object fell %.3f m\n", i, w, top, drop);

@@ -142,15 +142,21 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
     const double epsilon = sampler.reward.transition_epsilon;
     const std::vector<bool> in_left = LabelInHand(r.left_joints, r.left_valid, object, mesh, epsilon);
     const std::vector<bool> in_right = LabelInHand(r.right_joints, r.right_valid, object, mesh, epsilon);
-    std::vector<bool> in_hand(in_left.size());
+    // Step 5: the transition reward asks each hand for its own contact.
+    const SceneIndex index = IndexScene(m);
+    const auto bit = [&](const std::string& prefix) {
+      for (size_t h = 0; h < index.hands.size(); ++h) {
+        if (index.hands[h].rfind(prefix, 0) == 0) return static_cast<uint8_t>(1u << h);
+      }
+      throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = label});
+    };
+    const uint8_t left_bit = bit(kLeftPrefix), right_bit = bit(kRightPrefix);
+    std::vector<uint8_t> in_hand(in_left.size());
     for (size_t t = 0; t < in_hand.size(); ++t) {
-      in_hand[t] = in_left[t] || in_right[t];
+      in_hand[t] = (in_left[t] ? left_bit : 0) | (in_right[t] ? right_bit : 0);
       run.left_in_hand_frames += in_left[t];
       run.right_in_hand_frames += in_right[t];
     }
-
-    // Step 5.
-    const SceneIndex index = IndexScene(m);
     const DynamicReference ref = BuildReference(m, both, object, in_hand, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;

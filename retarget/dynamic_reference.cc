@@ -69,6 +69,15 @@ SceneIndex IndexScene(const mjModel* m) {
     s.ctrl_lo.push_back(limited ? m->actuator_ctrlrange[2 * a] : -1e10);
     s.ctrl_hi.push_back(limited ? m->actuator_ctrlrange[2 * a + 1] : 1e10);
   }
+  s.body_hand.assign(m->nbody, -1);
+  for (int b = 1; b < m->nbody; ++b) {  // parents come before children
+    if (is_mount(b)) {
+      s.body_hand[b] = static_cast<int>(s.hands.size());
+      s.hands.push_back(mj_id2name(m, mjOBJ_BODY, b));
+    } else {
+      s.body_hand[b] = s.body_hand[m->body_parentid[b]];
+    }
+  }
   return s;
 }
 
@@ -167,7 +176,7 @@ RowMatrix FeedforwardOffsets(const mjModel* m, const HandTrajectory& kinematic,
 
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,
-                                const std::vector<bool>& in_hand, double warmup_seconds) {
+                                const std::vector<uint8_t>& in_hand, double warmup_seconds) {
   const int frames = static_cast<int>(kinematic.qpos.size());
   if (frames == 0 || static_cast<int>(object.size()) != frames ||
       static_cast<int>(in_hand.size()) != frames) {

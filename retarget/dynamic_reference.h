@@ -32,6 +32,10 @@ struct SceneIndex {
   std::vector<int> act_qpos;     // per actuator: qpos address of its joint
   std::vector<int> act_kind;     // per actuator: kBasePos, kBaseRot or kFinger
   std::vector<double> ctrl_lo, ctrl_hi;
+  // Hands: the wrist mount bodies (kWristMountBody suffix) in body order;
+  // per body, the index of the hand it belongs to (under that mount), or -1.
+  std::vector<std::string> hands;
+  std::vector<int> body_hand;
 };
 inline constexpr int kBasePos = 0, kBaseRot = 1, kFinger = 2;
 
@@ -52,7 +56,9 @@ struct DynamicReference {
   RowMatrix feedforward;
   std::vector<Vec3> object_pos;    // (steps)
   std::vector<Quat> object_quat;   // (steps)
-  std::vector<uint8_t> in_hand;    // (steps) 1 = in-hand stage
+  // (steps) the hands that hold the object: bit h for SceneIndex hand h;
+  // 0 = resting stage.
+  std::vector<uint8_t> in_hand;
 
   int steps() const { return static_cast<int>(ctrl.rows()); }
   // The simulation step at which source frame f is reached.
@@ -78,7 +84,9 @@ std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const 
 
 // Samples `kinematic` (HandTrajectory from KinematicRetargeter, whose
 // qpos_names name the actuated joints), `object` and `in_hand` (one per
-// frame) at the model's timestep, after `warmup_seconds` of frame 0.
+// frame: the hands holding the object, bit h for SceneIndex hand h; 1 for
+// the one hand of a one-hand scene) at the model's timestep, after
+// `warmup_seconds` of frame 0.
 // Feed-forward targets: u = q + (d / kp) qdot for every actuated joint
 // (its damping's lag at the reference velocity); the floating base, whose
 // gains are critically damped (kp = I w^2, d = 2 I w: embodiment.h), also
@@ -87,6 +95,6 @@ std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const 
 // Throws Error("bad_reference") on a non-finite value or a size mismatch.
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,
-                                const std::vector<bool>& in_hand, double warmup_seconds);
+                                const std::vector<uint8_t>& in_hand, double warmup_seconds);
 
 }  // namespace doasido::retarget

@@ -85,7 +85,8 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
 
     const SceneIndex index = IndexScene(m);
     const DynamicReference ref =
-        BuildReference(m, run.kinematic, object, in_hand, WarmupSeconds(sampler));
+        BuildReference(m, run.kinematic, object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
+                       WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);

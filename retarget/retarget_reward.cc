@@ -43,18 +43,25 @@ double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
   double reward = -std::sqrt(sq);
   if (!config.penetration && !config.transition) return reward;
   double depth = 0;
-  bool floor_contact = false, hand_contact = false;
+  bool floor_contact = false;
+  unsigned touching = 0;  // bit h: hand h touches the object
   for (int c = 0; c < d->ncon; ++c) {
     const mjContact& con = d->contact[c];
-    const bool o1 = m->geom_bodyid[con.geom1] == index.object_body;
-    const bool o2 = m->geom_bodyid[con.geom2] == index.object_body;
+    const int b1 = m->geom_bodyid[con.geom1], b2 = m->geom_bodyid[con.geom2];
+    const bool o1 = b1 == index.object_body, o2 = b2 == index.object_body;
     const bool f = con.geom1 == index.floor_geom || con.geom2 == index.floor_geom;
     if ((o1 || o2) && f) floor_contact = true;
-    if ((o1 != o2) && !f) hand_contact = true;
+    if (o1 != o2 && !f) {
+      const int hand = index.body_hand[o1 ? b2 : b1];
+      if (hand >= 0) touching |= 1u << hand;
+    }
     if (!(o1 && o2)) depth += std::max(0.0, -con.dist - config.penetration_tolerance);
   }
   if (config.penetration) reward -= config.penetration_penalty_scale * depth;
-  if (config.transition && (ref.in_hand[step] ? !hand_contact : !floor_contact)) {
+  // In-hand stages: every hand that holds the object in the reference must
+  // touch it; resting stages: the object must touch the floor.
+  const unsigned holding = ref.in_hand[step];
+  if (config.transition && (holding ? (holding & ~touching) != 0 : !floor_contact)) {
     reward -= config.transition_penalty_scale;
   }
   return reward;

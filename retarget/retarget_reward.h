@@ -8,7 +8,9 @@
 // times the summed contact depth beyond `penetration_tolerance` (the object
 // hulls are dilated 2 mm, so a little is expected), minus transition_scale
 // when the reference's stage is not met (seed "Transition Reward"): no
-// object-floor contact while resting, no hand-object contact while in hand.
+// object-floor contact while resting, no hand-object contact while in hand;
+// with two hands, per hand: a hand the reference has holding the object
+// (DynamicReference::in_hand) that does not touch it.
 #pragma once
 
 #include "core/config.h"

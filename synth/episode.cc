@@ -52,6 +52,55 @@ double Clearance(const std::vector<Capsule>& caps, int first, int last, const Pr
   return best;
 }
 
+HandPose WithCurl(const Pose& wrist, const std::array<double, 5>& curl) {
+  HandPose p = RelaxedPose(wrist);
+  for (int f = 0; f < 5; ++f) SetFingerCurl(p, f, curl[f]);
+  return p;
+}
+
+// The hand of grasp `g` closed by s in [0, 1]: open at 0, gripping at 1.
+HandPose Closed(const Pose& wrist, const Grasp& g, double s) {
+  std::array<double, 5> curl;
+  for (int f = 0; f < 5; ++f) curl[f] = g.open[f] + (g.curl[f] - g.open[f]) * s;
+  return WithCurl(wrist, curl);
+}
+
+// Closes each finger f of `g` from its curl until its capsules touch the
+// object (bisection; `touching` set) or it is fully curled; fingers in turn,
+// thumb first, each with the ones before it already closed.
+// `capsules_at(curl)` poses the hand at curls `curl`.
+template <class CapsulesAt>
+void CloseFingers(Grasp& g, const CapsulesAt& capsules_at, const Proximity& obj) {
+  for (int f = 0; f < 5; ++f) {
+    if (g.touching[f]) continue;
+    auto clearance = [&](double c) {
+      std::array<double, 5> curl = g.curl;
+      curl[f] = c;
+      return Clearance(capsules_at(curl), 3 * f, 3 * f + 3, obj);
+    };
+    const double start = g.curl[f];
+    double lo = start, hi = -1;
+    for (double c = start; c <= 1.0 + 1e-9; c += 0.04) {
+      if (clearance(c) <= kTouchTol) {
+        hi = c;
+        break;
+      }
+      lo = c;
+    }
+    if (hi < 0) {
+      g.curl[f] = std::max(start, 1.0);
+      continue;
+    }
+    g.touching[f] = true;
+    if (hi == start) continue;
+    for (int it = 0; it < 10; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (clearance(mid) <= kTouchTol ? hi : lo) = mid;
+    }
+    g.curl[f] = hi;
+  }
+}
+
 Vec3 ApproachDirection(Side side, double azimuth, double elevation) {
   const double sx = side == Side::kRight ? 1.0 : -1.0;
   return Vec3(sx * std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
@@ -119,12 +168,6 @@ Pose CarryOutPose(const Pose& rest, double side_sign, double u) {
   return Translated(rest, Vec3(side_sign * out, 0, lift));
 }
 
-HandPose WithCurl(const Pose& wrist, const std::array<double, 5>& curl, double s) {
-  HandPose p = RelaxedPose(wrist);
-  for (int f = 0; f < 5; ++f) SetFingerCurl(p, f, curl[f] * s);
-  return p;
-}
-
 }  // namespace
 
 const char* VerbName(Verb verb) {
@@ -159,7 +202,7 @@ Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevat
   auto posed = [&](double dist, const std::array<double, 5>& curl) {
     const Vec3 palm = target + a * dist;
     const Pose wrist{Quat(R), palm - R * palm_local};
-    const HandPose hp = WithCurl(wrist, curl, 1.0);
+    const HandPose hp = WithCurl(wrist, curl);
     const HandJoints j = HandJointPositions(hp, side, shape);
     return std::make_pair(hp, HandCapsules(j, hp, side, shape));
   };
@@ -185,36 +228,87 @@ Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevat
   const double dist = step_hi + 0.002;
   Grasp g;
   g.curl.fill(0.0);
-  for (int f = 0; f < 5; ++f) {
-    auto clearance = [&](double c) {
-      std::array<double, 5> curl = g.curl;
-      curl[f] = c;
-      return Clearance(posed(dist, curl).second, 3 * f, 3 * f + 3, obj);
-    };
-    double lo = 0, hi = -1;
-    for (double c = 0; c <= 1.0 + 1e-9; c += 0.04) {
-      if (clearance(c) <= kTouchTol) {
-        hi = c;
-        break;
-      }
-      lo = c;
-    }
-    if (hi < 0) {
-      g.curl[f] = 1.0;
-      continue;
-    }
-    if (hi == 0) {
-      g.touching[f] = true;
-      continue;
-    }
-    for (int it = 0; it < 10; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (clearance(mid) <= kTouchTol ? hi : lo) = mid;
-    }
-    g.curl[f] = hi;
-    g.touching[f] = true;
-  }
+  CloseFingers(g, [&](const std::array<double, 5>& curl) { return posed(dist, curl).second; }, obj);
   const Pose wrist = posed(dist, g.curl).first.wrist;
+  g.wrist_in_object = rest.Inverse() * wrist;
+  return g;
+}
+
+Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
+                      double object_yaw, const HandShape& shape) {
+  const Pose rest{Quat(Eigen::AngleAxisd(object_yaw, Vec3::UnitZ())), Vec3::Zero()};
+  const Proximity obj(object.Transformed(rest));
+  const Vec3 centre(0, 0, std::min(0.55 * object.Max().z(), 0.07));
+  const Vec3 a = ApproachDirection(side, azimuth, elevation);
+  const Vec3 across = Vec3(a.x(), a.y(), 0).cross(Vec3::UnitZ()).normalized();
+  // Closing s in [0, 1] takes the opening from ~10 cm to ~4 cm.
+  auto posture = [](double s) {
+    const double f = -0.1 + 0.5 * s;
+    return std::array<double, 5>{0.3 + 0.2 * s, f, f, f, f};
+  };
+  // The wrist that puts the opening's midpoint at `centre` + shift * across,
+  // the opening along +-across (sign), the wrist on the approach side.
+  double shift = 0, back_off = 0;
+  auto wrist_for = [&](const std::array<double, 5>& curl, double sign) {
+    const HandJoints j = HandJointPositions(WithCurl(Pose{}, curl), side, shape);
+    const Vec3 thumb = j.row(4).transpose(), fingers = 0.5 * (j.row(8) + j.row(12)).transpose();
+    const Vec3 mid = 0.5 * (thumb + fingers), e = (fingers - thumb).normalized();
+    const Vec3 back = (-mid - (-mid).dot(e) * e).normalized();
+    Mat3 local, world;
+    local << e, back, e.cross(back);
+    const Vec3 u = sign * across;
+    world << u, a, u.cross(a);
+    const Mat3 R = world * local.transpose();
+    return Pose{Quat(R), centre + shift * across + back_off * a - R * mid};
+  };
+  // The radial side up: the thumb's base above the little finger's.
+  const auto open = posture(0);
+  double sign = 1;
+  for (double s : {1.0, -1.0}) {
+    const HandJoints j = HandJointPositions(WithCurl(wrist_for(open, s), open), side, shape);
+    if (j(1, 2) > j(17, 2)) sign = s;
+  }
+  auto capsules = [&](const std::array<double, 5>& curl, const Pose& wrist) {
+    const HandPose hp = WithCurl(wrist, curl);
+    return HandCapsules(HandJointPositions(hp, side, shape), hp, side, shape);
+  };
+  auto touching = [&](double s) {
+    const auto c = capsules(posture(s), wrist_for(posture(s), sign));
+    return Clearance(c, 0, static_cast<int>(c.size()), obj) <= kTouchTol;
+  };
+  // Close until the first touch, then slide the hand across until the
+  // thumb and the fingers are equally far from the surface, and again.
+  // An object too wide for the open hand: back the hand off along the approach until it fits.
+  while (touching(0) && back_off < 0.04) back_off += 0.002;
+  double hi = 1;
+  for (int round = 0; round < 6; ++round) {
+    double lo = 0;
+    hi = 1;
+    for (int it = 0; it < 14; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (touching(mid) ? hi : lo) = mid;
+    }
+    const auto c = capsules(posture(hi), wrist_for(posture(hi), sign));
+    const double thumb = Clearance(c, 0, 3, obj), fingers = Clearance(c, 3, 9, obj);
+    if (round == 5) break;
+    shift += sign * 0.5 * (thumb - fingers);
+  }
+  Grasp g;
+  g.curl = posture(hi);
+  const Pose wrist = wrist_for(g.curl, sign);
+  const auto c = capsules(g.curl, wrist);
+  for (int f = 0; f < 3; ++f) g.touching[f] = Clearance(c, 3 * f, 3 * f + 3, obj) <= 2 * kTouchTol;
+  // The ring and little fingers tuck in, off the object: pressing on its
+  // side across the pinch, they would push it out.
+  for (int f = 3; f < 5; ++f) {
+    std::array<double, 5> curl = g.curl;
+    curl[f] = 1.0;
+    if (Clearance(capsules(curl, wrist), 3 * f, 3 * f + 3, obj) > kTouchTol) g.curl[f] = 1.0;
+  }
+  CloseFingers(g, [&](const std::array<double, 5>& curl) { return capsules(curl, wrist); }, obj);
+  // The approach and the release: the thumb and the two fingers opened
+  // wider than the widest pinch, the others tucked as they grip.
+  g.open = {g.curl[0], -0.15, -0.15, g.curl[3], g.curl[4]};
   g.wrist_in_object = rest.Inverse() * wrist;
   return g;
 }
@@ -238,9 +332,16 @@ struct HandPlan {
   }
 };
 
-HandPlan PlanHand(const TriMesh& object, Side side, double azimuth, double elevation, double yaw,
-                  const HandShape& shape) {
-  return {SolveGrasp(object, side, azimuth, elevation, yaw, shape), ApproachDirection(side, azimuth, elevation)};
+Grasp SolveGraspOfType(GraspType type, const TriMesh& object, Side side, double azimuth,
+                       double elevation, double yaw, const HandShape& shape) {
+  return type == GraspType::kPinch ? SolvePinchGrasp(object, side, azimuth, elevation, yaw, shape)
+                                   : SolveGrasp(object, side, azimuth, elevation, yaw, shape);
+}
+
+HandPlan PlanHand(GraspType type, const TriMesh& object, Side side, double azimuth, double elevation,
+                  double yaw, const HandShape& shape) {
+  return {SolveGraspOfType(type, object, side, azimuth, elevation, yaw, shape),
+          ApproachDirection(side, azimuth, elevation)};
 }
 
 // Curl closing over [c0, c1], open until c0, closed until o0, opening over [o0, o1].
@@ -249,6 +350,17 @@ double Closing(double u, double c0, double c1, double o0, double o1) {
 }
 
 }  // namespace
+
+const char* GraspTypeName(GraspType type) {
+  return type == GraspType::kPinch ? "pinch" : "wrap";
+}
+
+GraspType GraspTypeFromName(const std::string& name) {
+  for (const GraspType t : {GraspType::kWrap, GraspType::kPinch}) {
+    if (name == GraspTypeName(t)) return t;
+  }
+  throw Error("bad_config", "grasp must be wrap or pinch, not '" + name + "'", {.field = "grasp"});
+}
 
 const char* TwoHandTaskName(TwoHandTask task) {
   switch (task) {
@@ -276,11 +388,11 @@ Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const Han
   Episode ep;
   ep.spec = spec;
   const Pose rest = RestPose(spec);
-  const HandPlan left = PlanHand(object, Side::kLeft, spec.approach_azimuth, spec.approach_elevation,
+  const HandPlan left = PlanHand(spec.grasp, object, Side::kLeft, spec.approach_azimuth, spec.approach_elevation,
                                  spec.object_yaw, shape);
   const double right_elevation =
       spec.two_hand_task == TwoHandTask::kHoldAndAct ? kPi / 2 - 0.2 : spec.approach_elevation;
-  const HandPlan right = PlanHand(object, Side::kRight, spec.approach_azimuth, right_elevation, spec.object_yaw, shape);
+  const HandPlan right = PlanHand(spec.grasp, object, Side::kRight, spec.approach_azimuth, right_elevation, spec.object_yaw, shape);
   ep.grasp = right.grasp;
   const double T = std::max(spec.frames - 1, 1);
   for (int i = 0; i < spec.frames; ++i) {
@@ -351,8 +463,8 @@ Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const Han
       case TwoHandTask::kNone:
         throw std::logic_error("ScriptTwoHands needs a two-hand task");
     }
-    fr.hands[static_cast<int>(Side::kRight)] = WithCurl(wr, right.grasp.curl, cr);
-    fr.hands[static_cast<int>(Side::kLeft)] = WithCurl(wl, left.grasp.curl, cl);
+    fr.hands[static_cast<int>(Side::kRight)] = Closed(wr, right.grasp, cr);
+    fr.hands[static_cast<int>(Side::kLeft)] = Closed(wl, left.grasp, cl);
     fr.contact[static_cast<int>(Side::kRight)] = touch_r;
     fr.contact[static_cast<int>(Side::kLeft)] = touch_l;
     ep.frames.push_back(std::move(fr));
@@ -367,8 +479,8 @@ Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const Hand
   const Side side = spec.active;
   const int s_idx = static_cast<int>(side);
   const double sx = side == Side::kRight ? 1.0 : -1.0;
-  ep.grasp = SolveGrasp(object, side, spec.approach_azimuth, spec.approach_elevation,
-                        spec.object_yaw, shape);
+  ep.grasp = SolveGraspOfType(spec.grasp, object, side, spec.approach_azimuth, spec.approach_elevation,
+                              spec.object_yaw, shape);
   const Pose rest = RestPose(spec);
   const Pose rest_xy{Quat::Identity(), rest.t};  // grasp is relative to the yawed object
   const double height = object.Max().z();
@@ -382,7 +494,6 @@ Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const Hand
   const Pose start = Translated(g0, a * 0.16 + Vec3(0, 0, 0.04));
   const Pose hover = Translated(g0, a * 0.035);
   const Pose away = Translated(g0, Vec3(sx * 0.9, 0, 0.15));
-  const std::array<double, 5> curl = ep.grasp.curl;
   const double T = std::max(spec.frames - 1, 1);
 
   for (int i = 0; i < spec.frames; ++i) {
@@ -469,7 +580,7 @@ Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const Hand
         }
       }
     }
-    fr.hands[s_idx] = WithCurl(wrist, curl, s_curl);
+    fr.hands[s_idx] = Closed(wrist, ep.grasp, s_curl);
     fr.contact[s_idx] = contact;
     if (spec.two_hands) {
       const Side other = side == Side::kRight ? Side::kLeft : Side::kRight;

@@ -29,8 +29,21 @@ const char* TwoHandTaskName(TwoHandTask task);
 // The task TwoHandTaskName gives `name`; throws Error("bad_config") otherwise.
 TwoHandTask TwoHandTaskFromName(const std::string& name);
 
+// How the active hand holds the object: kWrap, the palm against the object
+// and the fingers closed round it until they touch (the thumb often ends on
+// the rim, beside the fingers); kPinch, the object between the thumb tip
+// and the index and middle fingertips on opposite sides, at the height
+// kWrap grips, the ring and little fingers closed until they touch or curl
+// in (a grasp whose contacts oppose, so a simulated robot hand copying it
+// can lift the object).
+enum class GraspType { kWrap, kPinch };
+const char* GraspTypeName(GraspType type);
+// The type GraspTypeName gives `name`; throws Error("bad_config") otherwise.
+GraspType GraspTypeFromName(const std::string& name);
+
 struct EpisodeSpec {
   Verb verb = Verb::kPickPlace;
+  GraspType grasp = GraspType::kWrap;
   int frames = 90;
   Side active = Side::kRight;
   bool two_hands = false;
@@ -54,6 +67,8 @@ struct Grasp {
   Pose wrist_in_object;
   std::array<double, 5> curl{};
   std::array<bool, 5> touching{};  // whether the finger reached the surface
+  // The curls of the open hand the episode closes from (0: relaxed).
+  std::array<double, 5> open{};
 };
 
 // Places the hand against the object (palm moved along the approach
@@ -63,6 +78,15 @@ struct Grasp {
 // `object_yaw` (the approach direction is in the world).
 Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
                  double object_yaw, const HandShape& shape = {});
+
+// The kPinch grasp: the hand's opening (thumb tip to the midpoint of the
+// index and middle tips) lies horizontal and across the approach, the wrist
+// on the approach side, the radial side up; the thumb, index and middle
+// close together (bisection on one closing parameter) until a capsule
+// touches, then each finger that does not touch yet closes alone until it
+// does (or curls fully). Same frame conventions as SolveGrasp.
+Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
+                      double object_yaw, const HandShape& shape = {});
 
 struct EpisodeFrame {
   Pose object_pose;                              // object-local -> world

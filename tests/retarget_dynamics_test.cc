@@ -13,6 +13,7 @@
 #include "retarget/dynamic_retarget.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
+#include "retarget/retarget_reward.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
 #include "tests/small_retarget_config.h"
@@ -115,6 +116,48 @@ TEST(AnnealedSampler, PresetsAndRangeChecks) {
   EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
 }
 
+// The transition reward per hand on a two-hand scene of boxes: the left
+// hand touches the object, the right one is 10 cm away. Hands are found by
+// their wrist mounts (in body order) and every body under a mount is that
+// hand's; a stage whose holding hands all touch costs nothing, one where a
+// holding hand does not costs transition_penalty_scale; resting, the
+// object's floor contact is what counts.
+TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
+  const std::string mount = kWristMountBody;
+  const ModelPtr model = CompileMjcfText(R"(<mujoco><worldbody>
+    <geom name="floor" type="plane" size="1 1 0.1"/>
+    <body name="object" pos="0 0 0.05"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
+    <body name="l_)" + mount + R"(" pos="-0.069 0 0.05"><joint name="lx" type="slide" axis="1 0 0"/>
+      <body name="l_finger"><geom type="box" size="0.02 0.02 0.02"/></body></body>
+    <body name="r_)" + mount + R"(" pos="0.17 0 0.05"><joint name="rx" type="slide" axis="1 0 0"/>
+      <geom type="box" size="0.02 0.02 0.02"/></body>
+  </worldbody><actuator><position joint="lx"/><position joint="rx"/></actuator></mujoco>)",
+                                         "two boxes");
+  const mjModel* m = model.get();
+  const SceneIndex index = IndexScene(m);
+  ASSERT_EQ(index.hands, (std::vector<std::string>{"l_" + mount, "r_" + mount}));
+  EXPECT_EQ(index.body_hand[NameToId(m, mjOBJ_BODY, "l_finger")], 0);
+  EXPECT_EQ(index.body_hand[NameToId(m, mjOBJ_BODY, "object")], -1);
+  DataPtr d = MakeData(m);
+  mj_forward(m, d.get());
+  DynamicReference ref;
+  ref.ctrl = RowMatrix::Zero(1, m->nu);
+  ref.object_pos = {Vec3(0, 0, 0.05)};
+  ref.object_quat = {Quat::Identity()};
+  RewardConfig config;
+  config.penetration = false;
+  auto reward = [&](uint8_t holding, bool transition) {
+    ref.in_hand = {holding};
+    config.transition = transition;
+    return StepReward(m, d.get(), index, ref, 0, config);
+  };
+  const double tracking = reward(0, false), penalty = config.transition_penalty_scale;
+  EXPECT_DOUBLE_EQ(reward(0, true), tracking);             // resting on the floor
+  EXPECT_DOUBLE_EQ(reward(0b01, true), tracking);          // the left hand holds and touches
+  EXPECT_DOUBLE_EQ(reward(0b10, true), tracking - penalty);  // the right one holds, apart
+  EXPECT_DOUBLE_EQ(reward(0b11, true), tracking - penalty);  // both hold, one apart
+}
+
 TEST(RetargetMetrics, MatchHandComputedErrors) {
   const Quat z20(Eigen::AngleAxisd(0.2, Vec3::UnitZ())), z40(Eigen::AngleAxisd(0.4, Vec3::UnitZ()));
   const std::vector<Pose> ref = {{Quat::Identity(), Vec3(0, 0, 0)}, {Quat::Identity(), Vec3(1, 0, 0)},
@@ -199,7 +242,7 @@ SceneAndReference BuildSceneAndReference(const DynamicRetargetConfig& c, const s
   SceneAndReference out{BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene"), {}};
   KinematicRetargeter kinematic(out.hand, c.kinematic);
   const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
-  out.ref = BuildReference(out.hand.model.get(), t, object, std::vector<bool>(kFrames, false), 0.0);
+  out.ref = BuildReference(out.hand.model.get(), t, object, std::vector<uint8_t>(kFrames, 0), 0.0);
   return out;
 }
 

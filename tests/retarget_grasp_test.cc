@@ -12,6 +12,7 @@
 #include "retarget/dynamic_reference.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/object_surface.h"
+#include "retarget/reference_hold.h"
 #include "retarget/scene_builder.h"
 #include "synth/episode.h"
 #include "synth/objects.h"
@@ -26,8 +27,10 @@ using doasido::testing::ErrorCode;
 using doasido::testing::SharedData;
 using doasido::testing::TempDir;
 
-HandModel HandWithObject(const TriMesh& mesh, const Pose& pose, const TempDir& dir) {
+HandModel HandWithObject(const TriMesh& mesh, const Pose& pose, const TempDir& dir,
+                         double density = SceneConfig().density) {
   SceneConfig scene;
+  scene.density = density;
   scene.place_on_floor = false;
   scene.settle_seconds = 0;
   const ObjectScene s = BuildObjectScene(mesh, pose, scene, dir / "scene");
@@ -122,6 +125,45 @@ TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
   EXPECT_NEAR(on.touching_mean, -config.contact_depth, 0.001);
   EXPECT_GT(off.touching_mean, on.touching_mean + 0.001);
   EXPECT_GT(on.kept_out_min, -0.002);
+}
+
+// Whether a kinematic reference's grasp holds its object (reference_hold.h):
+// a synthetic pick-and-place, the object lifted 8 cm, retargeted with the
+// grasp terms pressing touching fingertips 1 cm in; at the highest frame a
+// pinch (thumb against index and middle) holds a hollow 100-g cylinder for
+// a second, a wrap (fingers on one flank, thumb on the rim) drops it, as
+// does the pinch without the grasp terms.
+TEST(KinematicGrasp, APinchedReferenceHoldsALightObjectAWrapDropsIt) {
+  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
+  auto drop = [&](synth::GraspType grasp, double contact_weight) {
+    TempDir dir;
+    synth::EpisodeSpec spec;
+    spec.frames = 40;
+    spec.grasp = grasp;
+    const recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
+    const std::vector<Pose> object = FilledObjectPoses(r);
+    const HandModel hand = HandWithObject(cylinder, object[0], dir, 400);
+    KinematicConfig config;
+    config.restarts = 1;
+    config.contact_weight = contact_weight;
+    config.contact_depth = 0.01;
+    KinematicRetargeter kinematic(hand, config);
+    const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &object, nullptr);
+    int top = 0;
+    for (int f = 0; f < r.frames(); ++f) {
+      if (object[f].t.z() > object[top].t.z()) top = f;
+    }
+    EXPECT_GT(object[top].t.z() - object[0].t.z(), 0.07);
+    DataPtr d = MakeData(hand.model.get());
+    return ReferenceHoldDrop(hand.model.get(), d.get(), t, top, object[top], 1.0);
+  };
+  const double pinch = drop(synth::GraspType::kPinch, 16), wrap = drop(synth::GraspType::kWrap, 16),
+               bare = drop(synth::GraspType::kPinch, 0);
+  std::printf("object fell in 1 s: pinch %.1f mm, wrap %.1f mm, pinch without grasp terms %.1f mm\n",
+              1e3 * pinch, 1e3 * wrap, 1e3 * bare);
+  EXPECT_LT(pinch, 0.02);
+  EXPECT_GT(wrap, 0.05);
+  EXPECT_GT(bare, 0.05);
 }
 
 // A synthetic handover (synth ScriptHandover) through its reconstruction:

@@ -189,6 +189,22 @@ TEST(Rasterizer, DepthOfAPlaneIsExactAndNearClippingWorks) {
   }
 }
 
+// Finger clearance of `side`'s hand in `frame` against the posed object:
+// the least over its fingers' capsules (m; negative inside).
+double FingerClearance(const EpisodeFrame& frame, Side side, const TriMesh& object) {
+  const TriMesh posed = object.Transformed(frame.object_pose);
+  const PosedHand hand = PoseHand(*frame.hands[static_cast<int>(side)], side);
+  double clearance = 1e9;
+  for (int c = 0; c < 15; ++c) {
+    const Capsule& cap = hand.capsules[c];
+    for (int k = 0; k <= 8; ++k) {
+      const Vec3 p = cap.a + (cap.b - cap.a) * (k / 8.0);
+      clearance = std::min(clearance, (InsideMesh(posed, p) ? -1 : 1) * DistanceToMesh(posed, p) - cap.radius);
+    }
+  }
+  return clearance;
+}
+
 TEST(Grasp, FingertipsEndOnTheSurface) {
   for (const TriMesh& object : {MakeCylinder(0.035, 0.12), MakeBox(0.06, 0.06, 0.1)}) {
     const Grasp g = SolveGrasp(object, Side::kRight, -0.3, 0.5, 0.2);
@@ -216,20 +232,72 @@ TEST(Grasp, FingertipsEndOnTheSurface) {
   }
 }
 
-// Finger clearance of `side`'s hand in `frame` against the posed object:
-// the least over its fingers' capsules (m; negative inside).
-double FingerClearance(const EpisodeFrame& frame, Side side, const TriMesh& object) {
-  const TriMesh posed = object.Transformed(frame.object_pose);
-  const PosedHand hand = PoseHand(*frame.hands[static_cast<int>(side)], side);
-  double clearance = 1e9;
-  for (int c = 0; c < 15; ++c) {
-    const Capsule& cap = hand.capsules[c];
-    for (int k = 0; k <= 8; ++k) {
-      const Vec3 p = cap.a + (cap.b - cap.a) * (k / 8.0);
-      clearance = std::min(clearance, (InsideMesh(posed, p) ? -1 : 1) * DistanceToMesh(posed, p) - cap.radius);
+// Where finger f's distal segment comes closest to the object's vertical
+// axis: the horizontal angle (radians, object frame) of that point.
+double ContactAngle(const PosedHand& hand, int f, const Pose& object) {
+  const Capsule& c = hand.capsules[3 * f + 2];
+  double best = 1e9, angle = 0;
+  for (int k = 0; k <= 16; ++k) {
+    const Vec3 p = object.Inverse() * Vec3(c.a + (c.b - c.a) * (k / 16.0));
+    if (p.head<2>().norm() < best) best = p.head<2>().norm(), angle = std::atan2(p.y(), p.x());
+  }
+  return angle;
+}
+
+// A pinch puts the thumb and the index and middle fingers on opposite sides
+// of the object, each on its surface, for either hand, round and flat
+// objects and any yaw; and through a whole pick-and-place the hand's flags
+// stay exact (on the surface when flagged, never inside).
+TEST(Grasp, APinchOpposesTheThumbToTheFingers) {
+  const std::vector<TriMesh> objects = {MakeCylinder(0.03, 0.09, 16), MakeCylinder(0.04, 0.09, 16),
+                                        MakeBox(0.05, 0.05, 0.08)};
+  double least_opposition = kPi;
+  for (size_t o = 0; o < objects.size(); ++o) {
+    for (const Side side : {Side::kRight, Side::kLeft}) {
+      for (const double yaw : {0.0, 0.4, 0.8}) {
+        const Grasp g = SolvePinchGrasp(objects[o], side, -0.35, 0.55, yaw);
+        const Pose rest{Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ())), Vec3::Zero()};
+        HandPose pose = RelaxedPose(rest * g.wrist_in_object);
+        for (int f = 0; f < 5; ++f) SetFingerCurl(pose, f, g.curl[f]);
+        EpisodeFrame frame;
+        frame.object_pose = rest;
+        frame.hands[static_cast<int>(side)] = pose;
+        EXPECT_LT(std::abs(FingerClearance(frame, side, objects[o])), 0.0015) << "object " << o;
+        const PosedHand hand = PoseHand(pose, side);
+        for (int f = 0; f < 3; ++f) {
+          ASSERT_TRUE(g.touching[f]) << "object " << o << " yaw " << yaw << " finger " << f;
+        }
+        const double thumb = ContactAngle(hand, 0, rest);
+        for (int f = 1; f < 3; ++f) {
+          const double gap = std::abs(std::remainder(ContactAngle(hand, f, rest) - thumb, 2 * kPi));
+          least_opposition = std::min(least_opposition, gap);
+        }
+      }
     }
   }
-  return clearance;
+  std::printf("pinch: thumb and finger contacts at least %.0f degrees apart round the object\n",
+              least_opposition * 180 / kPi);
+  EXPECT_GT(least_opposition, 120 * kPi / 180);
+  for (const Verb verb : {Verb::kPickPlace, Verb::kLiftRotate}) {
+    EpisodeSpec spec;
+    spec.verb = verb;
+    spec.grasp = GraspType::kPinch;
+    spec.frames = 60;
+    const Episode ep = ScriptEpisode(spec, objects[0]);
+    int held = 0;
+    for (size_t t = 0; t < ep.frames.size(); ++t) {
+      const double clearance = FingerClearance(ep.frames[t], Side::kRight, objects[0]);
+      if (ep.frames[t].contact[1]) {
+        ++held;
+        EXPECT_LT(std::abs(clearance), 0.0015) << VerbName(verb) << " frame " << t;
+      } else {
+        EXPECT_GT(clearance, -0.0015) << VerbName(verb) << " frame " << t << " finger inside";
+      }
+    }
+    EXPECT_GT(held, 20) << VerbName(verb);
+  }
+  EXPECT_EQ(GraspTypeFromName(GraspTypeName(GraspType::kPinch)), GraspType::kPinch);
+  EXPECT_EQ(doasido::testing::ErrorCode([] { GraspTypeFromName("fist"); }), "bad_config");
 }
 
 // The two-hand tasks' ground truth: a hand flagged in contact has its

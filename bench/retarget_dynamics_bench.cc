@@ -469,6 +469,7 @@ void Bimanual(const Flags& f) {
     synth::EpisodeSpec spec;
     spec.frames = f.frames;
     spec.two_hand_task = tasks[i % 3];
+    spec.grasp = synth::GraspTypeFromName(f.grasp);
     spec.object_yaw = 0.4 * i;
     spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
     const TriMesh mesh = i % 2 ? synth::MakeBox(0.06, 0.06, 0.09) : synth::MakeCylinder(0.035, 0.10, 16);

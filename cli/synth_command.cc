@@ -35,6 +35,11 @@ void AddSynthCommand(CLI::App& app) {
                   "Every clip a task for both hands: handover, carry or hold_and_act (exact contact per hand)")
       ->check(CLI::IsMember({"none", "handover", "carry", "hold_and_act"}))
       ->capture_default_str();
+  cmd->add_option("--grasp", cfg->grasp,
+                  "How the hand holds the object: wrap (palm and fingers round it) or pinch (thumb against "
+                  "index and middle, a grasp a robot hand can lift with)")
+      ->check(CLI::IsMember({"wrap", "pinch"}))
+      ->capture_default_str();
   cmd->add_option("--png-every", cfg->png_every,
                   "Also write every n-th frame as PNG under <out>/png (0: none)")
       ->capture_default_str();

@@ -83,6 +83,7 @@ ScenePlan PlanScene(const SynthConfig& cfg, const ObjectChoice& object, DefectKi
   s.active = Uniform(rng, 0, 1) < 0.7 ? Side::kRight : Side::kLeft;
   s.two_hands = Uniform(rng, 0, 1) < cfg.two_hand_fraction;
   s.two_hand_task = TwoHandTaskFromName(cfg.two_hand_task);
+  s.grasp = GraspTypeFromName(cfg.grasp);
   s.object_xy = Vec2(Uniform(rng, -0.03, 0.03), Uniform(rng, 0.0, 0.06));
   const double yaw_centre = object.name == "mug" ? (s.active == Side::kRight ? M_PI : 0.0) : 0.0;
   s.object_yaw = yaw_centre + Uniform(rng, -0.8, 0.8);

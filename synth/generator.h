@@ -45,6 +45,10 @@ struct SynthConfig {
   // "none", or a two-hand task every clip performs ("handover", "carry",
   // "hold_and_act"; episode.h TwoHandTask).
   std::string two_hand_task = "none";
+  // How the active hand holds the object: "wrap" or "pinch" (episode.h
+  // GraspType; a pinch opposes the thumb to two fingers, so a robot hand
+  // retargeted from it can lift the object).
+  std::string grasp = "wrap";
   int track_points = 64;
   bool write_bundles = true;
   bool write_annotations = true;
@@ -59,7 +63,7 @@ struct SynthConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, clips, width, height, fps,
                                                 frames, mix, genre, mesh_dir, sensor_noise,
-                                                two_hand_fraction, two_hand_task, track_points, write_bundles,
+                                                two_hand_fraction, two_hand_task, grasp, track_points, write_bundles,
                                                 write_annotations, png_every, model_bundles,
                                                 candidates, depth_noise, hand_noise)
 

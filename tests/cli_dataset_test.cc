@@ -347,5 +347,63 @@ TEST_F(CliDataset, KilledCreateLeavesNoPartialVersion) {
   }
 }
 
+// Two hands through the queue into a dataset: a synthetic two-handed carry
+// (pinch grasps) runs bundle -> recon -> retarget with a left robot hand,
+// `dataset create` takes its two-hand trajectory, and both exports carry
+// both hands' joints: robomimic's read back by h5py value for value, the
+// LeRobot features named after the trajectory's joints.
+TEST(CliDatasetTwoHands, ATwoHandTrajectoryBecomesAnEpisodeWithBothHands) {
+  TempDir dir;
+  const fs::path synth = dir / "s";
+  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "1", "--seed", "3", "--frames", "40",
+                        "--width", "320", "--height", "240", "--mix", "clean=1", "--two-hand-task",
+                        "carry", "--grasp", "pinch"}).exit_code, 0);
+  WriteFile(dir / "run.toml",
+            "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename {video} .mp4)/. "
+            "{output}/\"\n[retarget]\nleft_hand = \"sharpa_left\"\npreset = \"\"\n"
+            "[retarget.kinematic]\nrestarts = 1\n[retarget.sampler]\nnum_samples = 8\n"
+            "max_num_iterations = 2\nhorizon = 0.2\nknot_dt = 0.1\nctrl_dt = 0.1\n");
+  const std::string db = (dir / "d.db").string(), root = (dir / "datasets").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "download,probe,bundle,recon,retarget"}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", db, "--config", (dir / "run.toml").string(), synth.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto created = RunDoasido({"dataset", "create", "--db", db, "--root", root, "--name", "two",
+                                   "--select", "all"});
+  ASSERT_EQ(created.exit_code, 0) << created.err;
+  const dataset::Manifest v1 = dataset::ReadManifest(fs::path(root) / "two/v1");
+  ASSERT_EQ(v1.episodes.size(), 1u);
+  EXPECT_EQ(v1.episodes[0].embodiment, "sharpa_left+sharpa_right");
+  const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(
+      fs::path(root) / "two/v1/episodes" / v1.episodes[0].id / "trajectory.json");
+  ASSERT_EQ(t.qpos_names.size(), 56u);  // two floating wrists (6) and two 22-joint hands
+  EXPECT_EQ(t.qpos_names.front().rfind("l_", 0), 0u);
+  EXPECT_EQ(t.qpos_names.back().rfind("r_", 0), 0u);
+
+  const fs::path h5 = dir / "two.hdf5";
+  ASSERT_EQ(RunDoasido({"dataset", "export", "--root", root, "--name", "two", "v1", "--format", "robomimic",
+                        "--out", h5.string()}).exit_code, 0);
+  WriteFile(dir / "read.py", R"PY(import h5py, json, sys
+d = h5py.File(sys.argv[1], 'r')['data']
+g = d[list(d.keys())[0]]
+print(json.dumps({'embodiment': json.loads(d.attrs['env_args'])['env_kwargs']['embodiment'],
+                  'joint_pos': g['obs/robot0_joint_pos'][()].tolist()}))
+)PY");
+  const Json got = Json::parse(testing::ShellOk("/usr/bin/python3 " + (dir / "read.py").string() + " " + h5.string()));
+  EXPECT_EQ(got["embodiment"], "sharpa_left+sharpa_right");
+  ASSERT_EQ(got["joint_pos"].size(), t.qpos.size());
+  for (size_t f = 0; f < t.qpos.size(); ++f) {
+    ASSERT_EQ(got["joint_pos"][f].size(), 56u);
+    for (size_t j = 0; j < 56; ++j) ASSERT_EQ(got["joint_pos"][f][j].get<double>(), t.qpos[f][j]) << f << " " << j;
+  }
+
+  ASSERT_EQ(RunDoasido({"dataset", "export", "--root", root, "--name", "two", "v1", "--format", "lerobot",
+                        "--out", (dir / "lerobot").string()}).exit_code, 0);
+  std::ifstream info_file(dir / "lerobot/meta/info.json");
+  const Json info = Json::parse(info_file);
+  EXPECT_EQ(info["robot_type"], "sharpa_left+sharpa_right");
+  EXPECT_EQ(info["features"]["observation.state"]["names"], Json(t.qpos_names));
+  EXPECT_EQ(info["features"]["action"]["shape"], Json::array({56}));
+}
+
 }  // namespace
 }  // namespace doasido

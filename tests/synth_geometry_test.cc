@@ -250,7 +250,7 @@ double ContactAngle(const PosedHand& hand, int f, const Pose& object) {
 // stay exact (on the surface when flagged, never inside).
 TEST(Grasp, APinchOpposesTheThumbToTheFingers) {
   const std::vector<TriMesh> objects = {MakeCylinder(0.03, 0.09, 16), MakeCylinder(0.04, 0.09, 16),
-                                        MakeBox(0.05, 0.05, 0.08)};
+                                        MakeBox(0.05, 0.05, 0.08), MakeBox(0.06, 0.06, 0.09)};
   double least_opposition = kPi;
   for (size_t o = 0; o < objects.size(); ++o) {
     for (const Side side : {Side::kRight, Side::kLeft}) {
@@ -277,7 +277,10 @@ TEST(Grasp, APinchOpposesTheThumbToTheFingers) {
   }
   std::printf("pinch: thumb and finger contacts at least %.0f degrees apart round the object\n",
               least_opposition * 180 / kPi);
-  EXPECT_GT(least_opposition, 120 * kPi / 180);
+  // Two contacts hold by friction alone when the line between them lies in
+  // both friction cones: with the simulation's friction 1 (45-degree cones)
+  // that needs them over 90 degrees apart round a round object.
+  EXPECT_GT(least_opposition, 100 * kPi / 180);
   for (const Verb verb : {Verb::kPickPlace, Verb::kLiftRotate}) {
     EpisodeSpec spec;
     spec.verb = verb;
@@ -306,44 +309,48 @@ TEST(Grasp, APinchOpposesTheThumbToTheFingers) {
 // before or after the step); a hand that holds nothing is not inside it.
 TEST(TwoHands, ContactFlagsAreExactForEveryTask) {
   const TriMesh object = MakeCylinder(0.035, 0.12);
-  for (const TwoHandTask task : {TwoHandTask::kHandover, TwoHandTask::kCarry, TwoHandTask::kHoldAndAct}) {
-    EpisodeSpec spec;
-    spec.frames = 60;
-    spec.two_hand_task = task;
-    const Episode ep = ScriptEpisode(spec, object);
-    ASSERT_EQ(ep.frames.size(), 60u);
-    int moved = 0, both = 0;
-    for (size_t t = 0; t < ep.frames.size(); ++t) {
-      const EpisodeFrame& f = ep.frames[t];
-      ASSERT_TRUE(f.hands[0] && f.hands[1]) << TwoHandTaskName(task);
-      for (const Side side : {Side::kLeft, Side::kRight}) {
-        const double clearance = FingerClearance(f, side, object);
-        if (f.contact[static_cast<int>(side)]) {
-          EXPECT_LT(std::abs(clearance), 0.0015) << TwoHandTaskName(task) << " frame " << t;
-        } else {
-          EXPECT_GT(clearance, -0.0015) << TwoHandTaskName(task) << " frame " << t << " finger inside";
+  for (const GraspType grasp : {GraspType::kWrap, GraspType::kPinch}) {
+    for (const TwoHandTask task : {TwoHandTask::kHandover, TwoHandTask::kCarry, TwoHandTask::kHoldAndAct}) {
+      SCOPED_TRACE(GraspTypeName(grasp));
+      EpisodeSpec spec;
+      spec.frames = 60;
+      spec.two_hand_task = task;
+      spec.grasp = grasp;
+      const Episode ep = ScriptEpisode(spec, object);
+      ASSERT_EQ(ep.frames.size(), 60u);
+      int moved = 0, both = 0;
+      for (size_t t = 0; t < ep.frames.size(); ++t) {
+        const EpisodeFrame& f = ep.frames[t];
+        ASSERT_TRUE(f.hands[0] && f.hands[1]) << TwoHandTaskName(task);
+        for (const Side side : {Side::kLeft, Side::kRight}) {
+          const double clearance = FingerClearance(f, side, object);
+          if (f.contact[static_cast<int>(side)]) {
+            EXPECT_LT(std::abs(clearance), 0.0015) << TwoHandTaskName(task) << " frame " << t;
+          } else {
+            EXPECT_GT(clearance, -0.0015) << TwoHandTaskName(task) << " frame " << t << " finger inside";
+          }
+        }
+        both += f.contact[0] && f.contact[1];
+        if (t == 0) continue;
+        const EpisodeFrame& prev = ep.frames[t - 1];
+        const bool moves = (f.object_pose.t - prev.object_pose.t).norm() > 1e-9 ||
+                           f.object_pose.q.angularDistance(prev.object_pose.q) > 1e-9;
+        if (!moves) continue;
+        ++moved;
+        // Moving from frame t-1 to t: held in one of the two.
+        const bool left = prev.contact[0] || f.contact[0], right = prev.contact[1] || f.contact[1];
+        EXPECT_TRUE(left || right) << TwoHandTaskName(task) << " moves free in frame " << t;
+        if (task == TwoHandTask::kCarry) {
+          EXPECT_TRUE(left && right) << "frame " << t;
         }
       }
-      both += f.contact[0] && f.contact[1];
-      if (t == 0) continue;
-      const EpisodeFrame& prev = ep.frames[t - 1];
-      const bool moves = (f.object_pose.t - prev.object_pose.t).norm() > 1e-9 ||
-                         f.object_pose.q.angularDistance(prev.object_pose.q) > 1e-9;
-      if (!moves) continue;
-      ++moved;
-      // Moving from frame t-1 to t: held in one of the two.
-      const bool left = prev.contact[0] || f.contact[0], right = prev.contact[1] || f.contact[1];
-      EXPECT_TRUE(left || right) << TwoHandTaskName(task) << " moves free in frame " << t;
-      if (task == TwoHandTask::kCarry) {
-        EXPECT_TRUE(left && right) << "frame " << t;
+      std::printf("%s: object moves in %d frames, both hands hold it in %d\n", TwoHandTaskName(task), moved, both);
+      EXPECT_GT(both, 0) << TwoHandTaskName(task);
+      if (task == TwoHandTask::kHoldAndAct) {
+        EXPECT_EQ(moved, 0);
+      } else {
+        EXPECT_GT(moved, 10);
       }
-    }
-    std::printf("%s: object moves in %d frames, both hands hold it in %d\n", TwoHandTaskName(task), moved, both);
-    EXPECT_GT(both, 0) << TwoHandTaskName(task);
-    if (task == TwoHandTask::kHoldAndAct) {
-      EXPECT_EQ(moved, 0);
-    } else {
-      EXPECT_GT(moved, 10);
     }
   }
 }

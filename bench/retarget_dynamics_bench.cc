@@ -19,8 +19,9 @@
 //  5. the kinematic reference's grasps (--sections=grasp), with and without
 //     the grasp terms (KinematicConfig contact_weight): hand-object contacts
 //     per in-hand frame, the deepest penetration, and whether the grasp at
-//     the highest frame holds the object for a second: a reference whose own
-//     grasp drops the object cannot be tracked into a lift.
+//     the highest frame holds the object for a second (reference_hold.h):
+//     a reference whose own grasp drops the object cannot be tracked into a
+//     lift (--grasp=wrap drops it: no opposing contact).
 //  6. two hands (--sections=bimanual): synthetic handover, carry and
 //     hold-and-act episodes (clean and noisy) and the HOT3D sample's two
 //     hands, both robot hands in one scene (bimanual_retarget.h), rows as

@@ -276,9 +276,10 @@ Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double e
     const auto c = capsules(posture(s), wrist_for(posture(s), sign));
     return Clearance(c, 0, static_cast<int>(c.size()), obj) <= kTouchTol;
   };
-  // Close until the first touch, then slide the hand across until the
-  // thumb and the fingers are equally far from the surface, and again.
-  // An object too wide for the open hand: back the hand off along the approach until it fits.
+  // An object too wide for the open hand: back the hand off along the
+  // approach until it fits. Then close until the first touch, slide the hand
+  // across until the thumb and the fingers are equally far from the
+  // surface, and again.
   while (touching(0) && back_off < 0.04) back_off += 0.002;
   double hi = 1;
   for (int round = 0; round < 6; ++round) {
@@ -306,8 +307,9 @@ Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double e
     if (Clearance(capsules(curl, wrist), 3 * f, 3 * f + 3, obj) > kTouchTol) g.curl[f] = 1.0;
   }
   CloseFingers(g, [&](const std::array<double, 5>& curl) { return capsules(curl, wrist); }, obj);
-  // The approach and the release: the thumb and the two fingers opened
-  // wider than the widest pinch, the others tucked as they grip.
+  // The approach and the release: the thumb at its grip (it comes to rest
+  // on the surface as the hand arrives), index and middle opened wider than
+  // the widest pinch, the others tucked as they grip.
   g.open = {g.curl[0], -0.15, -0.15, g.curl[3], g.curl[4]};
   g.wrist_in_object = rest.Inverse() * wrist;
   return g;

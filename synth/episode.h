@@ -33,9 +33,9 @@ TwoHandTask TwoHandTaskFromName(const std::string& name);
 // and the fingers closed round it until they touch (the thumb often ends on
 // the rim, beside the fingers); kPinch, the object between the thumb tip
 // and the index and middle fingertips on opposite sides, at the height
-// kWrap grips, the ring and little fingers closed until they touch or curl
-// in (a grasp whose contacts oppose, so a simulated robot hand copying it
-// can lift the object).
+// kWrap grips, the ring and little fingers tucked in (a grasp whose
+// contacts oppose, so a simulated robot hand copying it can lift the
+// object; objects up to ~8 cm across).
 enum class GraspType { kWrap, kPinch };
 const char* GraspTypeName(GraspType type);
 // The type GraspTypeName gives `name`; throws Error("bad_config") otherwise.
@@ -83,8 +83,11 @@ Grasp SolveGrasp(const TriMesh& object, Side side, double azimuth, double elevat
 // index and middle tips) lies horizontal and across the approach, the wrist
 // on the approach side, the radial side up; the thumb, index and middle
 // close together (bisection on one closing parameter) until a capsule
-// touches, then each finger that does not touch yet closes alone until it
-// does (or curls fully). Same frame conventions as SolveGrasp.
+// touches, the hand sliding across until thumb and fingers touch alike
+// (backed off along the approach first when the open hand does not fit);
+// ring and little fingers curl in fully unless that touches the object,
+// then close until they touch. `Grasp::open` is the hand the episode
+// approaches with. Same frame conventions as SolveGrasp.
 Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double elevation,
                       double object_yaw, const HandShape& shape = {});
 

@@ -65,7 +65,6 @@ const std::filesystem::path kData = DOASIDO_SHARED_DATA;
 struct Flags {
   int refs = 30, frames = 60, samples = 16, iterations = 3, threads = 2;
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
-  // The kinematic reference's grasp terms (KinematicConfig); < 0 keeps the default.
   double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
   // The synthetic references are grasped so that a robot hand copying them
   // can hold the object: the hand pinches (thumb against two fingers), the
@@ -75,6 +74,7 @@ struct Flags {
   // --contact_weight=0 --density=1000 measure the references without.
   std::string grasp = "pinch";  // the synthetic hand's grasp (synth::GraspTypeName)
   double density = 400;         // kg/m^3 of the object (SceneConfig)
+  // The kinematic reference's grasp terms (KinematicConfig); < 0 keeps the default.
   double contact_weight = 16, contact_depth = 0.01, contact_epsilon = -1;
   bool seed_wall = false, verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
@@ -119,17 +119,17 @@ struct Case {
 };
 
 // Reference i: verb, object and approach vary with i; noise seeded by i.
-Case MakeCase(int i, int frames, double lift_scale, double elevation, const std::string& grasp) {
+Case MakeCase(const Flags& f, int i, int frames) {
   const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
   Case c;
   c.mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
   synth::EpisodeSpec spec;
   spec.verb = verbs[i % 3];
   spec.frames = frames;
-  spec.manipulation_scale = lift_scale;
+  spec.manipulation_scale = f.lift_scale;
   spec.object_yaw = 0.4 * i;
-  spec.approach_elevation = elevation;
-  spec.grasp = synth::GraspTypeFromName(grasp);
+  spec.approach_elevation = f.elevation;
+  spec.grasp = synth::GraspTypeFromName(f.grasp);
   spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
   c.clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, c.mesh), 30.0);
   c.noisy = c.clean;
@@ -186,6 +186,14 @@ DynamicRetargetRun RunOne(const recon::Reconstruction& r, const TriMesh& mesh,
   return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label);
 }
 
+// The hand geom of contact c when it is between the hand and the object, else -1.
+int HandGeomTouchingObject(const mjModel* m, const mjData* d, const SceneIndex& index, int c) {
+  const mjContact& con = d->contact[c];
+  const int b1 = m->geom_bodyid[con.geom1], b2 = m->geom_bodyid[con.geom2];
+  if ((b1 == index.object_body) == (b2 == index.object_body) || b1 == 0 || b2 == 0) return -1;
+  return b1 == index.object_body ? con.geom2 : con.geom1;
+}
+
 // Hand-object contacts when the hand stands at `traj`'s joints of frame k
 // and the object at `object` (for --verbose): how many, and the deepest.
 std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajectory& traj, int k,
@@ -196,9 +204,7 @@ std::pair<int, double> Contacts(const mjModel* m, mjData* d, const HandTrajector
   int n = 0;
   double deepest = 0;
   for (int c = 0; c < d->ncon; ++c) {
-    const int b1 = m->geom_bodyid[d->contact[c].geom1], b2 = m->geom_bodyid[d->contact[c].geom2];
-    const bool object1 = b1 == index.object_body, object2 = b2 == index.object_body;
-    if (object1 == object2 || b1 == 0 || b2 == 0) continue;  // not hand-object
+    if (HandGeomTouchingObject(m, d, index, c) < 0) continue;
     ++n;
     deepest = std::min(deepest, d->contact[c].dist);
   }
@@ -210,7 +216,7 @@ void Ablation(const Flags& f) {
   std::map<std::pair<int, int>, Tally> tally;  // (row, noisy)
   const auto t0 = Clock::now();
   for (int i = 0; i < f.refs; ++i) {
-    const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation, f.grasp);
+    const Case c = MakeCase(f, i, f.frames);
     for (int row = 0; row < 4; ++row) {
       const DynamicRetargetConfig config = AblationRow(f, row);
       for (int noisy = 0; noisy < 2; ++noisy) {
@@ -313,7 +319,7 @@ double RawStepsPerSecond(const mjModel* m, int threads, double seconds,
 }
 
 void Throughput(const Flags& f) {
-  const Case c = MakeCase(0, f.frames, f.lift_scale, f.elevation, f.grasp);
+  const Case c = MakeCase(f, 0, f.frames);
   std::printf("\n== Simulation throughput: sim steps/s inside the optimiser vs raw mj_step, same scene\n");
   std::printf("%-8s | %-14s | %-22s | %-22s\n", "threads", "optimiser", "raw: replayed / ratio",
               "raw: at rest / ratio");
@@ -334,7 +340,7 @@ void Throughput(const Flags& f) {
 
 void Wall(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
-  const Case c = MakeCase(0, frames, f.lift_scale, f.elevation, f.grasp);
+  const Case c = MakeCase(f, 0, frames);
   std::printf("\n== Wall time for a %.0f-s clip (%d frames), %d threads\n", f.clip_seconds, frames,
               f.threads);
   DynamicRetargetConfig fast = BaseConfig(f);
@@ -400,9 +406,8 @@ void DescribeGrasp(const mjModel* m, mjData* d, const HandTrajectory& traj,
   std::fprintf(stderr, "\n  robot:");
   for (int c = 0; c < d->ncon; ++c) {
     const mjContact& con = d->contact[c];
-    const int b1 = m->geom_bodyid[con.geom1], b2 = m->geom_bodyid[con.geom2];
-    if ((b1 == index.object_body) == (b2 == index.object_body) || b1 == 0 || b2 == 0) continue;
-    const int hand_geom = b1 == index.object_body ? con.geom2 : con.geom1;
+    const int hand_geom = HandGeomTouchingObject(m, d, index, c);
+    if (hand_geom < 0) continue;
     const Vec3 p(con.pos[0], con.pos[1], con.pos[2]);
     std::fprintf(stderr, " %s(%.0f deg z %.3f d %.4f)", mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[hand_geom]),
                  angle(p).first, angle(p).second, con.dist);
@@ -426,7 +431,7 @@ void Grasp(const Flags& f) {
     double deepest = 0;
     for (int i = 0; i < f.refs; ++i) {
       if (i % 3 == 2) continue;  // slides never leave the floor
-      const Case c = MakeCase(i, f.frames, f.lift_scale, f.elevation, f.grasp);
+      const Case c = MakeCase(f, i, f.frames);
       DynamicRetargetConfig config = BaseConfig(f);
       config.sampler.num_samples = 1;
       config.sampler.max_num_iterations = 1;

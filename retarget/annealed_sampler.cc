@@ -75,16 +75,26 @@ bool BadState(const mjData* d) {
          d->warning[mjWARN_BADQVEL].number != kNoBadState;
 }
 
+// Uniform direction, size uniform in [0, scale]: three values into `out`.
+void RandomWrench(Rng& rng, double scale, double* out) {
+  Vec3 dir(rng.Normal(), rng.Normal(), rng.Normal());
+  dir /= std::max(dir.norm(), 1e-12);
+  const double size = scale * rng.Uniform();
+  for (int i = 0; i < 3; ++i) out[i] = size * dir[i];
+}
+
 class Planner {
  public:
   Planner(const mjModel* m, const DynamicReference& ref, const AnnealedSamplerConfig& config)
       : m_(m), ref_(ref), c_(config), index_(IndexScene(m)), pool_(m, config.threads),
         knots_(KnotCount(config.horizon, config.knot_dt)),
-        group_(config.perturb ? std::max(1, config.num_perturb_samples) : 1),
-        samples_(std::max(2, config.num_samples / group_)),
         horizon_steps_(static_cast<int>(std::lround(config.horizon / ref.dt))),
-        buffer_(static_cast<size_t>(samples_) * knots_ * m->nu), rollout_return_(samples_ * group_),
-        returns_(samples_), weights_(samples_), nominal_(knots_, m->nu), sigma_(knots_, m->nu) {
+        gate_(PerturbationGate(ref, config)), nominal_(knots_, m->nu), sigma_(knots_, m->nu) {
+    const int most = std::max(2, config.num_samples);
+    buffer_.resize(static_cast<size_t>(most) * knots_ * m->nu);
+    rollout_return_.resize(std::max(most, 2 * std::max(1, config.num_perturb_samples)));
+    returns_.reserve(most);
+    weights_.reserve(most);
     const double mass = m->body_subtreemass[index_.object_body];
     weight_ = mass * std::abs(m->opt.gravity[2]);
     sigma_ = NoiseScales(c_, index_.act_kind, knots_);
@@ -110,7 +120,9 @@ class Planner {
   AnnealedSamplerConfig c_;
   SceneIndex index_;
   RolloutPool pool_;
-  int knots_, group_, samples_, horizon_steps_;
+  int knots_, horizon_steps_;
+  std::vector<uint8_t> gate_;           // (steps) perturbations allowed
+  int group_ = 1, samples_ = 2;         // of the current plan
   std::vector<double> buffer_;          // (samples, knots, nu)
   std::vector<double> rollout_return_;  // (samples * group)
   std::vector<double> returns_, weights_;
@@ -133,22 +145,20 @@ double Planner::Rollout(int rollout, int thread, int start, int length, std::uin
   mjData* d = pool_.data(thread);
   Load(m_, state_, d);
   const double* knots = buffer_.data() + static_cast<size_t>(rollout / group_) * knots_ * m_->nu;
-  const bool perturb = group_ > 1;
-  Rng rng{Mix(key, static_cast<std::uint64_t>(rollout), 0x5eed, 1)};
+  // Common random numbers: perturbation k of every control sample draws
+  // the same stream.
+  Rng rng{Mix(key, static_cast<std::uint64_t>(rollout % group_), 0x5eed, 1)};
   double* xfrc = d->xfrc_applied + 6 * index_.object_body;
   bool active = false;
   double total = 0;
   for (int h = 0; h < length; ++h) {
     EvaluateKnots(knots, knots_, m_->nu, c_.knot_dt, h * ref_.dt, d->ctrl);
-    if (perturb) {
-      const double u = rng.Uniform();
+    if (group_ > 1) {
       const bool was = active;
-      active = active ? u < c_.perturb_continue_prob : u < c_.perturb_prob;
+      active = gate_[start + h] && rng.Uniform() < (was ? c_.perturb_continue_prob : c_.perturb_prob);
       if (active && !was) {
-        for (int i = 0; i < 3; ++i) xfrc[i] = c_.perturb_force_scale * weight_ * rng.Normal() / std::sqrt(3.0);
-        for (int i = 3; i < 6; ++i) {
-          xfrc[i] = c_.perturb_torque_scale * weight_ * 0.05 * rng.Normal() / std::sqrt(3.0);
-        }
+        RandomWrench(rng, c_.perturb_force_scale * weight_, xfrc);
+        RandomWrench(rng, c_.perturb_torque_scale * weight_ * 0.05, xfrc + 3);
       } else if (!active) {
         std::fill(xfrc, xfrc + 6, 0.0);
       }
@@ -165,6 +175,12 @@ double Planner::Rollout(int rollout, int thread, int start, int length, std::uin
 
 int Planner::Optimise(int start, int plan) {
   const int nu = m_->nu, length = std::min(horizon_steps_, ref_.steps() - 1 - start);
+  const bool perturb = std::any_of(gate_.begin() + start, gate_.begin() + start + length,
+                                   [](uint8_t g) { return g != 0; });
+  group_ = perturb ? std::max(1, c_.num_perturb_samples) : 1;
+  samples_ = std::max(2, c_.num_samples / group_);
+  returns_.resize(samples_);  // within the capacity reserved: no allocation
+  weights_.resize(samples_);
   const double beta = std::pow(c_.final_noise_scale, 1.0 / c_.max_num_iterations);
   int it = 0;
   while (it < c_.max_num_iterations) {
@@ -180,8 +196,8 @@ int Planner::Optimise(int start, int plan) {
     ReportStageProgress();
     stats_.sim_steps += static_cast<long long>(samples_) * group_ * length;
     double worst = 0;
-    for (double r : rollout_return_) {
-      if (std::isfinite(r)) worst = std::min(worst, r);
+    for (int n = 0; n < samples_ * group_; ++n) {
+      if (std::isfinite(rollout_return_[n])) worst = std::min(worst, rollout_return_[n]);
     }
     for (int c = 0; c < samples_; ++c) {  // failed rollouts score as the worst (SPIDER)
       double sum = 0;
@@ -283,6 +299,18 @@ DynamicResult Planner::Run(const std::function<void(int, int)>& progress) {
 
 }  // namespace
 
+std::vector<uint8_t> PerturbationGate(const DynamicReference& ref, const AnnealedSamplerConfig& c) {
+  const int steps = ref.steps(), lag = static_cast<int>(std::lround(c.perturb_gate_seconds / ref.dt));
+  std::vector<uint8_t> gate(steps, 0);
+  if (!c.perturb) return gate;
+  for (int s = ref.warmup_steps + lag; s + lag < steps; ++s) {
+    bool held = true;
+    for (int k = s - lag; k <= s + lag && held; ++k) held = ref.in_hand[k] != 0;
+    gate[s] = held;
+  }
+  return gate;
+}
+
 void CheckConfig(const AnnealedSamplerConfig& c, const std::string& section) {
   RequireInRange(section, "num_samples", c.num_samples, 2, 1 << 20);
   RequireInRange(section, "max_num_iterations", c.max_num_iterations, 1, 10000);
@@ -305,6 +333,7 @@ void CheckConfig(const AnnealedSamplerConfig& c, const std::string& section) {
   RequireInRange(section, "perturb_torque_scale", c.perturb_torque_scale, 0, 1e3);
   RequireInRange(section, "perturb_prob", c.perturb_prob, 0, 1);
   RequireInRange(section, "perturb_continue_prob", c.perturb_continue_prob, 0, 1);
+  RequireInRange(section, "perturb_gate_seconds", c.perturb_gate_seconds, 0, 100);
   RequireInRange(section, "threads", c.threads, 1, 1024);
   CheckConfig(c.reward, section + ".reward");
 }

@@ -26,12 +26,21 @@
 //    prepended; meanwhile the object is held at its frame-0 pose (its free
 //    joint is reset every step, which acts as a weld to the world without
 //    toggling eq_active in per-thread model copies) while the hand moves.
-//  - perturbation: with num_perturb_samples > 1 every control sample is
-//    simulated that many times, each under its own random force and torque
-//    on the object (a perturbation starts with probability perturb_prob per
-//    step and continues with perturb_continue_prob; force perturb_force_scale
-//    times the object's weight, torque perturb_torque_scale times weight x
-//    5 cm, Gaussian directions), and scored by the mean return.
+//  - perturbation: only while the reference holds the object off the floor
+//    (DynamicReference::in_hand) for perturb_gate_seconds before and after
+//    the step: a stable hold is what it tests, and a push on a resting or
+//    just-released object only scatters the returns. A plan whose horizon
+//    reaches such a step splits num_samples into num_samples /
+//    num_perturb_samples control samples, each simulated num_perturb_samples
+//    times under random forces and torques on the object, scored by the
+//    mean return; the k-th perturbation sequence is the same for every
+//    control sample (common random numbers), so returns differ by the
+//    controls, not by the luck of the draw. A perturbation starts with
+//    probability perturb_prob per step and continues with
+//    perturb_continue_prob; its direction is uniform on the sphere, its size
+//    uniform up to perturb_force_scale times the object's weight (torque:
+//    perturb_torque_scale times weight x 5 cm). Other plans use all
+//    num_samples as control samples.
 //  - transition reward and penetration penalty: RewardConfig.
 //
 // Determinism: all noise is drawn from `seed` per (plan, iteration, sample),
@@ -77,6 +86,7 @@ struct AnnealedSamplerConfig {
   double perturb_torque_scale = 0.5;
   double perturb_prob = 0.05;
   double perturb_continue_prob = 0.95;
+  double perturb_gate_seconds = 0.25;  // not in the seed's table; our lifts last ~1 s
   RewardConfig reward;
   // Execution.
   int threads = 2;
@@ -87,7 +97,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
     pos_noise_scale, rot_noise_scale, joint_noise_scale, final_noise_scale,
     first_ctrl_noise_scale, last_ctrl_noise_scale, top_fraction, temperature,
     improvement_threshold, blend_seconds, warmup, warmup_seconds, perturb, num_perturb_samples,
-    perturb_force_scale, perturb_torque_scale, perturb_prob, perturb_continue_prob, reward, threads,
+    perturb_force_scale, perturb_torque_scale, perturb_prob, perturb_continue_prob,
+    perturb_gate_seconds, reward, threads,
     seed)
 void CheckConfig(const AnnealedSamplerConfig& c, const std::string& section);
 
@@ -113,6 +124,12 @@ RowMatrix NoiseScales(const AnnealedSamplerConfig& config, const std::vector<int
 void DrawSamples(const RowMatrix& nominal, const RowMatrix& sigma, double anneal,
                  std::uint64_t key, const std::vector<double>& lo, const std::vector<double>& hi,
                  int samples, std::vector<double>& out);
+
+// Per step of `ref`: 1 where rollouts may perturb the object (see
+// "perturbation" above): after warmup, with a hand holding the object off
+// the floor from perturb_gate_seconds before the step to as long after.
+// All 0 when `config.perturb` is off.
+std::vector<uint8_t> PerturbationGate(const DynamicReference& ref, const AnnealedSamplerConfig& config);
 
 // Softmax weights of the top `top_fraction` of `returns` (z-scored, divided
 // by `temperature`); the others get 0. Writes into `weights` (same size).

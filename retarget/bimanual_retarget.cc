@@ -151,13 +151,14 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
       throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = label});
     };
     const uint8_t left_bit = bit(kLeftPrefix), right_bit = bit(kRightPrefix);
+    const std::vector<bool> resting = LabelResting(object, mesh, sampler.reward.transition_rest_height);
     std::vector<uint8_t> in_hand(in_left.size());
     for (size_t t = 0; t < in_hand.size(); ++t) {
       in_hand[t] = (in_left[t] ? left_bit : 0) | (in_right[t] ? right_bit : 0);
-      run.left_in_hand_frames += in_left[t];
-      run.right_in_hand_frames += in_right[t];
+      run.left_in_hand_frames += in_left[t] && !resting[t];
+      run.right_in_hand_frames += in_right[t] && !resting[t];
     }
-    const DynamicReference ref = BuildReference(m, both, object, in_hand, WarmupSeconds(sampler));
+    const DynamicReference ref = BuildReference(m, both, object, in_hand, resting, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, both);

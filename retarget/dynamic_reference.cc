@@ -138,6 +138,17 @@ std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const 
   return out;
 }
 
+std::vector<bool> LabelResting(const std::vector<Pose>& object, const TriMesh& mesh, double height) {
+  std::vector<bool> out(object.size(), false);
+  if (mesh.num_vertices() == 0) return out;
+  for (size_t t = 0; t < object.size(); ++t) {
+    const Eigen::RowVector3d zrow = object[t].R().row(2);
+    const double lowest = (mesh.vertices * zrow.transpose()).minCoeff() + object[t].t.z();
+    out[t] = lowest < height;
+  }
+  return out;
+}
+
 // Per frame and actuator, the target's lead over the joint (see the
 // header); row `frames` holds the lead of a joint at rest (gravity only).
 RowMatrix FeedforwardOffsets(const mjModel* m, const HandTrajectory& kinematic,
@@ -176,10 +187,11 @@ RowMatrix FeedforwardOffsets(const mjModel* m, const HandTrajectory& kinematic,
 
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,
-                                const std::vector<uint8_t>& in_hand, double warmup_seconds) {
+                                const std::vector<uint8_t>& in_hand, const std::vector<bool>& resting,
+                                double warmup_seconds) {
   const int frames = static_cast<int>(kinematic.qpos.size());
   if (frames == 0 || static_cast<int>(object.size()) != frames ||
-      static_cast<int>(in_hand.size()) != frames) {
+      static_cast<int>(in_hand.size()) != frames || static_cast<int>(resting.size()) != frames) {
     throw Error("bad_reference", "hand, object and stage labels differ in length",
                 {.field = "object_poses"});
   }
@@ -211,6 +223,7 @@ DynamicReference BuildReference(const mjModel* m,
   ref.object_pos.resize(steps);
   ref.object_quat.resize(steps);
   ref.in_hand.resize(steps);
+  ref.resting.resize(steps);
   const RowMatrix lead = FeedforwardOffsets(m, kinematic, column);  // (frames, nu)
   ref.feedforward.resize(steps, m->nu);
   for (int s = 0; s < steps; ++s) {
@@ -227,7 +240,9 @@ DynamicReference BuildReference(const mjModel* m,
     }
     ref.object_pos[s] = (1 - a) * object[f0].t + a * object[f1].t;
     ref.object_quat[s] = object[f0].q.normalized().slerp(a, object[f1].q.normalized());
-    ref.in_hand[s] = in_hand[a < 0.5 ? f0 : f1];
+    const int nearest = a < 0.5 ? f0 : f1;
+    ref.resting[s] = resting[nearest];
+    ref.in_hand[s] = resting[nearest] ? 0 : in_hand[nearest];
   }
   return ref;
 }

@@ -4,8 +4,11 @@
 //    reference position targets (every hand joint carries a position
 //    actuator, embodiment.h BuildHandModel);
 //  - the reconstructed object pose;
-//  - a stage label per step: "in hand" when the reconstructed hand is within
-//    epsilon of the object surface, else "resting" (seed: transition reward).
+//  - stage labels per step (seed: transition reward): "resting" while the
+//    reconstructed object lies on the floor, "in hand" (per hand) while a
+//    reconstructed hand is within epsilon of the object surface and the
+//    object is off the floor; a step may be neither (the object in the air
+//    with no hand near it: a reconstruction error the reward asks nothing of).
 // Time: `warmup_steps` steps (seed "Warmup Steps") precede frame 0 and
 // repeat it; step s is at time (s - warmup_steps) * dt from frame 0.
 #pragma once
@@ -56,9 +59,11 @@ struct DynamicReference {
   RowMatrix feedforward;
   std::vector<Vec3> object_pos;    // (steps)
   std::vector<Quat> object_quat;   // (steps)
-  // (steps) the hands that hold the object: bit h for SceneIndex hand h;
-  // 0 = resting stage.
+  // (steps) the hands that hold the object off the floor: bit h for
+  // SceneIndex hand h; 0 while it rests.
   std::vector<uint8_t> in_hand;
+  // (steps) 1 while the object rests on the floor.
+  std::vector<uint8_t> resting;
 
   int steps() const { return static_cast<int>(ctrl.rows()); }
   // The simulation step at which source frame f is reached.
@@ -82,11 +87,18 @@ std::vector<bool> LabelInHand(const recon::Reconstruction& r, const std::vector<
 std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const std::vector<bool>& valid,
                               const std::vector<Pose>& object, const TriMesh& mesh, double epsilon);
 
+// Per frame: whether the object (`mesh` posed by `object`) rests on the
+// floor, its lowest point within `height` of z = 0 (the reconstruction's
+// floor). A hand near a resting object is reaching for it or letting go:
+// the object is not yet (or no longer) in that hand.
+std::vector<bool> LabelResting(const std::vector<Pose>& object, const TriMesh& mesh, double height);
+
 // Samples `kinematic` (HandTrajectory from KinematicRetargeter, whose
-// qpos_names name the actuated joints), `object` and `in_hand` (one per
-// frame: the hands holding the object, bit h for SceneIndex hand h; 1 for
-// the one hand of a one-hand scene) at the model's timestep, after
-// `warmup_seconds` of frame 0.
+// qpos_names name the actuated joints), `object`, `in_hand` (one per
+// frame: the hands near the object, bit h for SceneIndex hand h; 1 for the
+// one hand of a one-hand scene) and `resting` (LabelResting) at the model's
+// timestep, after `warmup_seconds` of frame 0. A resting frame holds in no
+// hand.
 // Feed-forward targets: u = q + (d / kp) qdot for every actuated joint
 // (its damping's lag at the reference velocity); the floating base, whose
 // gains are critically damped (kp = I w^2, d = 2 I w: embodiment.h), also
@@ -95,6 +107,7 @@ std::vector<bool> LabelInHand(const std::vector<recon::Joints21>& joints, const 
 // Throws Error("bad_reference") on a non-finite value or a size mismatch.
 DynamicReference BuildReference(const mjModel* m,
                                 const HandTrajectory& kinematic, const std::vector<Pose>& object,
-                                const std::vector<uint8_t>& in_hand, double warmup_seconds);
+                                const std::vector<uint8_t>& in_hand, const std::vector<bool>& resting,
+                                double warmup_seconds);
 
 }  // namespace doasido::retarget

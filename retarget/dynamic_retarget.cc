@@ -81,12 +81,13 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
     run.kinematic.object_poses = object;
     const std::vector<bool> in_hand =
         LabelInHand(r, object, mesh, sampler.reward.transition_epsilon);
-    for (bool b : in_hand) run.in_hand_frames += b;
+    const std::vector<bool> resting = LabelResting(object, mesh, sampler.reward.transition_rest_height);
+    for (size_t t = 0; t < in_hand.size(); ++t) run.in_hand_frames += in_hand[t] && !resting[t];
 
     const SceneIndex index = IndexScene(m);
     const DynamicReference ref =
         BuildReference(m, run.kinematic, object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
-                       WarmupSeconds(sampler));
+                       resting, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);

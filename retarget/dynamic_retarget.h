@@ -55,7 +55,7 @@ struct DynamicRetargetRun {
   TrackingMetrics metrics;
   SamplerStats stats;
   std::string robot_scene_xml; // the hand + object scene it ran in
-  int in_hand_frames = 0;
+  int in_hand_frames = 0;      // frames a hand holds the object off the floor
   // Per frame, the robot fingertips the kinematic reference put on the
   // object (KinematicConfig contact_weight; all 0 when off).
   std::vector<int> grasp_contacts;

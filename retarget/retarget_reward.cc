@@ -17,6 +17,7 @@ void CheckConfig(const RewardConfig& c, const std::string& section) {
   RequireInRange(section, "penetration_tolerance", c.penetration_tolerance, 0, 0.1);
   RequireInRange(section, "transition_penalty_scale", c.transition_penalty_scale, 0, 1e6);
   RequireInRange(section, "transition_epsilon", c.transition_epsilon, 1e-4, 0.5);
+  RequireInRange(section, "transition_rest_height", c.transition_rest_height, 0, 0.5);
 }
 
 Vec3 RotationError(const Quat& a, const Quat& b) {
@@ -58,10 +59,10 @@ double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
     if (!(o1 && o2)) depth += std::max(0.0, -con.dist - config.penetration_tolerance);
   }
   if (config.penetration) reward -= config.penetration_penalty_scale * depth;
-  // In-hand stages: every hand that holds the object in the reference must
-  // touch it; resting stages: the object must touch the floor.
-  const unsigned holding = ref.in_hand[step];
-  if (config.transition && (holding ? (holding & ~touching) != 0 : !floor_contact)) {
+  // Resting stages: the object must touch the floor; in-hand stages: every
+  // hand that holds the object in the reference must touch it.
+  const bool missed = ref.resting[step] ? !floor_contact : (ref.in_hand[step] & ~touching) != 0;
+  if (config.transition && missed) {
     reward -= config.transition_penalty_scale;
   }
   return reward;

@@ -10,7 +10,10 @@
 // when the reference's stage is not met (seed "Transition Reward"): no
 // object-floor contact while resting, no hand-object contact while in hand;
 // with two hands, per hand: a hand the reference has holding the object
-// (DynamicReference::in_hand) that does not touch it.
+// (DynamicReference::in_hand) that does not touch it. Stages: in hand when
+// the human hand is within transition_epsilon of the object (the seed's
+// rule) and the object is off the floor; resting when the object's lowest
+// point is within transition_rest_height of the floor (DynamicReference).
 #pragma once
 
 #include "core/config.h"
@@ -31,13 +34,14 @@ struct RewardConfig {
   bool transition = true;
   double transition_penalty_scale = 0.5;
   double transition_epsilon = 0.02;  // m: hand-object distance labelling "in hand"
+  double transition_rest_height = 0.01;  // m: object bottom height labelling "resting"
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RewardConfig, pos_rew_scale, rot_rew_scale,
                                                 base_pos_rew_scale, base_rot_rew_scale,
                                                 joint_rew_scale, terminal_rew_scale, penetration,
                                                 penetration_penalty_scale, penetration_tolerance,
                                                 transition, transition_penalty_scale,
-                                                transition_epsilon)
+                                                transition_epsilon, transition_rest_height)
 void CheckConfig(const RewardConfig& c, const std::string& section);
 
 // Reward of the state in `d` against reference step `step`. No allocation.

@@ -161,6 +161,84 @@ Pose VerbPose(Verb verb, const Pose& rest, double height, double side_sign, doub
   return rest;
 }
 
+// Closing s in [0, 1] takes the pinch's opening from ~10 cm to ~4 cm.
+std::array<double, 5> PinchPosture(double s) {
+  const double f = -0.1 + 0.5 * s;
+  return {0.3 + 0.2 * s, f, f, f, f};
+}
+
+// Where a pinching hand goes (SolvePinchGrasp): the opening (thumb tip to
+// the index and middle tips) laid along `across` (horizontal, across the
+// approach `a`), its midpoint at `centre` + shift * across + back_off * a,
+// the wrist on the approach side, the radial side up.
+class PinchPlacement {
+ public:
+  PinchPlacement(Side side, const HandShape& shape, const Proximity& obj, const Vec3& a,
+                 const Vec3& centre)
+      : side_(side), shape_(shape), obj_(obj), a_(a), centre_(centre),
+        across_(Vec3(a.x(), a.y(), 0).cross(Vec3::UnitZ()).normalized()) {
+    const auto open = PinchPosture(0);
+    double up = 1;
+    for (double s : {1.0, -1.0}) {
+      sign_ = s;
+      const HandJoints j = HandJointPositions(WithCurl(Wrist(open), open), side_, shape_);
+      if (j(1, 2) > j(17, 2)) up = s;  // the thumb's base above the little finger's
+    }
+    sign_ = up;
+  }
+
+  Pose Wrist(const std::array<double, 5>& curl) const {
+    const HandJoints j = HandJointPositions(WithCurl(Pose{}, curl), side_, shape_);
+    const Vec3 thumb = j.row(4).transpose(), fingers = 0.5 * (j.row(8) + j.row(12)).transpose();
+    const Vec3 mid = 0.5 * (thumb + fingers), e = (fingers - thumb).normalized();
+    const Vec3 back = (-mid - (-mid).dot(e) * e).normalized();
+    Mat3 local, world;
+    local << e, back, e.cross(back);
+    const Vec3 u = sign_ * across_;
+    world << u, a_, u.cross(a_);
+    const Mat3 R = world * local.transpose();
+    return Pose{Quat(R), centre_ + shift_ * across_ + back_off_ * a_ - R * mid};
+  }
+
+  std::vector<Capsule> Capsules(const std::array<double, 5>& curl, const Pose& wrist) const {
+    const HandPose hp = WithCurl(wrist, curl);
+    return HandCapsules(HandJointPositions(hp, side_, shape_), hp, side_, shape_);
+  }
+
+  // An object too wide for the open hand: backs the hand off along the
+  // approach until it fits. Then closes until the first touch, slides the
+  // hand across until the thumb and the fingers are equally far from the
+  // surface, and again. Returns the closing s at the touch.
+  double Close() {
+    while (Touching(0) && back_off_ < 0.04) back_off_ += 0.002;
+    double hi = 1;
+    for (int round = 0; round < 6; ++round) {
+      double lo = 0;
+      hi = 1;
+      for (int it = 0; it < 14; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (Touching(mid) ? hi : lo) = mid;
+      }
+      if (round == 5) break;
+      const auto c = Capsules(PinchPosture(hi), Wrist(PinchPosture(hi)));
+      shift_ += sign_ * 0.5 * (Clearance(c, 0, 3, obj_) - Clearance(c, 3, 9, obj_));
+    }
+    return hi;
+  }
+
+ private:
+  bool Touching(double s) const {
+    const auto c = Capsules(PinchPosture(s), Wrist(PinchPosture(s)));
+    return Clearance(c, 0, static_cast<int>(c.size()), obj_) <= kTouchTol;
+  }
+
+  Side side_;
+  const HandShape& shape_;
+  const Proximity& obj_;
+  Vec3 a_, centre_, across_;
+  double sign_ = 1, shift_ = 0, back_off_ = 0;
+};
+
 // Carrying the object out of view and back (for LeaveFrame::kObject).
 Pose CarryOutPose(const Pose& rest, double side_sign, double u) {
   const double lift = 0.12 * (MinJerk(Seg(u, 0, 0.1)) - MinJerk(Seg(u, 0.87, 1)));
@@ -238,75 +316,21 @@ Grasp SolvePinchGrasp(const TriMesh& object, Side side, double azimuth, double e
                       double object_yaw, const HandShape& shape) {
   const Pose rest{Quat(Eigen::AngleAxisd(object_yaw, Vec3::UnitZ())), Vec3::Zero()};
   const Proximity obj(object.Transformed(rest));
-  const Vec3 centre(0, 0, std::min(0.55 * object.Max().z(), 0.07));
-  const Vec3 a = ApproachDirection(side, azimuth, elevation);
-  const Vec3 across = Vec3(a.x(), a.y(), 0).cross(Vec3::UnitZ()).normalized();
-  // Closing s in [0, 1] takes the opening from ~10 cm to ~4 cm.
-  auto posture = [](double s) {
-    const double f = -0.1 + 0.5 * s;
-    return std::array<double, 5>{0.3 + 0.2 * s, f, f, f, f};
-  };
-  // The wrist that puts the opening's midpoint at `centre` + shift * across,
-  // the opening along +-across (sign), the wrist on the approach side.
-  double shift = 0, back_off = 0;
-  auto wrist_for = [&](const std::array<double, 5>& curl, double sign) {
-    const HandJoints j = HandJointPositions(WithCurl(Pose{}, curl), side, shape);
-    const Vec3 thumb = j.row(4).transpose(), fingers = 0.5 * (j.row(8) + j.row(12)).transpose();
-    const Vec3 mid = 0.5 * (thumb + fingers), e = (fingers - thumb).normalized();
-    const Vec3 back = (-mid - (-mid).dot(e) * e).normalized();
-    Mat3 local, world;
-    local << e, back, e.cross(back);
-    const Vec3 u = sign * across;
-    world << u, a, u.cross(a);
-    const Mat3 R = world * local.transpose();
-    return Pose{Quat(R), centre + shift * across + back_off * a - R * mid};
-  };
-  // The radial side up: the thumb's base above the little finger's.
-  const auto open = posture(0);
-  double sign = 1;
-  for (double s : {1.0, -1.0}) {
-    const HandJoints j = HandJointPositions(WithCurl(wrist_for(open, s), open), side, shape);
-    if (j(1, 2) > j(17, 2)) sign = s;
-  }
-  auto capsules = [&](const std::array<double, 5>& curl, const Pose& wrist) {
-    const HandPose hp = WithCurl(wrist, curl);
-    return HandCapsules(HandJointPositions(hp, side, shape), hp, side, shape);
-  };
-  auto touching = [&](double s) {
-    const auto c = capsules(posture(s), wrist_for(posture(s), sign));
-    return Clearance(c, 0, static_cast<int>(c.size()), obj) <= kTouchTol;
-  };
-  // An object too wide for the open hand: back the hand off along the
-  // approach until it fits. Then close until the first touch, slide the hand
-  // across until the thumb and the fingers are equally far from the
-  // surface, and again.
-  while (touching(0) && back_off < 0.04) back_off += 0.002;
-  double hi = 1;
-  for (int round = 0; round < 6; ++round) {
-    double lo = 0;
-    hi = 1;
-    for (int it = 0; it < 14; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (touching(mid) ? hi : lo) = mid;
-    }
-    const auto c = capsules(posture(hi), wrist_for(posture(hi), sign));
-    const double thumb = Clearance(c, 0, 3, obj), fingers = Clearance(c, 3, 9, obj);
-    if (round == 5) break;
-    shift += sign * 0.5 * (thumb - fingers);
-  }
+  PinchPlacement p(side, shape, obj, ApproachDirection(side, azimuth, elevation),
+                   Vec3(0, 0, std::min(0.55 * object.Max().z(), 0.07)));
   Grasp g;
-  g.curl = posture(hi);
-  const Pose wrist = wrist_for(g.curl, sign);
-  const auto c = capsules(g.curl, wrist);
+  g.curl = PinchPosture(p.Close());
+  const Pose wrist = p.Wrist(g.curl);
+  const auto c = p.Capsules(g.curl, wrist);
   for (int f = 0; f < 3; ++f) g.touching[f] = Clearance(c, 3 * f, 3 * f + 3, obj) <= 2 * kTouchTol;
   // The ring and little fingers tuck in, off the object: pressing on its
   // side across the pinch, they would push it out.
   for (int f = 3; f < 5; ++f) {
     std::array<double, 5> curl = g.curl;
     curl[f] = 1.0;
-    if (Clearance(capsules(curl, wrist), 3 * f, 3 * f + 3, obj) > kTouchTol) g.curl[f] = 1.0;
+    if (Clearance(p.Capsules(curl, wrist), 3 * f, 3 * f + 3, obj) > kTouchTol) g.curl[f] = 1.0;
   }
-  CloseFingers(g, [&](const std::array<double, 5>& curl) { return capsules(curl, wrist); }, obj);
+  CloseFingers(g, [&](const std::array<double, 5>& curl) { return p.Capsules(curl, wrist); }, obj);
   // The approach and the release: the thumb at its grip (it comes to rest
   // on the surface as the hand arrives), index and middle opened wider than
   // the widest pinch, the others tucked as they grip.

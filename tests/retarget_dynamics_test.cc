@@ -30,9 +30,10 @@ constexpr int kFrames = 20;
 
 TriMesh Cylinder() { return synth::MakeCylinder(0.03, 0.08, 16); }
 
-recon::Reconstruction Reference(int frames = kFrames) {
+recon::Reconstruction Reference(int frames = kFrames, synth::Verb verb = synth::Verb::kPickPlace) {
   synth::EpisodeSpec spec;
   spec.frames = frames;
+  spec.verb = verb;
   return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, Cylinder()), 30.0);
 }
 
@@ -146,16 +147,90 @@ TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
   ref.object_quat = {Quat::Identity()};
   RewardConfig config;
   config.penetration = false;
-  auto reward = [&](uint8_t holding, bool transition) {
+  auto reward = [&](uint8_t holding, bool resting, bool transition) {
     ref.in_hand = {holding};
+    ref.resting = {resting};
     config.transition = transition;
     return StepReward(m, d.get(), index, ref, 0, config);
   };
-  const double tracking = reward(0, false), penalty = config.transition_penalty_scale;
-  EXPECT_DOUBLE_EQ(reward(0, true), tracking);             // resting on the floor
-  EXPECT_DOUBLE_EQ(reward(0b01, true), tracking);          // the left hand holds and touches
-  EXPECT_DOUBLE_EQ(reward(0b10, true), tracking - penalty);  // the right one holds, apart
-  EXPECT_DOUBLE_EQ(reward(0b11, true), tracking - penalty);  // both hold, one apart
+  const double tracking = reward(0, false, false), penalty = config.transition_penalty_scale;
+  EXPECT_DOUBLE_EQ(reward(0, true, true), tracking);             // resting on the floor
+  EXPECT_DOUBLE_EQ(reward(0, false, true), tracking);            // in the air, no hand near: nothing asked
+  EXPECT_DOUBLE_EQ(reward(0b01, false, true), tracking);         // the left hand holds and touches
+  EXPECT_DOUBLE_EQ(reward(0b10, false, true), tracking - penalty);  // the right one holds, apart
+  EXPECT_DOUBLE_EQ(reward(0b11, false, true), tracking - penalty);  // both hold, one apart
+  // Lifted off the floor, the object that should rest costs the penalty.
+  d->qpos[index.object_qpos + 2] += 0.02;
+  mj_forward(m, d.get());
+  EXPECT_DOUBLE_EQ(reward(0, true, true), reward(0, true, false) - penalty);
+}
+
+TEST(DynamicReference, AnObjectOnTheFloorRestsAndIsInNoHand) {
+  const TriMesh cylinder = Cylinder();  // radius 3 cm, height 8 cm, base at z = 0
+  const Quat on_side(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
+  const std::vector<Pose> object = {{Quat::Identity(), Vec3(0, 0, 0)},
+                                    {Quat::Identity(), Vec3(0.1, 0, 0.02)},
+                                    {on_side, Vec3(0, 0, 0.0305)},
+                                    {on_side, Vec3(0, 0, 0.045)}};
+  EXPECT_EQ(LabelResting(object, cylinder, 0.01), (std::vector<bool>{true, false, true, false}));
+
+  const DynamicRetargetConfig c = SmallConfig();
+  TempDir dir;
+  const ObjectScene scene = BuildObjectScene(cylinder, object[0], c.scene, dir / "scene");
+  std::ifstream in(scene.xml_path);
+  const HandModel hand = BuildHandModel(FindEmbodiment(c.hand, c.robots_dir),
+                                        std::string((std::istreambuf_iterator<char>(in)), {}), dir / "scene");
+  KinematicRetargeter kinematic(hand, c.kinematic);
+  const recon::Reconstruction r = Reference(4);
+  const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
+  const DynamicReference ref = BuildReference(hand.model.get(), t, object, {1, 1, 0, 1},
+                                              LabelResting(object, cylinder, 0.01), 0.0);
+  const std::vector<uint8_t> in_hand = {0, 1, 0, 1}, resting = {1, 0, 1, 0};
+  for (int f = 0; f < 4; ++f) {
+    const int s = ref.StepOfFrame(f);
+    EXPECT_EQ(ref.in_hand[s], in_hand[f]) << "frame " << f;
+    EXPECT_EQ(ref.resting[s], resting[f]) << "frame " << f;
+  }
+}
+
+TEST(AnnealedSampler, PerturbationsOnlyWhereTheObjectIsHeldOffTheFloor) {
+  DynamicReference ref;
+  ref.dt = 0.005;
+  ref.warmup_steps = 20;
+  ref.ctrl = RowMatrix::Zero(400, 1);
+  ref.in_hand.assign(400, 0);
+  std::fill(ref.in_hand.begin() + 100, ref.in_hand.begin() + 300, 1);
+  AnnealedSamplerConfig c;
+  c.perturb_gate_seconds = 0.25;  // 50 steps
+  const std::vector<uint8_t> gate = PerturbationGate(ref, c);
+  for (int s = 0; s < 400; ++s) EXPECT_EQ(gate[s], s >= 150 && s < 250) << "step " << s;
+  // Held from the first step: not before warmup and the lag have passed.
+  std::fill(ref.in_hand.begin(), ref.in_hand.begin() + 100, 1);
+  const std::vector<uint8_t> early = PerturbationGate(ref, c);
+  EXPECT_EQ(std::find(early.begin(), early.end(), 1) - early.begin(), 70);
+  c.perturb = false;
+  const std::vector<uint8_t> off = PerturbationGate(ref, c);
+  EXPECT_EQ(std::count(off.begin(), off.end(), 1), 0);
+}
+
+TEST(DynamicRetarget, OnlyAReferenceThatLiftsTheObjectIsPerturbed) {
+  TempDir dir;
+  DynamicRetargetConfig with = SmallConfig(), without = SmallConfig();
+  without.sampler.perturb = false;
+  const recon::Reconstruction slide = Reference(kFrames, synth::Verb::kSlide);
+  const DynamicRetargetRun a = Retarget(slide, with, dir), b = Retarget(slide, without, dir);
+  ASSERT_EQ(a.in_hand_frames, 0);  // the hand is near, but the object stays on the floor
+  EXPECT_EQ(a.stats.rollouts, b.stats.rollouts);
+  for (int f = 0; f < kFrames; ++f) EXPECT_EQ(a.trajectory.qpos[f], b.trajectory.qpos[f]) << "frame " << f;
+
+  const recon::Reconstruction lift = Reference(kFrames, synth::Verb::kPickPlace);
+  with.sampler.perturb_gate_seconds = 0.02;  // this short lift is held for 0.23 s
+  with.sampler.perturb_prob = 1;
+  const DynamicRetargetRun c = Retarget(lift, with, dir), d = Retarget(lift, without, dir);
+  ASSERT_GT(c.in_hand_frames, 0);
+  bool differs = false;
+  for (int f = 0; f < kFrames; ++f) differs |= c.trajectory.ctrl[f] != d.trajectory.ctrl[f];
+  EXPECT_TRUE(differs) << "perturbed rollouts rank the samples of the held frames differently";
 }
 
 TEST(RetargetMetrics, MatchHandComputedErrors) {
@@ -178,10 +253,17 @@ TEST(RetargetMetrics, MatchHandComputedErrors) {
 TEST(DynamicRetarget, SameSeedGivesTheSameTrajectoryForAnyThreadCount) {
   const recon::Reconstruction r = Reference();
   TempDir dir;
-  const DynamicRetargetRun a = Retarget(r, SmallConfig(2), dir);
-  const DynamicRetargetRun b = Retarget(r, SmallConfig(2), dir);
-  const DynamicRetargetRun c = Retarget(r, SmallConfig(1), dir);
-  DynamicRetargetConfig other = SmallConfig(2);
+  // Perturbed rollouts in every held frame of this short lift.
+  const auto config = [](int threads) {
+    DynamicRetargetConfig c = SmallConfig(threads);
+    c.sampler.perturb_gate_seconds = 0.02;
+    c.sampler.perturb_prob = 1;
+    return c;
+  };
+  const DynamicRetargetRun a = Retarget(r, config(2), dir);
+  const DynamicRetargetRun b = Retarget(r, config(2), dir);
+  const DynamicRetargetRun c = Retarget(r, config(1), dir);
+  DynamicRetargetConfig other = config(2);
   other.sampler.seed = 4;
   const DynamicRetargetRun d = Retarget(r, other, dir);
   ASSERT_EQ(a.trajectory.qpos.size(), static_cast<size_t>(kFrames));
@@ -242,7 +324,8 @@ SceneAndReference BuildSceneAndReference(const DynamicRetargetConfig& c, const s
   SceneAndReference out{BuildHandModel(FindEmbodiment(c.hand, c.robots_dir), xml, dir / "scene"), {}};
   KinematicRetargeter kinematic(out.hand, c.kinematic);
   const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
-  out.ref = BuildReference(out.hand.model.get(), t, object, std::vector<uint8_t>(kFrames, 0), 0.0);
+  out.ref = BuildReference(out.hand.model.get(), t, object, std::vector<uint8_t>(kFrames, 0),
+                           std::vector<bool>(kFrames, true), 0.0);
   return out;
 }
 

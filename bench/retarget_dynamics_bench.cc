@@ -36,6 +36,7 @@
 //   [--elevation=RAD] (the synthetic hand's approach above the horizontal; 0.55)
 //   [--grasp=pinch|wrap] (the synthetic hand's grasp, synth::GraspType)
 //   [--density=400] (kg/m^3 of the synthetic objects)
+//   [--seed=0] (the sampler's seed: rerun to see how much a row moves by chance)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -64,6 +65,7 @@ const std::filesystem::path kData = DOASIDO_SHARED_DATA;
 
 struct Flags {
   int refs = 30, frames = 60, samples = 16, iterations = 3, threads = 2;
+  std::uint64_t seed = 0;  // the sampler's (AnnealedSamplerConfig::seed)
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
   double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
   // The synthetic references are grasped so that a robot hand copying them
@@ -93,6 +95,7 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--samples") f.samples = std::stoi(v);
     else if (k == "--iterations") f.iterations = std::stoi(v);
     else if (k == "--threads") f.threads = std::stoi(v);
+    else if (k == "--seed") f.seed = std::stoull(v);
     else if (k == "--horizon") f.horizon = std::stod(v);
     else if (k == "--ctrl_dt") f.ctrl_dt = std::stod(v);
     else if (k == "--knot_dt") f.knot_dt = std::stod(v);
@@ -154,6 +157,7 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   s.knot_dt = f.knot_dt;
   s.blend_seconds = f.ctrl_dt;
   s.threads = f.threads;
+  s.seed = f.seed;
   return c;
 }
 
@@ -257,8 +261,9 @@ void Ablation(const Flags& f) {
                  std::chrono::duration<double>(Clock::now() - t0).count());
   }
   std::printf("\n== Ablation (seed Table 3 in kind): %d synthetic references, %d frames at 30 fps,\n"
-              "   %d samples x %d iterations, horizon %.2f s, ctrl_dt %.2f s, knot_dt %.2f s, %d threads\n",
-              f.refs, f.frames, f.samples, f.iterations, f.horizon, f.ctrl_dt, f.knot_dt, f.threads);
+              "   %d samples x %d iterations, horizon %.2f s, ctrl_dt %.2f s, knot_dt %.2f s, %d threads, seed %llu\n",
+              f.refs, f.frames, f.samples, f.iterations, f.horizon, f.ctrl_dt, f.knot_dt, f.threads,
+              static_cast<unsigned long long>(f.seed));
   std::printf("%-22s | %-26s | %-26s\n", "", "noisy: succ  E_pos  E_rot", "clean: succ  E_pos  E_rot");
   for (int row = 0; row < 4; ++row) {
     std::printf("%-22s", rows[row]);
@@ -500,8 +505,8 @@ void Bimanual(const Flags& f) {
                  std::chrono::duration<double>(Clock::now() - t0).count());
   }
   std::printf("\n== Two hands: %d synthetic references (handover, carry, hold-and-act in turn), %d frames,\n"
-              "   both Sharpa hands and the object in one scene, %d samples x %d iterations\n",
-              f.refs, f.frames, f.samples, f.iterations);
+              "   both Sharpa hands and the object in one scene, %d samples x %d iterations, seed %llu\n",
+              f.refs, f.frames, f.samples, f.iterations, static_cast<unsigned long long>(f.seed));
   std::printf("%-22s | %-36s | %-36s\n", "", "noisy: succ  E_pos  E_rot  wrists", "clean: succ  E_pos  E_rot  wrists");
   for (int row = 0; row < 4; ++row) {
     std::printf("%-22s", rows[row]);

@@ -112,8 +112,14 @@ TEST(AnnealedSampler, PresetsAndRangeChecks) {
   AnnealedSamplerConfig bad;
   bad.perturb_prob = 1.5;
   EXPECT_EQ(ErrorCode([&] { CheckConfig(bad, "retarget.sampler"); }), "bad_config");
+  bad = {};
+  bad.perturb_gate_seconds = -0.1;
+  EXPECT_EQ(ErrorCode([&] { CheckConfig(bad, "retarget.sampler"); }), "bad_config");
   DynamicRetargetConfig c;
   c.sampler.reward.transition_epsilon = 0;
+  EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
+  c = {};
+  c.sampler.reward.transition_rest_height = -0.01;
   EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
 }
 
@@ -122,7 +128,7 @@ TEST(AnnealedSampler, PresetsAndRangeChecks) {
 // their wrist mounts (in body order) and every body under a mount is that
 // hand's; a stage whose holding hands all touch costs nothing, one where a
 // holding hand does not costs transition_penalty_scale; resting, the
-// object's floor contact is what counts.
+// object's floor contact is what counts; neither, nothing is asked.
 TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
   const std::string mount = kWristMountBody;
   const ModelPtr model = CompileMjcfText(R"(<mujoco><worldbody>

@@ -10,8 +10,9 @@
 //       reads it like retarget_kinematic's)
 //   kinematic_reference.json  the kinematic reference it tracked
 //   scene/scene.xml + hull OBJs, robot_scene.xml  the scene it ran in
-// Measurements: e_pos, e_rot, success, frames, in_hand_frames, plans,
-// iterations, rollouts, sim_steps, optimizer_seconds, rollout_steps_per_second.
+// Measurements: e_pos, e_rot, success, frames, in_hand_frames (frames the
+// reference holds the object off the floor), plans, iterations, rollouts,
+// sim_steps, optimizer_seconds, rollout_steps_per_second.
 // With config.left_hand set and a left hand in the reconstruction, both
 // hands are retargeted in one scene (bimanual_retarget.h): the trajectory
 // holds both (names prefixed l_ / r_, embodiment "<left>+<right>"),

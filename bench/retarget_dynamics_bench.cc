@@ -9,7 +9,7 @@
 //  2. simulation steps per second inside the optimiser against raw mj_step
 //     of the same scene on the same number of threads: replaying the run's
 //     own controls (the same contact load), and at rest from qpos0;
-//  3. wall time to retarget a clip with the fast preset, and the seed
+//  3. wall time to retarget --wall_clips clips with the fast preset, and the seed
 //     preset's wall time (run with --seed_wall, else estimated from the
 //     measured throughput at 32 iterations, i.e. without early stops);
 //  4. real references (--sections=hot3d): the HOT3D sample's hands and the
@@ -67,6 +67,7 @@ struct Flags {
   int refs = 30, frames = 60, samples = 16, iterations = 3, threads = 2;
   std::uint64_t seed = 0;  // the sampler's (AnnealedSamplerConfig::seed)
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
+  double improvement_threshold = 0.01;  // the sampler's early stop (AnnealedSamplerConfig)
   double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
   // The synthetic references are grasped so that a robot hand copying them
   // can hold the object: the hand pinches (thumb against two fingers), the
@@ -81,6 +82,7 @@ struct Flags {
   bool seed_wall = false, verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
   std::string wall_preset = "fast";
+  int wall_clips = 3;  // clips of the wall-time section
   std::string sections = "ablation,throughput,wall,hot3d,grasp,bimanual";
 };
 
@@ -99,7 +101,9 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--horizon") f.horizon = std::stod(v);
     else if (k == "--ctrl_dt") f.ctrl_dt = std::stod(v);
     else if (k == "--knot_dt") f.knot_dt = std::stod(v);
+    else if (k == "--improvement_threshold") f.improvement_threshold = std::stod(v);
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
+    else if (k == "--wall_clips") f.wall_clips = std::stoi(v);
     else if (k == "--lift_scale") f.lift_scale = std::stod(v);
     else if (k == "--elevation") f.elevation = std::stod(v);
     else if (k == "--grasp") f.grasp = v;
@@ -155,6 +159,7 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   s.horizon = f.horizon;
   s.ctrl_dt = f.ctrl_dt;
   s.knot_dt = f.knot_dt;
+  s.improvement_threshold = f.improvement_threshold;
   s.blend_seconds = f.ctrl_dt;
   s.threads = f.threads;
   s.seed = f.seed;
@@ -343,25 +348,37 @@ void Throughput(const Flags& f) {
   }
 }
 
+// One clip of the wall-time section: wall seconds, the run.
+std::pair<double, DynamicRetargetRun> TimedRun(const recon::Reconstruction& r, const TriMesh& mesh,
+                                               const DynamicRetargetConfig& config, const std::string& label) {
+  const auto t0 = Clock::now();
+  DynamicRetargetRun run = RunOne(r, mesh, config, label);
+  return {std::chrono::duration<double>(Clock::now() - t0).count(), std::move(run)};
+}
+
 void Wall(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
-  const Case c = MakeCase(f, 0, frames);
-  std::printf("\n== Wall time for a %.0f-s clip (%d frames), %d threads\n", f.clip_seconds, frames,
-              f.threads);
+  std::printf("\n== Wall time for %d %.0f-s clips (%d frames; pick-and-place, lift-and-rotate, slide in turn), %d threads\n",
+              f.wall_clips, f.clip_seconds, frames, f.threads);
   DynamicRetargetConfig fast = BaseConfig(f);
   fast.preset = f.wall_preset;
   fast.sampler.threads = f.threads;
-  for (int noisy = 0; noisy < 2; ++noisy) {
-    const auto t0 = Clock::now();
-    const DynamicRetargetRun run = RunOne(noisy ? c.noisy : c.clean, c.mesh, fast, "wall");
-    const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double steps_per_s = run.stats.sim_steps / run.stats.rollout_seconds;
-    std::printf("%s preset (%s): %.1f s wall, %d plans, %d iterations, %lld sim steps (%.0f/s), "
-                "success %d (E_pos %.3f, E_rot %.3f), in-hand frames %d\n",
-                f.wall_preset.empty() ? "flags" : f.wall_preset.c_str(), noisy ? "noisy" : "clean", wall, run.stats.plans, run.stats.iterations,
-                run.stats.sim_steps, steps_per_s, run.metrics.success, run.metrics.e_pos,
-                run.metrics.e_rot, run.in_hand_frames);
-    if (f.verbose) {
+  const char* name = f.wall_preset.empty() ? "flags" : f.wall_preset.c_str();
+  Tally tally[2];
+  double wall[2] = {0, 0}, steps_per_s = 0;
+  for (int i = 0; i < f.wall_clips; ++i) {
+    const Case c = MakeCase(f, i, frames);
+    for (int noisy = 0; noisy < 2; ++noisy) {
+      const auto [seconds, run] = TimedRun(noisy ? c.noisy : c.clean, c.mesh, fast, "wall");
+      tally[noisy].Add(run.metrics);
+      wall[noisy] += seconds;
+      steps_per_s = run.stats.sim_steps / run.stats.rollout_seconds;
+      std::printf("%s preset, clip %d (%s): %.1f s wall, %d plans, %d iterations, %lld sim steps (%.0f/s), "
+                  "success %d (E_pos %.3f, E_rot %.3f), in-hand frames %d\n",
+                  name, i, noisy ? "noisy" : "clean", seconds, run.stats.plans, run.stats.iterations,
+                  run.stats.sim_steps, steps_per_s, run.metrics.success, run.metrics.e_pos,
+                  run.metrics.e_rot, run.in_hand_frames);
+      if (!f.verbose) continue;
       const auto& r = noisy ? c.noisy : c.clean;
       for (int k = 0; k < r.frames(); k += 15) {
         std::fprintf(stderr, "  t %4.1f s: object z ref %.3f sim %.3f, error %.3f m\n", k / 30.0,
@@ -369,21 +386,23 @@ void Wall(const Flags& f) {
                      (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
       }
     }
-    if (noisy) continue;
-    const AnnealedSamplerConfig seed = SamplerPreset("seed");
-    const double steps = std::ceil((f.clip_seconds + seed.horizon) / seed.ctrl_dt) *
-                         seed.max_num_iterations * seed.num_samples * (seed.horizon / 0.005);
-    std::printf("seed preset, estimated without early stops: %.3g sim steps / %.0f per s = %.0f s "
-                "(%.1f h)\n", steps, steps_per_s, steps / steps_per_s, steps / steps_per_s / 3600);
   }
+  for (int noisy = 0; noisy < 2; ++noisy) {
+    std::printf("%s preset, %s: %.1f s wall per clip, success %d of %d\n", name, noisy ? "noisy" : "clean",
+                wall[noisy] / std::max(1, f.wall_clips), tally[noisy].success, tally[noisy].n);
+  }
+  const AnnealedSamplerConfig seed = SamplerPreset("seed");
+  const double steps = std::ceil((f.clip_seconds + seed.horizon) / seed.ctrl_dt) *
+                       seed.max_num_iterations * seed.num_samples * (seed.horizon / 0.005);
+  std::printf("seed preset, estimated without early stops: %.3g sim steps / %.0f per s = %.0f s "
+              "(%.1f h) per clip\n", steps, steps_per_s, steps / steps_per_s, steps / steps_per_s / 3600);
   if (f.seed_wall) {
-    DynamicRetargetConfig seed = fast;
-    seed.preset = "seed";
-    const auto t0 = Clock::now();
-    const DynamicRetargetRun run = RunOne(c.noisy, c.mesh, seed, "wall_seed");
-    std::printf("seed preset (noisy): %.1f s wall, %d iterations, success %d (E_pos %.3f, E_rot %.3f)\n",
-                std::chrono::duration<double>(Clock::now() - t0).count(), run.stats.iterations,
-                run.metrics.success, run.metrics.e_pos, run.metrics.e_rot);
+    DynamicRetargetConfig seed_config = fast;
+    seed_config.preset = "seed";
+    const Case c = MakeCase(f, 0, frames);
+    const auto [seconds, run] = TimedRun(c.noisy, c.mesh, seed_config, "wall_seed");
+    std::printf("seed preset, clip 0 (noisy): %.1f s wall, %d iterations, success %d (E_pos %.3f, E_rot %.3f)\n",
+                seconds, run.stats.iterations, run.metrics.success, run.metrics.e_pos, run.metrics.e_rot);
   }
 }
 

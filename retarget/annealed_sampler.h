@@ -40,7 +40,9 @@
 //    perturb_continue_prob; its direction is uniform on the sphere, its size
 //    uniform up to perturb_force_scale times the object's weight (torque:
 //    perturb_torque_scale times weight x 5 cm). Other plans use all
-//    num_samples as control samples.
+//    num_samples as control samples. The rollout budget stays num_samples
+//    per iteration (a GPU implementation may afford num_samples x
+//    num_perturb_samples rollouts; on two cores the row would cost 4x).
 //  - transition reward and penetration penalty: RewardConfig.
 //
 // Determinism: all noise is drawn from `seed` per (plan, iteration, sample),

@@ -484,6 +484,7 @@ int KinematicRetargeter::PoseObject(const Keypoints21& human, const Pose& object
       touching.push_back(tip_geom_[a]);
     }
   }
+  if (static_cast<int>(touching.size()) < kMinGraspFingertips) touching.clear();
   for (int g : hand_geoms_) {
     geom_terms_.push_back({g, std::find(touching.begin(), touching.end(), g) != touching.end(), 0});
   }

@@ -31,7 +31,11 @@
 // fingertip whose human fingertip lies within contact_epsilon of the object
 // has its fingertip geom pulled into it, sqrt(contact_weight) (d +
 // contact_depth) / sigma: the position targets then squeeze what the human
-// held. Every other geom is kept out, sqrt(contact_weight) min(0, d) / sigma.
+// held. Only while kMinGraspFingertips or more fingertips touch: a single
+// fingertip pressed into a free object pushes it (it tips a standing
+// cylinder before the opposing finger arrives, and the grasp then closes on
+// a tilted object and loses the lift). Every other geom is kept out,
+// sqrt(contact_weight) min(0, d) / sigma.
 // Scaling the human hand to the robot's moves its fingertips off the object
 // it holds; without these terms the robot grasps beside it, or through it.
 #pragma once
@@ -50,6 +54,10 @@
 #include "retarget/object_surface.h"
 
 namespace doasido::retarget {
+
+// Fingertips that must touch the object together before the grasp terms
+// press them into it (see "Grasp terms" above).
+inline constexpr int kMinGraspFingertips = 2;
 
 using Keypoints21 = Eigen::Matrix<double, 21, 3, Eigen::RowMajor>;
 
@@ -157,7 +165,8 @@ class KinematicRetargeter {
 
   // Poses the object for the next SolveFrame calls and chooses the grasp
   // terms from `human` (unscaled); returns the number of touching
-  // fingertips. No-op returning 0 without grasp terms.
+  // fingertips (0 when fewer than kMinGraspFingertips touch). No-op
+  // returning 0 without grasp terms.
   int PoseObject(const Keypoints21& human, const Pose& object);
   // The signed distance of a world point to the posed object (m; +inf
   // without an object).

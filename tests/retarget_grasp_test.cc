@@ -127,6 +127,48 @@ TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
   EXPECT_GT(on.kept_out_min, -0.002);
 }
 
+// A lone fingertip on the object is not pressed into it (it would push a
+// free object away): at a frame where the reference pinches, the grasp
+// terms press two or more fingertips; with every human keypoint but the
+// fingertip nearest the object moved 10 cm away, none.
+TEST(KinematicGrasp, ALoneFingertipIsNotPressedIntoTheObject) {
+  TempDir dir;
+  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
+  synth::EpisodeSpec spec;
+  spec.frames = 40;
+  const recon::Reconstruction r =
+      synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
+  const std::vector<Pose> object = FilledObjectPoses(r);
+  const HandModel hand = HandWithObject(cylinder, object[0], dir);
+  KinematicConfig config;
+  config.contact_weight = 16;
+  KinematicRetargeter kinematic(hand, config);
+  int pinch = -1, pressed = 0;
+  for (int f = 0; f < r.frames() && pinch < 0; ++f) {
+    pressed = r.right_valid[f] ? kinematic.PoseObject(r.right_joints[f], object[f]) : 0;
+    if (pressed >= kMinGraspFingertips) pinch = f;
+  }
+  ASSERT_GE(pinch, 0) << "the reference never pinches";
+  auto touching = [&] {
+    const auto gaps = kinematic.GraspGaps(Eigen::VectorXd::Zero(kinematic.VariableNames().size()));
+    return std::count_if(gaps.begin(), gaps.end(), [](const auto& g) { return g.touch; });
+  };
+  EXPECT_EQ(touching(), pressed);
+  Keypoints21 lone = r.right_joints[pinch];
+  int nearest = 4;  // the human fingertip nearest the object
+  for (int tip : {8, 12, 16, 20}) {
+    if (kinematic.ObjectDistance(lone.row(tip).transpose()) < kinematic.ObjectDistance(lone.row(nearest).transpose())) {
+      nearest = tip;
+    }
+  }
+  ASSERT_LT(kinematic.ObjectDistance(lone.row(nearest).transpose()), config.contact_epsilon);
+  for (int k = 0; k < 21; ++k) {
+    if (k != nearest) lone.row(k) += Eigen::RowVector3d(0, 0, 0.1);
+  }
+  EXPECT_EQ(kinematic.PoseObject(lone, object[pinch]), 0);
+  EXPECT_EQ(touching(), 0);
+}
+
 // Whether a kinematic reference's grasp holds its object (reference_hold.h):
 // a synthetic pick-and-place, the object lifted 8 cm, retargeted with the
 // grasp terms pressing touching fingertips 1 cm in; at the highest frame a

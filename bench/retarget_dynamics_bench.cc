@@ -9,9 +9,10 @@
 //  2. simulation steps per second inside the optimiser against raw mj_step
 //     of the same scene on the same number of threads: replaying the run's
 //     own controls (the same contact load), and at rest from qpos0;
-//  3. wall time to retarget --wall_clips clips with the fast preset, and the seed
-//     preset's wall time (run with --seed_wall, else estimated from the
-//     measured throughput at 32 iterations, i.e. without early stops);
+//  3. wall time and success retargeting --wall_clips 10-s clips (from clip
+//     --wall_first) with the fast preset, and on the first --seed_wall=N of
+//     them (noisy) with the seed preset (half an hour a clip; without it,
+//     its bound at 32 iterations a plan, i.e. without early stops);
 //  4. real references (--sections=hot3d): the HOT3D sample's hands and the
 //     object each hand's fingertips come closest to (recon/hot3d_recording.h),
 //     the left hand onto sharpa_left and, mirrored, onto sharpa_right; the
@@ -37,6 +38,9 @@
 //   [--grasp=pinch|wrap] (the synthetic hand's grasp, synth::GraspType)
 //   [--density=400] (kg/m^3 of the synthetic objects)
 //   [--seed=0] (the sampler's seed: rerun to see how much a row moves by chance)
+//   [--wall_clips=3 --wall_first=0 --seed_wall=0 --wall_preset=fast] (the wall-time section)
+//   [--noise_scale=1] (times the sampler's noise; 0 replays the kinematic reference)
+//   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; with --wall_preset= only)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -68,6 +72,9 @@ struct Flags {
   std::uint64_t seed = 0;  // the sampler's (AnnealedSamplerConfig::seed)
   double horizon = 0.5, ctrl_dt = 0.25, knot_dt = 0.25, clip_seconds = 10, lift_scale = 2.0;
   double improvement_threshold = 0.01;  // the sampler's early stop (AnnealedSamplerConfig)
+  double noise_scale = 1;  // times the sampler's noise scales; 0 replays the kinematic reference
+  double penetration_scale = -1;  // RewardConfig::penetration_penalty_scale; < 0 keeps the default
+  double terminal_scale = -1;     // RewardConfig::terminal_rew_scale; < 0 keeps the default
   double elevation = 0.55;  // the synthetic hand's approach, radians above the horizontal
   // The synthetic references are grasped so that a robot hand copying them
   // can hold the object: the hand pinches (thumb against two fingers), the
@@ -79,10 +86,12 @@ struct Flags {
   double density = 400;         // kg/m^3 of the object (SceneConfig)
   // The kinematic reference's grasp terms (KinematicConfig); < 0 keeps the default.
   double contact_weight = 16, contact_depth = 0.01, contact_epsilon = -1;
-  bool seed_wall = false, verbose = false;
+  bool verbose = false;
   // The wall-time section's preset; "" runs --samples, --iterations, ... as given.
   std::string wall_preset = "fast";
   int wall_clips = 3;  // clips of the wall-time section
+  int wall_first = 0;  // the index of its first clip (MakeCase)
+  int seed_wall = 0;   // of those clips, how many also run the seed preset (noisy)
   std::string sections = "ablation,throughput,wall,hot3d,grasp,bimanual";
 };
 
@@ -102,6 +111,9 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--ctrl_dt") f.ctrl_dt = std::stod(v);
     else if (k == "--knot_dt") f.knot_dt = std::stod(v);
     else if (k == "--improvement_threshold") f.improvement_threshold = std::stod(v);
+    else if (k == "--noise_scale") f.noise_scale = std::stod(v);
+    else if (k == "--penetration_scale") f.penetration_scale = std::stod(v);
+    else if (k == "--terminal_scale") f.terminal_scale = std::stod(v);
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
     else if (k == "--wall_clips") f.wall_clips = std::stoi(v);
     else if (k == "--lift_scale") f.lift_scale = std::stod(v);
@@ -111,7 +123,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--contact_weight") f.contact_weight = std::stod(v);
     else if (k == "--contact_depth") f.contact_depth = std::stod(v);
     else if (k == "--contact_epsilon") f.contact_epsilon = std::stod(v);
-    else if (k == "--seed_wall") f.seed_wall = v != "0";
+    else if (k == "--seed_wall") f.seed_wall = std::stoi(v);
+    else if (k == "--wall_first") f.wall_first = std::stoi(v);
     else if (k == "--wall_preset") f.wall_preset = eq == std::string::npos ? "" : v;
     else if (k == "--sections") f.sections = v;
     else if (k == "--verbose") f.verbose = v != "0";
@@ -160,6 +173,11 @@ DynamicRetargetConfig BaseConfig(const Flags& f) {
   s.ctrl_dt = f.ctrl_dt;
   s.knot_dt = f.knot_dt;
   s.improvement_threshold = f.improvement_threshold;
+  s.pos_noise_scale *= f.noise_scale;
+  s.rot_noise_scale *= f.noise_scale;
+  s.joint_noise_scale *= f.noise_scale;
+  if (f.penetration_scale >= 0) s.reward.penetration_penalty_scale = f.penetration_scale;
+  if (f.terminal_scale >= 0) s.reward.terminal_rew_scale = f.terminal_scale;
   s.blend_seconds = f.ctrl_dt;
   s.threads = f.threads;
   s.seed = f.seed;
@@ -349,61 +367,89 @@ void Throughput(const Flags& f) {
 }
 
 // One clip of the wall-time section: wall seconds, the run.
+// With `progress`, prints the wall time at the end of every plan to stderr.
 std::pair<double, DynamicRetargetRun> TimedRun(const recon::Reconstruction& r, const TriMesh& mesh,
-                                               const DynamicRetargetConfig& config, const std::string& label) {
+                                               const DynamicRetargetConfig& config, const std::string& label,
+                                               bool progress = false) {
   const auto t0 = Clock::now();
-  DynamicRetargetRun run = RunOne(r, mesh, config, label);
+  const auto dir = std::filesystem::temp_directory_path() / "doasido-dynamics-bench";
+  auto report = [&](int done, int total) {
+    std::fprintf(stderr, "  %s: step %d of %d, %.0f s\n", label.c_str(), done, total,
+                 std::chrono::duration<double>(Clock::now() - t0).count());
+  };
+  DynamicRetargetRun run = progress ? RetargetReconstruction(r, mesh, FindEmbodiment(config.hand, config.robots_dir),
+                                                             config, dir, label, report)
+                                    : RunOne(r, mesh, config, label);
   return {std::chrono::duration<double>(Clock::now() - t0).count(), std::move(run)};
 }
 
+// For --verbose: the object's height in the reference and in the run, every half second.
+void PrintHeights(const recon::Reconstruction& r, const DynamicRetargetRun& run) {
+  for (int k = 0; k < r.frames(); k += 15) {
+    std::fprintf(stderr, "  t %4.1f s: object z ref %.3f sim %.3f, error %.3f m\n", k / 30.0,
+                 r.object_poses[k].t.z(), run.trajectory.object_poses[k].t.z(),
+                 (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
+  }
+}
+
+void PrintWallRun(const char* preset, int clip, bool noisy, double seconds, const DynamicRetargetRun& run) {
+  std::printf("%s preset, clip %d (%s): %.1f s wall, %d plans, %d iterations, %lld sim steps (%.0f/s), "
+              "success %d (E_pos %.3f, E_rot %.3f), in-hand frames %d\n",
+              preset, clip, noisy ? "noisy" : "clean", seconds, run.stats.plans, run.stats.iterations,
+              run.stats.sim_steps, run.stats.sim_steps / run.stats.rollout_seconds, run.metrics.success,
+              run.metrics.e_pos, run.metrics.e_rot, run.in_hand_frames);
+}
+
+// Clips --wall_first ... + --wall_clips with the --wall_preset (clean and
+// noisy); the first --seed_wall of them (noisy) with the seed preset too.
 void Wall(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
-  std::printf("\n== Wall time for %d %.0f-s clips (%d frames; pick-and-place, lift-and-rotate, slide in turn), %d threads\n",
-              f.wall_clips, f.clip_seconds, frames, f.threads);
+  std::printf("\n== Wall time for %d %.0f-s clips from clip %d (%d frames; pick-and-place, lift-and-rotate, "
+              "slide in turn), %d threads\n", f.wall_clips, f.clip_seconds, f.wall_first, frames, f.threads);
   DynamicRetargetConfig fast = BaseConfig(f);
   fast.preset = f.wall_preset;
   fast.sampler.threads = f.threads;
+  DynamicRetargetConfig seed = fast;
+  seed.preset = "seed";
   const char* name = f.wall_preset.empty() ? "flags" : f.wall_preset.c_str();
-  Tally tally[2];
-  double wall[2] = {0, 0}, steps_per_s = 0;
-  for (int i = 0; i < f.wall_clips; ++i) {
+  Tally tally[2], seed_tally, fast_on_seed_clips;
+  double wall[2] = {0, 0}, seed_wall = 0, steps_per_s = 0;
+  for (int n = 0; n < f.wall_clips; ++n) {
+    const int i = f.wall_first + n;
     const Case c = MakeCase(f, i, frames);
     for (int noisy = 0; noisy < 2; ++noisy) {
-      const auto [seconds, run] = TimedRun(noisy ? c.noisy : c.clean, c.mesh, fast, "wall");
+      const auto& r = noisy ? c.noisy : c.clean;
+      const auto [seconds, run] = TimedRun(r, c.mesh, fast, "wall");
       tally[noisy].Add(run.metrics);
+      if (noisy && n < f.seed_wall) fast_on_seed_clips.Add(run.metrics);
       wall[noisy] += seconds;
       steps_per_s = run.stats.sim_steps / run.stats.rollout_seconds;
-      std::printf("%s preset, clip %d (%s): %.1f s wall, %d plans, %d iterations, %lld sim steps (%.0f/s), "
-                  "success %d (E_pos %.3f, E_rot %.3f), in-hand frames %d\n",
-                  name, i, noisy ? "noisy" : "clean", seconds, run.stats.plans, run.stats.iterations,
-                  run.stats.sim_steps, steps_per_s, run.metrics.success, run.metrics.e_pos,
-                  run.metrics.e_rot, run.in_hand_frames);
-      if (!f.verbose) continue;
-      const auto& r = noisy ? c.noisy : c.clean;
-      for (int k = 0; k < r.frames(); k += 15) {
-        std::fprintf(stderr, "  t %4.1f s: object z ref %.3f sim %.3f, error %.3f m\n", k / 30.0,
-                     r.object_poses[k].t.z(), run.trajectory.object_poses[k].t.z(),
-                     (run.trajectory.object_poses[k].t - r.object_poses[k].t).norm());
-      }
+      PrintWallRun(name, i, noisy, seconds, run);
+      if (f.verbose) PrintHeights(r, run);
     }
+    if (n >= f.seed_wall) continue;
+    const auto [seconds, run] = TimedRun(c.noisy, c.mesh, seed, "wall_seed", true);
+    seed_tally.Add(run.metrics);
+    seed_wall += seconds;
+    PrintWallRun("seed", i, true, seconds, run);
+    if (f.verbose) PrintHeights(c.noisy, run);
   }
   for (int noisy = 0; noisy < 2; ++noisy) {
     std::printf("%s preset, %s: %.1f s wall per clip, success %d of %d\n", name, noisy ? "noisy" : "clean",
                 wall[noisy] / std::max(1, f.wall_clips), tally[noisy].success, tally[noisy].n);
   }
-  const AnnealedSamplerConfig seed = SamplerPreset("seed");
-  const double steps = std::ceil((f.clip_seconds + seed.horizon) / seed.ctrl_dt) *
-                       seed.max_num_iterations * seed.num_samples * (seed.horizon / 0.005);
-  std::printf("seed preset, estimated without early stops: %.3g sim steps / %.0f per s = %.0f s "
-              "(%.1f h) per clip\n", steps, steps_per_s, steps / steps_per_s, steps / steps_per_s / 3600);
-  if (f.seed_wall) {
-    DynamicRetargetConfig seed_config = fast;
-    seed_config.preset = "seed";
-    const Case c = MakeCase(f, 0, frames);
-    const auto [seconds, run] = TimedRun(c.noisy, c.mesh, seed_config, "wall_seed");
-    std::printf("seed preset, clip 0 (noisy): %.1f s wall, %d iterations, success %d (E_pos %.3f, E_rot %.3f)\n",
-                seconds, run.stats.iterations, run.metrics.success, run.metrics.e_pos, run.metrics.e_rot);
+  if (f.seed_wall > 0) {
+    std::printf("seed preset, noisy, the first %d clips: %.1f s wall per clip, success %d of %d "
+                "(%s preset on the same clips: success %d of %d)\n", seed_tally.n,
+                seed_wall / std::max(1, seed_tally.n), seed_tally.success, seed_tally.n, name,
+                fast_on_seed_clips.success, fast_on_seed_clips.n);
+    return;
   }
+  const AnnealedSamplerConfig s = SamplerPreset("seed");
+  const double steps = std::ceil((f.clip_seconds + s.horizon) / s.ctrl_dt) * s.max_num_iterations *
+                       s.num_samples * (s.horizon / 0.005);
+  std::printf("seed preset, bound without early stops: %.3g sim steps / %.0f per s = %.0f s (%.1f h) per clip "
+              "(--seed_wall=N runs it)\n", steps, steps_per_s, steps / steps_per_s, steps / steps_per_s / 3600);
 }
 
 // For --verbose: where the human fingertips and the robot's contacts sit

@@ -38,6 +38,25 @@ HandModel HandWithObject(const TriMesh& mesh, const Pose& pose, const TempDir& d
                         ReadFileOrThrow(s.xml_path, "io", "cannot read the scene"), dir / "scene");
 }
 
+// A 40-frame synthetic pick-and-place of a cylinder (3 cm, 9 cm tall), its
+// object poses, and the right Sharpa hand in a scene with the object.
+struct PickPlace {
+  explicit PickPlace(const TempDir& dir)
+      : cylinder(synth::MakeCylinder(0.03, 0.09, 16)),
+        r(synth::EpisodeReconstruction(synth::ScriptEpisode(Spec(), cylinder), 30.0)),
+        object(FilledObjectPoses(r)),
+        hand(HandWithObject(cylinder, object[0], dir)) {}
+  static synth::EpisodeSpec Spec() {
+    synth::EpisodeSpec spec;
+    spec.frames = 40;
+    return spec;
+  }
+  TriMesh cylinder;
+  recon::Reconstruction r;
+  std::vector<Pose> object;
+  HandModel hand;
+};
+
 // A 16-sided cylinder (radius 3 cm to its corners, 9 cm tall), dilated by
 // the scene's 2 mm: at its centre, minus the distance to the side faces;
 // above the top, the height over it, straight up; beside it, the distance
@@ -72,13 +91,10 @@ TEST(ObjectSurface, SignedDistanceOfADilatedCylinder) {
 // tolerance; without the terms the same fingertips stay outside.
 TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
   TempDir dir;
-  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
-  synth::EpisodeSpec spec;
-  spec.frames = 40;
-  const recon::Reconstruction r =
-      synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
-  const std::vector<Pose> object = FilledObjectPoses(r);
-  const HandModel hand = HandWithObject(cylinder, object[0], dir);
+  const PickPlace scene(dir);
+  const recon::Reconstruction& r = scene.r;
+  const std::vector<Pose>& object = scene.object;
+  const HandModel& hand = scene.hand;
   KinematicConfig config;
   config.restarts = 1;
   config.contact_weight = 16;
@@ -133,13 +149,10 @@ TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
 // fingertip nearest the object moved 10 cm away, none.
 TEST(KinematicGrasp, ALoneFingertipIsNotPressedIntoTheObject) {
   TempDir dir;
-  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
-  synth::EpisodeSpec spec;
-  spec.frames = 40;
-  const recon::Reconstruction r =
-      synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
-  const std::vector<Pose> object = FilledObjectPoses(r);
-  const HandModel hand = HandWithObject(cylinder, object[0], dir);
+  const PickPlace scene(dir);
+  const recon::Reconstruction& r = scene.r;
+  const std::vector<Pose>& object = scene.object;
+  const HandModel& hand = scene.hand;
   KinematicConfig config;
   config.contact_weight = 16;
   KinematicRetargeter kinematic(hand, config);

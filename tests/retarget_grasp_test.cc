@@ -149,16 +149,13 @@ TEST(KinematicGrasp, TouchingFingertipsReachTheObjectAndTheRestStayOut) {
 // fingertip nearest the object moved 10 cm away, none.
 TEST(KinematicGrasp, ALoneFingertipIsNotPressedIntoTheObject) {
   TempDir dir;
-  const PickPlace scene(dir);
-  const recon::Reconstruction& r = scene.r;
-  const std::vector<Pose>& object = scene.object;
-  const HandModel& hand = scene.hand;
+  const PickPlace s(dir);
   KinematicConfig config;
   config.contact_weight = 16;
-  KinematicRetargeter kinematic(hand, config);
+  KinematicRetargeter kinematic(s.hand, config);
   int pinch = -1, pressed = 0;
-  for (int f = 0; f < r.frames() && pinch < 0; ++f) {
-    pressed = r.right_valid[f] ? kinematic.PoseObject(r.right_joints[f], object[f]) : 0;
+  for (int f = 0; f < s.r.frames() && pinch < 0; ++f) {
+    pressed = s.r.right_valid[f] ? kinematic.PoseObject(s.r.right_joints[f], s.object[f]) : 0;
     if (pressed >= kMinGraspFingertips) pinch = f;
   }
   ASSERT_GE(pinch, 0) << "the reference never pinches";
@@ -167,7 +164,7 @@ TEST(KinematicGrasp, ALoneFingertipIsNotPressedIntoTheObject) {
     return std::count_if(gaps.begin(), gaps.end(), [](const auto& g) { return g.touch; });
   };
   EXPECT_EQ(touching(), pressed);
-  Keypoints21 lone = r.right_joints[pinch];
+  Keypoints21 lone = s.r.right_joints[pinch];
   int nearest = 4;  // the human fingertip nearest the object
   for (int tip : {8, 12, 16, 20}) {
     if (kinematic.ObjectDistance(lone.row(tip).transpose()) < kinematic.ObjectDistance(lone.row(nearest).transpose())) {
@@ -178,7 +175,7 @@ TEST(KinematicGrasp, ALoneFingertipIsNotPressedIntoTheObject) {
   for (int k = 0; k < 21; ++k) {
     if (k != nearest) lone.row(k) += Eigen::RowVector3d(0, 0, 0.1);
   }
-  EXPECT_EQ(kinematic.PoseObject(lone, object[pinch]), 0);
+  EXPECT_EQ(kinematic.PoseObject(lone, s.object[pinch]), 0);
   EXPECT_EQ(touching(), 0);
 }
 

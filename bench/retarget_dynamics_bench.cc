@@ -11,7 +11,7 @@
 //     own controls (the same contact load), and at rest from qpos0;
 //  3. wall time and success retargeting --wall_clips 10-s clips (from clip
 //     --wall_first) with the fast preset, and on the first --seed_wall=N of
-//     them (noisy) with the seed preset (half an hour a clip; without it,
+//     them (noisy) with the seed preset (14-17 min a clip; without it,
 //     its bound at 32 iterations a plan, i.e. without early stops);
 //  4. real references (--sections=hot3d): the HOT3D sample's hands and the
 //     object each hand's fingertips come closest to (recon/hot3d_recording.h),
@@ -40,12 +40,13 @@
 //   [--seed=0] (the sampler's seed: rerun to see how much a row moves by chance)
 //   [--wall_clips=3 --wall_first=0 --seed_wall=0 --wall_preset=fast] (the wall-time section)
 //   [--noise_scale=1] (times the sampler's noise; 0 replays the kinematic reference)
-//   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; with --wall_preset= only)
+//   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; not where a preset replaces the flags)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <string>
 #include <thread>
@@ -208,9 +209,10 @@ struct Tally {
 };
 
 DynamicRetargetRun RunOne(const recon::Reconstruction& r, const TriMesh& mesh,
-                          const DynamicRetargetConfig& c, const std::string& label) {
+                          const DynamicRetargetConfig& c, const std::string& label,
+                          const std::function<void(int, int)>& progress = {}) {
   const auto dir = std::filesystem::temp_directory_path() / "doasido-dynamics-bench";
-  return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label);
+  return RetargetReconstruction(r, mesh, FindEmbodiment(c.hand, c.robots_dir), c, dir, label, progress);
 }
 
 // The hand geom of contact c when it is between the hand and the object, else -1.
@@ -372,14 +374,11 @@ std::pair<double, DynamicRetargetRun> TimedRun(const recon::Reconstruction& r, c
                                                const DynamicRetargetConfig& config, const std::string& label,
                                                bool progress = false) {
   const auto t0 = Clock::now();
-  const auto dir = std::filesystem::temp_directory_path() / "doasido-dynamics-bench";
   auto report = [&](int done, int total) {
     std::fprintf(stderr, "  %s: step %d of %d, %.0f s\n", label.c_str(), done, total,
                  std::chrono::duration<double>(Clock::now() - t0).count());
   };
-  DynamicRetargetRun run = progress ? RetargetReconstruction(r, mesh, FindEmbodiment(config.hand, config.robots_dir),
-                                                             config, dir, label, report)
-                                    : RunOne(r, mesh, config, label);
+  DynamicRetargetRun run = RunOne(r, mesh, config, label, progress ? report : std::function<void(int, int)>());
   return {std::chrono::duration<double>(Clock::now() - t0).count(), std::move(run)};
 }
 

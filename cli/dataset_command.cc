@@ -5,6 +5,7 @@
 #include <map>
 
 #include "cli/commands.h"
+#include "cli/output_options.h"
 #include "core/progress.h"
 #include "dataset/lerobot_export.h"
 #include "dataset/robomimic_export.h"
@@ -28,6 +29,7 @@ struct Options {
   std::int64_t seed = 0;
   bool no_thumbnails = false;
   bool allow_empty = false;
+  bool allow_stale = false;
   std::string version, other;
   std::string format;
   std::string out;
@@ -60,6 +62,16 @@ std::string SplitCounts(const Manifest& m) {
 
 void Create(const Options& o) {
   Database db(o.db.db, Database::OpenMode::kExisting);
+  // A dataset root holds many versions: a new one never replaces anything,
+  // so an existing root is this command's own (and no --force is needed);
+  // the guard keeps it out of versions, the database and the artifacts.
+  CheckOutputPath({.path = o.root,
+                   .kind = OutputRequest::Kind::kFolder,
+                   .option = "--root",
+                   .what = "the dataset root",
+                   .is_own_output = [](const fs::path&) { return true; },
+                   .force = true,
+                   .databases = {o.db.db}});
   CreateOptions c;
   c.name = o.name;
   c.selection = ParseSelection(o.select);
@@ -67,6 +79,7 @@ void Create(const Options& o) {
   c.seed = o.seed;
   c.thumbnails = !o.no_thumbnails;
   c.allow_empty = o.allow_empty;
+  c.allow_stale = o.allow_stale;
   Progress progress("dataset", 0);
   const Manifest m = CreateVersion(db, o.root, c, [&progress](int done, int total) {
     progress.SetTotal(static_cast<std::uint64_t>(total));
@@ -79,6 +92,10 @@ void Create(const Options& o) {
               m.name.c_str(), m.version.c_str(), m.episodes.size(), SplitCounts(m).c_str(),
               m.episodes.size() + m.excluded.size(), m.files.size(), static_cast<double>(bytes) / 1e6,
               m.parent.empty() ? "" : (", parent " + m.parent).c_str());
+  if (!m.stale.empty()) {
+    std::printf("--allow-stale: %zu clips had unsettled runs (recorded in the manifest)\n",
+                m.stale.size());
+  }
   std::printf("%s\n", (fs::path(o.root) / m.name / m.version).c_str());
 }
 
@@ -174,6 +191,18 @@ void Verify(const Options& o) {
 
 void Export(const Options& o) {
   const fs::path dir = FindVersion(o.root, o.name, o.version);
+  const bool robomimic = o.format == "robomimic";
+  // An export replaces its own earlier export (atomically, see the
+  // exporters); anything else at --out is refused.
+  CheckOutputPath(
+      {.path = o.out,
+       .kind = robomimic ? OutputRequest::Kind::kFile : OutputRequest::Kind::kFolder,
+       .what = robomimic ? "the robomimic HDF5 file" : "the LeRobot folder",
+       .is_own_output = robomimic ? std::function<bool(const fs::path&)>([](const fs::path& p) {
+                                      return FileStartsWith(p, std::string("\x89HDF\r\n\x1a\n", 8));
+                                    })
+                                  : FolderHolds({"meta/info.json"}),
+       .force = true});
   ExportSummary s;
   if (o.format == "robomimic") {
     s = ExportRobomimic(dir, o.out);
@@ -222,6 +251,10 @@ void AddDatasetCommand(CLI::App& app) {
   create->add_flag("--no-thumbnails", o->no_thumbnails,
                    "Playbook report without example thumbnails (no decoding)");
   create->add_flag("--allow-empty", o->allow_empty, "Make a version even with no episodes");
+  create->add_flag("--allow-stale", o->allow_stale,
+                   "Make a version although some clips' runs are pending, running or stale "
+                   "(computed from an earlier upstream run or other parameters); recorded in the "
+                   "manifest. Without it such a version is refused, naming the clips");
   create->callback([o] { Create(*o); });
 
   auto* list = cmd->add_subcommand("list", "List the versions under --root");

@@ -10,6 +10,8 @@
 #include <optional>
 
 #include "cli/commands.h"
+#include "cli/option_checks.h"
+#include "cli/output_options.h"
 #include "core/config_check.h"
 #include "core/error.h"
 #include "db/database.h"
@@ -35,8 +37,35 @@ struct PlanArgs {
   std::string robots_dir;
   std::string out;
   bool no_replay = false;
+  bool force = false;
   deploy::PlanConfig config;
 };
+
+// Refuses an unsafe --out before any planning (core/output_path.h).
+void CheckPlanOut(const std::string& out, const char* format, bool force,
+                  const std::vector<std::filesystem::path>& databases) {
+  CheckOutputPath({.path = out,
+                   .kind = OutputRequest::Kind::kFile,
+                   .what = "the plan",
+                   .is_own_output = JsonOfFormat(format),
+                   .force = force,
+                   .databases = databases});
+}
+
+// Writes the plan through a temporary sibling, so an earlier plan is
+// replaced whole or not at all.
+void WritePlanAtomically(const std::string& out,
+                         const std::function<void(const std::filesystem::path&)>& write) {
+  const std::filesystem::path temp = TempSibling(out);
+  try {
+    write(temp);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(temp, ec);
+    throw;
+  }
+  RenameIntoPlace(temp, out);
+}
 
 void PrintIssues(const deploy::Plan& plan) {
   for (const auto& u : plan.unreachable) {
@@ -50,6 +79,9 @@ void PrintIssues(const deploy::Plan& plan) {
 }
 
 void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
+  std::vector<std::filesystem::path> databases;
+  if (a.trajectory.empty()) databases.push_back(a.db.db);
+  CheckPlanOut(a.out, deploy::kPlanFormat, a.force, databases);
   deploy::PlanConfig config = a.config;
   const Json file_config = LoadConfig(a.db);
   if (file_config.is_object() && file_config.contains("deploy")) {
@@ -63,7 +95,8 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::CheckConfig(config, "deploy");
   deploy::TrajectoryFiles files;
   if (!a.trajectory.empty()) {
-    files = deploy::FilesBeside(a.trajectory);
+    // Relative to the working directory, like every path on the command line.
+    files = deploy::FilesBeside(std::filesystem::absolute(a.trajectory));
   } else {
     Database db(a.db.db, Database::OpenMode::kExisting);
     auto found = deploy::FindTrajectoryFiles(db, a.clip);
@@ -88,7 +121,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   if (config.replay && !a.no_replay) {
     deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir);
   }
-  deploy::WritePlanJson(plan, a.out);
+  WritePlanAtomically(a.out, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });
   const auto& p = plan.placement;
   std::printf("%s: %zu commands at %.0f Hz (%.2f s), placement yaw %.1f deg at (%.3f, %.3f) m, "
               "%d candidates\n", hand.name.c_str(), plan.times.size(), plan.rate_hz,
@@ -114,18 +147,19 @@ void AddPlan(CLI::App& deploy) {
       "plan", "Place a robot hand trajectory in the UR3e's workspace, solve arm IK for every\n"
               "command frame, check reach and joint speeds, replay in MuJoCo, write a plan");
   AddDbOptions(*cmd, a->db);
-  cmd->add_option("--clip", a->clip, "Clip id whose retarget (else retarget_kinematic) trajectory to plan");
+  cmd->add_option("--clip", a->clip, "Clip id whose retarget (else retarget_kinematic) trajectory to plan")->check(FiniteRange(1, 1000000000000000.0));
   cmd->add_option("--trajectory", a->trajectory, "A trajectory.json instead of --db/--clip "
                   "(scene/scene.xml beside it is the replay scene)");
   cmd->add_option("--hand", a->hand, "Embodiment (default: the trajectory's)");
   cmd->add_option("--robots-dir", a->robots_dir, "Folder of robot hand descriptions");
   cmd->add_option("--out", a->out, "Plan file to write (JSON)")->required();
-  cmd->add_option("--rate", a->config.rate_hz, "Command rate, Hz")->capture_default_str();
-  cmd->add_option("--yaw-steps", a->config.workspace.yaw_steps, "Yaw candidates over a full turn")
+  cmd->add_option("--rate", a->config.rate_hz, "Command rate, Hz")->check(FiniteRange(0, 1000))->capture_default_str();
+  cmd->add_option("--yaw-steps", a->config.workspace.yaw_steps, "Yaw candidates over a full turn")->check(FiniteRange(1, 360))
       ->capture_default_str();
   cmd->add_option("--offset-steps", a->config.workspace.offset_steps,
-                  "Offset candidates per axis around the default table position")->capture_default_str();
+                  "Offset candidates per axis around the default table position")->check(FiniteRange(1, 21))->capture_default_str();
   cmd->add_flag("--no-replay", a->no_replay, "Skip the MuJoCo replay");
+  AddForceFlag(*cmd, a->force);
   cmd->footer(
       "The workspace (default table pose, search ranges) and IK tolerances are the\n"
       "[deploy] section of --config (deploy/plan.h PlanConfig). Frames the arm cannot\n"
@@ -147,6 +181,7 @@ void AddPlan(CLI::App& deploy) {
 void AddPlanTwo(CLI::App& deploy) {
   struct Args {
     std::string trajectory, left, right, left_hand, right_hand, robots_dir, out;
+    bool force = false;
     deploy::BimanualConfig config;
   };
   auto a = std::make_shared<Args>();
@@ -162,11 +197,12 @@ void AddPlanTwo(CLI::App& deploy) {
   cmd->add_option("--right-hand", a->right_hand, "Right embodiment (default: the trajectory's)");
   cmd->add_option("--robots-dir", a->robots_dir, "Folder of robot hand descriptions");
   cmd->add_option("--out", a->out, "Plan file to write (JSON)")->required();
-  cmd->add_option("--base-distance", a->config.base_distance, "Metres between the two arms' bases")
+  cmd->add_option("--base-distance", a->config.base_distance, "Metres between the two arms' bases")->check(FiniteRange(0, 5))
       ->capture_default_str();
-  cmd->add_option("--clearance", a->config.clearance, "Metres the arms and hands must keep apart")
+  cmd->add_option("--clearance", a->config.clearance, "Metres the arms and hands must keep apart")->check(FiniteRange(0, 1))
       ->capture_default_str();
-  cmd->add_option("--rate", a->config.plan.rate_hz, "Command rate, Hz")->capture_default_str();
+  cmd->add_option("--rate", a->config.plan.rate_hz, "Command rate, Hz")->check(FiniteRange(0, 1000))->capture_default_str();
+  AddForceFlag(*cmd, a->force);
   cmd->footer(
       "The bases stand side by side, the left arm at +base-distance/2 and the right at -base-distance/2\n"
       "across the table, both trajectories placed once (deploy/bimanual.h). Each arm is its link capsules\n"
@@ -180,6 +216,7 @@ void AddPlanTwo(CLI::App& deploy) {
       "  doasido deploy stream --plan work/two.json");
   cmd->callback([a] {
     deploy::CheckConfig(a->config, "deploy");
+    CheckPlanOut(a->out, deploy::kBimanualPlanFormat, a->force, {});
     if (a->trajectory.empty() && (a->left.empty() || a->right.empty())) {
       throw Error("bad_arguments", "give --trajectory, or --left and --right", {.field = "--trajectory"});
     }
@@ -192,7 +229,9 @@ void AddPlanTwo(CLI::App& deploy) {
     deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, lh, rh, a->config);
     plan.left.source = a->trajectory.empty() ? a->left : a->trajectory;
     plan.right.source = a->trajectory.empty() ? a->right : a->trajectory;
-    deploy::WriteBimanualPlanJson(plan, a->config, a->out);
+    WritePlanAtomically(a->out, [&](const std::filesystem::path& p) {
+      deploy::WriteBimanualPlanJson(plan, a->config, p);
+    });
     const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
     std::printf("%s + %s: %zu commands at %.0f Hz, bases %.3f m apart, closest approach %.3f m\n",
                 lh.name.c_str(), rh.name.c_str(), plan.right.times.size(), plan.right.rate_hz,
@@ -224,7 +263,7 @@ void AddStream(CLI::App& deploy) {
   cmd->add_option("--url", a->options.url, "LCM URL (ttl=0 keeps it on this machine)")
       ->capture_default_str();
   cmd->add_option("--channel", a->options.channel, "LCM channel")->capture_default_str();
-  cmd->add_option("--rate", a->options.rate_hz, "Command rate, Hz (0: the plan's)")
+  cmd->add_option("--rate", a->options.rate_hz, "Command rate, Hz (0: the plan's)")->check(FiniteRange(0, 1000))
       ->capture_default_str();
   cmd->add_option("--dry-run", a->dry_run, "Write the messages to this LCM log file instead "
                   "(no network, no waiting)");

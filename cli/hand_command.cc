@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/output_options.h"
 #include "cli/hand_render.h"
 #include "core/error.h"
 #include "retarget/hand_check.h"
@@ -67,6 +68,7 @@ void PrintPoints(const HandCheck& c) {
 void AddImport(CLI::App& hand) {
   struct Options {
     std::string urdf, mjcf, out;
+    bool force = false;
     retarget::HandImportOptions import;
   };
   auto opt = std::make_shared<Options>();
@@ -83,6 +85,7 @@ void AddImport(CLI::App& hand) {
       ->check(CLI::IsMember({"right", "left"}))
       ->capture_default_str();
   cmd->add_option("--name", opt->import.name, "Name of the hand and its files (default: the file's stem)");
+  AddForceFlag(*cmd, opt->force);
   cmd->footer(
       "Writes <out>/<name>.xml (MJCF), <out>/meshes/, <out>/<name>.json (the description: fingertips\n"
       "on the distal bodies, knuckles on the first flexion joints, the thumb as the chain opposing\n"
@@ -96,6 +99,11 @@ void AddImport(CLI::App& hand) {
     if (opt->urdf.empty() == opt->mjcf.empty()) {
       throw Error("bad_option", "give --urdf F or --mjcf F", {.field = "--urdf"});
     }
+    CheckOutputPath({.path = opt->out,
+                     .kind = OutputRequest::Kind::kFolder,
+                     .what = "the imported hand",
+                     .is_own_output = HoldsHandModel,
+                     .force = opt->force});
     const retarget::ImportedHand h = opt->urdf.empty()
                                          ? retarget::DescribeMjcf(opt->mjcf, opt->out, opt->import)
                                          : retarget::ImportUrdf(opt->urdf, opt->out, opt->import);
@@ -163,6 +171,7 @@ void AddMirror(CLI::App& hand) {
   struct Options {
     std::string hand, robots_dir, out, name;
     char axis = 'y';
+    bool force = false;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = hand.add_subcommand(
@@ -179,6 +188,7 @@ void AddMirror(CLI::App& hand) {
       ->check(CLI::IsMember({'x', 'y', 'z'}))
       ->capture_default_str();
   cmd->add_option("--robots-dir", opt->robots_dir, "Folder of robot models descriptions refer to");
+  AddForceFlag(*cmd, opt->force);
   cmd->footer("Writes <out>/<name>.xml (one self-contained MJCF; meshes stay where they are, scaled by -1\n"
               "along the axis) and <out>/<name>.json. Mirroring the result again gives the original.\n\n"
               "Examples:\n"
@@ -188,6 +198,11 @@ void AddMirror(CLI::App& hand) {
   cmd->callback([opt] {
     const std::string robots = opt->robots_dir.empty() ? retarget::DefaultRobotsDir() : opt->robots_dir;
     const retarget::Embodiment source = retarget::FindEmbodiment(opt->hand, robots);
+    CheckOutputPath({.path = opt->out,
+                     .kind = OutputRequest::Kind::kFolder,
+                     .what = "the mirrored hand",
+                     .is_own_output = HoldsHandModel,
+                     .force = opt->force});
     const retarget::MirroredHand m = retarget::MirrorHand(source, opt->out, {.axis = opt->axis, .name = opt->name});
     std::printf("%s (%s) mirrored through %c = 0: %s (%s)\nmodel: %s\ndescription: %s (%zu points)\n",
                 source.name.c_str(), source.side.c_str(), opt->axis, m.embodiment.name.c_str(),

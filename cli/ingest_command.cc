@@ -1,6 +1,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/option_checks.h"
 #include "cli/ingest_options.h"
 #include "pipeline/stage_registry.h"
 #include "db/database.h"
@@ -22,7 +23,7 @@ void AddIngestOptions(CLI::App& cmd, IngestOptions& opt) {
                  "Annotations)");
   cmd.add_option("--frame-scale", opt.list.voc_frame_scale,
                  "VOC / frame names: multiply annotated frame numbers by this to get video "
-                 "frames")
+                 "frames")->check(FiniteRange(1e-06, 1000000.0))
       ->capture_default_str();
   cmd.add_option("--video-url-template", opt.list.video_url_template,
                  "VOC / frame names / JSON id maps: URL of a video id, {id} replaced, for "

@@ -1,4 +1,5 @@
 #include "cli/commands.h"
+#include "cli/option_checks.h"
 #include "db/database.h"
 
 namespace doasido::cli {
@@ -27,8 +28,8 @@ void AddQueueCommand(CLI::App& app) {
   list->add_option("--stage", opt->stage, "Only this stage");
   list->add_option("--state", opt->state, "Only this state")
       ->check(CLI::IsMember({"pending", "running", "done", "failed"}));
-  list->add_option("--clip", opt->clip, "Only this clip id");
-  list->add_option("--limit", opt->limit, "At most this many rows (0: all)")->capture_default_str();
+  list->add_option("--clip", opt->clip, "Only this clip id")->check(FiniteRange(1, 1000000000000000.0));
+  list->add_option("--limit", opt->limit, "At most this many rows (0: all)")->check(FiniteRange(0, 1000000000.0))->capture_default_str();
   list->add_flag("--json", opt->json, "Print JSON");
   list->callback([opt] {
     Database db(opt->db.db, Database::OpenMode::kExisting);
@@ -56,7 +57,7 @@ void AddQueueCommand(CLI::App& app) {
   auto* retry = cmd->add_subcommand("retry", "Queue failed runs again (attempts start over)");
   AddDbOptions(*retry, opt->db);
   retry->add_option("--stage", opt->stage, "Only this stage (default: all)");
-  retry->add_option("--clip", opt->clip, "Only this clip id");
+  retry->add_option("--clip", opt->clip, "Only this clip id")->check(FiniteRange(1, 1000000000000000.0));
   retry->callback([opt] {
     Database db(opt->db.db, Database::OpenMode::kExisting);
     std::printf("%lld failed runs queued again\n",
@@ -67,7 +68,7 @@ void AddQueueCommand(CLI::App& app) {
       "reset", "Queue a stage again from scratch for one clip or all; later stages are dropped");
   AddDbOptions(*reset, opt->db);
   reset->add_option("--stage", opt->stage, "The stage to run again")->required();
-  auto* clip = reset->add_option("--clip", opt->clip, "This clip id");
+  auto* clip = reset->add_option("--clip", opt->clip, "This clip id")->check(FiniteRange(1, 1000000000000000.0));
   auto* all = reset->add_flag("--all", opt->all, "Every clip");
   clip->excludes(all);
   reset->callback([opt] {

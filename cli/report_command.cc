@@ -1,6 +1,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/output_options.h"
 #include "core/config_check.h"
 #include "db/database.h"
 #include "reports/report.h"
@@ -13,6 +14,7 @@ void AddReportCommand(CLI::App& app) {
     std::string out;
     int max_thumbnails = reports::ThumbnailOptions{}.max_per_reason;
     bool no_thumbnails = false;
+    bool force = false;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand(
@@ -27,12 +29,19 @@ void AddReportCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-thumbnails", opt->no_thumbnails,
                 "Skip decoding videos for example thumbnails (numbers and charts only)");
+  AddForceFlag(*cmd, opt->force);
   cmd->footer("Example:\n  doasido report --db work/doasido.db --out work/report\n"
               "  xdg-open work/report/report.html\n"
               "The [report] table of --config sets the rest (histogram_bins, max_failures,\n"
               "thumbnail.panel_height, thumbnail.jpeg_quality, ...).");
   cmd->callback([opt, cmd] {
     Database db(opt->db.db, Database::OpenMode::kExisting);
+    CheckOutputPath({.path = opt->out,
+                     .kind = OutputRequest::Kind::kFolder,
+                     .what = "the report",
+                     .is_own_output = FolderHolds({"report.html", "report.json"}),
+                     .force = opt->force,
+                     .databases = {opt->db.db}});
     reports::ReportOptions options;
     ReadCheckedSection(LoadConfig(opt->db), reports::kReportSection, options);
     // Given on the command line, it wins over the config file.
@@ -40,7 +49,17 @@ void AddReportCommand(CLI::App& app) {
       options.thumbnail.max_per_reason = opt->max_thumbnails;
     }
     if (opt->no_thumbnails) options.thumbnails = false;
-    const auto out = reports::WriteReport(db, opt->out, options);
+    reports::ReportOutput out;
+    WriteFolderAtomically(opt->out, [&](const std::filesystem::path& temp) {
+      out = reports::WriteReport(db, temp, options);
+    });
+    // Named where they are now, not where they were written.
+    auto moved = [&](const std::filesystem::path& p) {
+      return (std::filesystem::path(opt->out) / p.filename()).string();
+    };
+    out.html = moved(out.html);
+    out.json = moved(out.json);
+    for (auto& p : out.csv) p = moved(p);
     const auto& f = out.data.funnel;
     std::printf("%lld clips, %lld survive (%.1f%%)\n", static_cast<long long>(f.pool),
                 static_cast<long long>(f.survivors), reports::Percent(f.survivors, f.pool));

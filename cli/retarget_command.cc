@@ -5,6 +5,8 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/option_checks.h"
+#include "cli/output_options.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "retarget/embodiment.h"
@@ -20,6 +22,7 @@ struct RetargetOptions {
   std::string out;
   std::string robots_dir;
   double fps = 30;
+  bool force = false;
   retarget::KinematicConfig kinematic;
 };
 }  // namespace
@@ -43,11 +46,12 @@ void AddRetargetCommand(CLI::App& app) {
                   "Folder of robot models the descriptions refer to (default: "
                   "$DOASIDO_ROBOTS_DIR, else share/doasido/robots beside the executable's "
                   "folder)");
-  cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->capture_default_str();
-  cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")
+  cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->check(FiniteRange(0.1, 10000))->capture_default_str();
+  cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")->check(FiniteRange(1, 1000))
       ->capture_default_str();
-  cmd->add_option("--scale", opt->kinematic.scale, "Human->robot scale; 0 adapts it")
+  cmd->add_option("--scale", opt->kinematic.scale, "Human->robot scale; 0 adapts it")->check(FiniteRange(0, 100))
       ->capture_default_str();
+  AddForceFlag(*cmd, opt->force);
   cmd->footer(
       "Writes <out>/trajectory.json and <out>/trajectory.csv (robot qpos per frame,\n"
       "floating wrist first) and prints the fingertip error after scale adaptation.\n\n"
@@ -55,6 +59,11 @@ void AddRetargetCommand(CLI::App& app) {
       "  doasido retarget-kinematic --hand allegro \\\n"
       "      --keypoints ../shared/data/retarget/human_hand_keypoints_right.csv --out work/allegro");
   cmd->callback([opt] {
+    CheckOutputPath({.path = opt->out,
+                     .kind = OutputRequest::Kind::kFolder,
+                     .what = "the trajectory",
+                     .is_own_output = FolderHolds({"trajectory.json"}),
+                     .force = opt->force});
     const std::string robots =
         opt->robots_dir.empty() ? retarget::DefaultRobotsDir() : opt->robots_dir;
     const auto frames = retarget::ReadKeypointCsv(opt->keypoints);

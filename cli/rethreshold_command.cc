@@ -51,6 +51,10 @@ void AddRethresholdCommand(CLI::App& app) {
       for (const auto& [what, n] : t.transitions) {
         std::printf("%-16s   %-48s %lld\n", "", what.c_str(), static_cast<long long>(n));
       }
+      if (t.downstream > 0) {
+        std::printf("%-16s   %lld later runs queued again on the new verdicts\n", "",
+                    static_cast<long long>(t.downstream));
+      }
     }
     if (opt->dry_run) {
       std::printf("\n(dry run: nothing written)\n");

@@ -1,6 +1,7 @@
 #include <cstdio>
 
 #include "cli/commands.h"
+#include "cli/option_checks.h"
 #include "db/database.h"
 #include "review/server.h"
 #include "review/study.h"
@@ -54,7 +55,7 @@ void AddReviewCommand(CLI::App& app) {
   srv->add_option("--host", serve->serve.host, "Address to listen on (loopback unless "
                                              "--allow-remote)")
       ->capture_default_str();
-  srv->add_option("--port", serve->serve.port, "Port (0: any free port)")->capture_default_str();
+  srv->add_option("--port", serve->serve.port, "Port (0: any free port)")->check(FiniteRange(0, 65535))->capture_default_str();
   srv->add_flag("--allow-remote", serve->serve.allow_remote,
               "Allow a non-loopback --host (anyone who reaches it sees the clips)");
   srv->add_option("--reviewer", serve->serve.reviewer, "Reviewer name filled in on the page");
@@ -95,7 +96,7 @@ void AddReviewCommand(CLI::App& app) {
                 "CSV with item_id, source_video, a_video, b_video, a_label, b_label (paths "
                 "relative to the CSV)")
       ->required();
-  c->add_option("--raters", create->raters, "Raters per item")->capture_default_str();
+  c->add_option("--raters", create->raters, "Raters per item")->check(FiniteRange(1, 1000))->capture_default_str();
   c->add_option("--seed", create->seed, "Seed of the left/right layout")->capture_default_str();
   c->footer(
       "Example:\n"

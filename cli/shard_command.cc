@@ -4,8 +4,10 @@
 #include <cstdio>
 
 #include "cli/commands.h"
+#include "cli/option_checks.h"
 #include "core/error.h"
 #include "core/file_text.h"
+#include "core/output_path.h"
 #include "db/database.h"
 #include "pipeline/shard.h"
 #include "pipeline/slurm.h"
@@ -43,6 +45,15 @@ std::vector<pipeline::ShardInfo> MakeShards(Database& db, const ShardCliOptions&
   pipeline::ShardOptions options;
   options.shards = o.shards;
   options.out_dir = o.out.empty() ? db.root() / "shards" : std::filesystem::path(o.out);
+  // Shards never replace one another (Error("shard_exists")): an existing
+  // folder is accepted, the guard keeps it off the inputs.
+  CheckOutputPath({.path = options.out_dir,
+                   .kind = OutputRequest::Kind::kFolder,
+                   .option = "--out",
+                   .what = "the shards",
+                   .is_own_output = [](const std::filesystem::path&) { return true; },
+                   .force = true,
+                   .databases = {db.path()}});
   options.stage_hashes = StageHashes(db, LoadConfig(o.db));
   for (const auto& m : o.media_root) {
     const auto eq = m.find('=');
@@ -108,6 +119,10 @@ void AddMerge(CLI::App& app) {
                     s.shard.c_str(), static_cast<long long>(s.clips),
                     static_cast<long long>(s.finished_runs), static_cast<long long>(s.open_runs),
                     static_cast<long long>(s.changed_clips), static_cast<long long>(s.events));
+        if (s.handed_back > 0) {
+          std::printf("%s: finished; its %lld clips are this database's again\n",
+                      s.shard.c_str(), static_cast<long long>(s.handed_back));
+        }
       } catch (const Error& e) {
         std::fprintf(stderr, "refused: %s\n", e.what());
         ++refused;
@@ -128,7 +143,7 @@ struct SlurmCliOptions {
 
 void AddSlurmOptions(CLI::App& cmd, SlurmCliOptions& o) {
   cmd.add_option("--partition", o.slurm.partition, "Slurm partition");
-  cmd.add_option("--cpus-per-task", o.slurm.cpus_per_task, "CPUs per task (= doasido run --jobs)")
+  cmd.add_option("--cpus-per-task", o.slurm.cpus_per_task, "CPUs per task (= doasido run --jobs)")->check(FiniteRange(1, 1024))
       ->capture_default_str()
       ->check(CLI::Range(1, 4096));
   cmd.add_option("--mem", o.slurm.mem, "Memory per task, e.g. 8G");

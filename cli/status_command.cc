@@ -40,6 +40,10 @@ void PrintStatusTable(Database& db) {
     std::printf("\n%lld stage runs failed: `doasido queue list --state failed` shows why, "
                 "`doasido queue retry` tries them again\n", static_cast<long long>(s.failed));
   }
+  for (const auto& [stage, n] : db.CountRequeued()) {
+    std::printf("\n%lld runs queued again because their %s run changed (they re-run after it)\n",
+                static_cast<long long>(n), stage.c_str());
+  }
   if (s.sharded > 0) {
     std::printf("\n%lld unfinished stage runs belong to shards (below); `doasido merge` brings "
                 "their results back\n", static_cast<long long>(s.sharded));
@@ -75,6 +79,7 @@ void AddStatusCommand(CLI::App& app) {
                       {"queue", {{"pending", s.pending}, {"running", s.running},
                                  {"done", s.done}, {"failed", s.failed},
                                  {"expired_leases", s.expired}, {"sharded", s.sharded}}},
+                      {"requeued_by_upstream", db.CountRequeued()},
                       {"counts", counts}};
     std::printf("%s\n", out.dump(2).c_str());
   });

@@ -12,7 +12,7 @@ namespace doasido::dataset {
 namespace {
 
 StageProvenance ProvenanceOf(const Database::ReportRun& r) {
-  return {r.stage, r.param_hash, r.verdict, r.reason, r.verdict_source};
+  return {r.stage, r.param_hash, r.verdict, r.reason, r.verdict_source, r.finished_at};
 }
 
 std::string Describe(const Database::ReportRun& r) {
@@ -92,6 +92,7 @@ EpisodeSelection SelectEpisodes(Database& db, Selection selection) {
       }
       if (trajectory) {
         reached = true;
+        e.upstream = r.inputs;
         break;
       }
     }

@@ -11,6 +11,7 @@
 #include "dataset/feature_stats.h"
 #include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
+#include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
 #include "video/frame_count.h"
@@ -57,14 +58,13 @@ void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* fi
   l.trajectory = retarget::ReadTrajectoryJson(path);
   const retarget::HandTrajectory& t = l.trajectory;
   auto mixed = [&](const std::string& field, const std::string& why) {
-    throw Error("mixed_trajectories", why + " (LeRobot wants one robot and rate per dataset)",
+    throw Error(kMixedTrajectories, why + " (LeRobot wants one robot and rate per dataset)",
                 {.clip = e.external_id, .file = path.string(), .field = field});
   };
   if (t.qpos.empty()) mixed("qpos", "the trajectory has no frames");
   if (first) {
-    const retarget::HandTrajectory& f = first->trajectory;
-    if (t.fps != f.fps) mixed("fps", "fps " + std::to_string(t.fps) + " differs from the first episode's");
-    if (t.qpos_names != f.qpos_names) mixed("qpos_names", "joints differ from the first episode's");
+    const Mismatch m = TrajectoryMismatch(t, first->trajectory);
+    if (!m.field.empty()) mixed(m.field, m.why);
   }
   for (const auto& q : t.qpos) l.state.emplace_back(q.data(), q.data() + q.size());
   for (const auto& p : t.object_poses) {

@@ -6,6 +6,7 @@
 #include <hdf5.h>
 
 #include "core/error.h"
+#include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
 
@@ -153,6 +154,24 @@ void WriteDemo(const Writer& w, hid_t data, const Episode& e, const retarget::Ha
 
 ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_file) {
   const Manifest m = ReadManifest(version_dir);
+  // Every trajectory is read and compared before the file is touched: a
+  // version that mixes robots or features is refused, not half written.
+  std::vector<retarget::HandTrajectory> trajectories;
+  for (const Episode& e : m.episodes) {
+    const fs::path path = version_dir / kEpisodesFolder / e.id / kTrajectoryFile;
+    trajectories.push_back(retarget::ReadTrajectoryJson(path));
+    const retarget::HandTrajectory& t = trajectories.back();
+    if (t.qpos.empty()) {
+      throw Error("bad_trajectory", "the trajectory has no frames",
+                  {.clip = e.external_id, .file = path.string(), .field = "qpos"});
+    }
+    const Mismatch mixed = TrajectoryMismatch(t, trajectories.front());
+    if (!mixed.field.empty()) {
+      throw Error(kMixedTrajectories,
+                  mixed.why + " (a robomimic file holds one robot and one set of observations)",
+                  {.clip = e.external_id, .file = path.string(), .field = mixed.field});
+    }
+  }
   std::error_code ec;
   if (out_file.has_parent_path()) fs::create_directories(out_file.parent_path(), ec);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become our Error, not stderr noise
@@ -163,13 +182,9 @@ ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_f
   ExportSummary summary;
   std::map<std::string, std::vector<std::string>> masks;
   std::string embodiment;
-  for (const Episode& e : m.episodes) {
-    const fs::path path = version_dir / kEpisodesFolder / e.id / kTrajectoryFile;
-    const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(path);
-    if (t.qpos.empty()) {
-      throw Error("bad_trajectory", "the trajectory has no frames",
-                  {.clip = e.external_id, .file = path.string(), .field = "qpos"});
-    }
+  for (size_t i = 0; i < m.episodes.size(); ++i) {
+    const Episode& e = m.episodes[i];
+    const retarget::HandTrajectory& t = trajectories[i];
     WriteDemo(w, data.get(), e, t);
     masks[e.split].push_back("demo_" + std::to_string(e.index));
     summary.frames += static_cast<std::int64_t>(t.qpos.size());

@@ -36,13 +36,13 @@ Json OrNull(const std::optional<T>& v) {
 
 Json ToJson(const StageProvenance& s) {
   return {{"stage", s.stage}, {"param_hash", s.param_hash}, {"verdict", s.verdict},
-          {"reason", s.reason}, {"source", s.source}};
+          {"reason", s.reason}, {"source", s.source}, {"finished_at", OrNull(s.finished_at)}};
 }
 
 StageProvenance StageFromJson(const Json& j, const std::string& at) {
   return {Get<std::string>(j, "stage", at), Get<std::string>(j, "param_hash", at),
           Get<std::string>(j, "verdict", at), Get<std::string>(j, "reason", at),
-          Get<std::string>(j, "source", at)};
+          Get<std::string>(j, "source", at), GetOptional<double>(j, "finished_at", at)};
 }
 
 Json ToJson(const Episode& e) {
@@ -72,6 +72,7 @@ Json ToJson(const Episode& e) {
           {"fps", e.fps},
           {"embodiment", e.embodiment},
           {"stages", stages},
+          {"upstream", e.upstream},
           {"verification", verification},
           {"metadata", e.metadata}};
 }
@@ -109,6 +110,7 @@ Episode EpisodeFromJson(const Json& j, const std::string& where) {
                                   Get<std::string>(v, "reason", at)};
   }
   e.metadata = j.value("metadata", Json::object());
+  e.upstream = j.value("upstream", Json());
   return e;
 }
 
@@ -159,6 +161,8 @@ Json ToJson(const Manifest& m) {
           {"trajectory_stage", m.trajectory_stage},
           {"episodes", episodes},
           {"excluded", excluded},
+          {"allow_stale", m.allow_stale},
+          {"stale", m.stale},
           {"files", files}};
 }
 
@@ -192,6 +196,8 @@ Manifest ManifestFromJson(const Json& j) {
     m.episodes.push_back(EpisodeFromJson(episodes[i], "episodes[" + std::to_string(i) + "]"));
   }
   m.trajectory_stage = Get<std::string>(j, "trajectory_stage", "");
+  m.allow_stale = j.value("allow_stale", false);
+  m.stale = j.value("stale", std::vector<std::string>{});
   const Json excluded = Get<Json>(j, "excluded", "");
   for (size_t i = 0; i < excluded.size(); ++i) {
     const std::string at = "excluded[" + std::to_string(i) + "]";

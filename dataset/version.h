@@ -54,6 +54,9 @@ struct StageProvenance {
   std::string verdict;  // pass | reject | flag
   std::string reason;
   std::string source;  // stage | rethreshold | human (latest verdict row)
+  // When the run finished: with the stage, it names the run (row ids change
+  // when shards merge). Absent in manifests from before it was recorded.
+  std::optional<double> finished_at;
 };
 
 struct Verification {
@@ -80,6 +83,9 @@ struct Episode {
   double fps = 0;
   std::string embodiment;
   std::vector<StageProvenance> stages;  // pipeline order
+  // The upstream runs the trajectory run consumed, as it recorded them
+  // (Database::UpstreamInputs); null when it recorded none.
+  Json upstream;
   std::optional<Verification> verification;
   Json metadata = Json::object();  // the list row's other columns
 };
@@ -109,6 +115,10 @@ struct Manifest {
   std::vector<Episode> episodes;
   std::vector<Exclusion> excluded;  // clips considered and not taken, by id
   std::vector<FileEntry> files;  // every file of the version but manifest.json
+  // `dataset create --allow-stale`: made although these clips' runs were
+  // not settled ("clip 3 (why)"), which a version otherwise refuses.
+  bool allow_stale = false;
+  std::vector<std::string> stale;
 };
 
 Json ToJson(const Manifest& m);

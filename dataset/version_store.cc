@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/tool_version.h"
 #include "dataset/episode_selection.h"
+#include "dataset/settled_runs.h"
 #include "dataset/version_files.h"
 #include "recon/recon_stage.h"
 #include "reports/report.h"
@@ -143,6 +144,18 @@ fs::path FindVersion(const fs::path& root, const std::string& name, const std::s
 Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& options,
                        const std::function<void(int, int)>& progress) {
   CheckName(options.name);
+  std::map<ClipId, std::string> external_ids;
+  for (const ClipRecord& clip : db.ListClips()) external_ids[clip.id] = clip.external_id;
+  const std::vector<UnsettledClip> unsettled = FindUnsettled(db.ReportRuns(), external_ids);
+  if (!unsettled.empty() && !options.allow_stale) {
+    throw Error("unsettled_runs",
+                std::to_string(unsettled.size()) +
+                    " clips have runs that are not settled, so a version would mix old and new "
+                    "results: " + NameClips(unsettled) +
+                    ". Let the workers finish (`doasido run`), or pass --allow-stale to cut the "
+                    "version anyway (recorded in its manifest)",
+                {.clip = std::to_string(unsettled.front().clip_id), .field = "--allow-stale"});
+  }
   EpisodeSelection selection = SelectEpisodes(db, options.selection);
   if (selection.episodes.empty() && !options.allow_empty) {
     throw Error("empty_version",
@@ -173,6 +186,8 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
   m.split_fractions = options.splits;
   m.seed = options.seed;
   m.trajectory_stage = selection.trajectory_stage;
+  m.allow_stale = options.allow_stale;
+  for (const UnsettledClip& u : unsettled) m.stale.push_back(NameClips({u}));
   m.excluded = std::move(selection.excluded);
   m.episodes = std::move(selection.episodes);
   AssignSplits(m.episodes, options.splits, options.seed);

@@ -24,6 +24,10 @@ struct CreateOptions {
   std::int64_t seed = 0;
   bool thumbnails = true;  // in the playbook report
   bool allow_empty = false;  // else Error("empty_version") when nothing is selected
+  // Else Error("unsettled_runs") naming the clips whose runs are pending,
+  // running or stale (dataset/settled_runs.h); allowed, the manifest
+  // records it and those clips.
+  bool allow_stale = false;
 };
 
 // Every version under `root`, by name then number.
@@ -45,7 +49,8 @@ std::filesystem::path FindVersion(const std::filesystem::path& root, const std::
 // assigns splits, copies each episode's trajectory, its trajectory stage's
 // and its reconstruction's artifact folders, writes the playbook report of
 // every clip considered and the manifest with each file's SHA-256, then
-// renames the folder into place. `progress(done, total)` is called per
+// renames the folder into place. Refuses unsettled runs (see
+// CreateOptions::allow_stale) before writing anything. `progress(done, total)` is called per
 // episode. Temporary folders that killed runs left behind are removed
 // first. Throws Error("empty_version") when no clip is selected (unless
 // allowed), Error("version_exists") when another process created the same

@@ -175,26 +175,49 @@ class Database {
   // ---- Queue --------------------------------------------------------------
   // Claims the oldest pending run (or a run whose lease expired) of one of
   // `stages` (all when empty) for `worker`, leased for `lease_s` seconds.
+  // A run waits while an earlier stage of its clip is not done (a changed
+  // upstream run queues its downstream runs before it has run again).
   // A run whose attempts reached `max_attempts` is failed instead of handed
   // out. Returns nullopt when nothing is claimable right now.
   std::optional<Claim> ClaimNext(const std::string& worker, const std::vector<std::string>& stages,
                                  double lease_s, int max_attempts);
   // Extends the lease; false when the worker no longer holds it.
   bool Heartbeat(std::int64_t run_id, const std::string& worker, double lease_s);
-  // Records the result and marks the run done, queueing the clip for the
-  // next stage when the verdict is pass. Returns false (and changes nothing)
+  // Records the result and marks the run done, with the upstream runs it
+  // consumed (stage_runs.inputs, see UpstreamInputs); later runs of the clip
+  // are queued again (they consumed the old result), and the clip is queued
+  // for the next stage when the verdict is pass. Returns false (and changes nothing)
   // when `worker` no longer holds the lease: the run was reclaimed and its
   // result belongs to whoever holds it now.
   bool Complete(const Claim& claim, const std::string& worker, const std::string& param_hash,
                 const StageResult& result, double duration_s);
   // Records a failed attempt: back to pending while attempts < max_attempts,
-  // else failed. The error text is kept either way. Returns false (nothing
-  // recorded) when `worker` no longer holds the run.
+  // else failed (and the clip's later runs dropped). Either way the run has
+  // no verdict, and the error text is kept, bounded to kMaxStoredTextBytes
+  // (core/bounded_text.h, its tail). Returns false (nothing recorded) when
+  // `worker` no longer holds the run.
   bool Fail(const Claim& claim, const std::string& worker, const std::string& error,
             int max_attempts);
-  // Done or failed runs of `stage` whose parameters differ from
-  // `param_hash` go back to pending (new parameters: re-run; same: no-op).
-  std::int64_t InvalidateOtherParams(const std::string& stage, const std::string& param_hash);
+  // Done runs of `stage` whose parameters differ from `param_hash` go back
+  // to pending without a verdict (new parameters: re-run; same: no-op), and
+  // with them every later run of those clips (RequeueDownstream); their
+  // number goes to `downstream` when given. Returns the runs of `stage`.
+  std::int64_t InvalidateOtherParams(const std::string& stage, const std::string& param_hash,
+                                     std::int64_t* downstream = nullptr);
+  // The one mechanism by which a changed run reaches what follows it: every
+  // later run of `clip` goes back to pending without a verdict, lease or
+  // error, marked as queued again because of `stage` (requeued_by).
+  // Returns how many runs were not already waiting for that reason.
+  std::int64_t RequeueDownstream(ClipId clip, const std::string& stage);
+  // The done runs before `stage` in `clip`'s pipeline, as a run records what
+  // it consumed: [{stage, param_hash, finished_at, artifacts: [..]}] (a run
+  // is its stage and finish time: row ids change when a shard is merged).
+  Json UpstreamInputs(ClipId clip, const std::string& stage);
+  // Runs of `stages` (all when empty) a worker could claim now or that run:
+  // what `--until-empty` waits for.
+  std::int64_t CountOpen(const std::vector<std::string>& stages);
+  // Pending runs queued again because an earlier run changed, by that stage.
+  std::map<std::string, std::int64_t> CountRequeued();
   // failed -> pending with attempts reset. Empty stage: all stages.
   std::int64_t Retry(const std::string& stage, std::optional<ClipId> clip);
   // Any state -> pending with attempts reset, and the clip's later stages
@@ -219,8 +242,10 @@ class Database {
   // are dropped and, on pass, the next stage is queued, so later stages judge
   // the new result. Returns false, changing nothing, when the run is not done
   // or its current verdict was given by a person (source "human").
+  // `requeued` (when given) gets the later runs of the clip left waiting
+  // to run again on the new result (RequeueDownstream, then MoveOn).
   bool StoreRedecision(ClipId clip, const std::string& stage, const std::string& param_hash,
-                       const StageResult& result, bool changed);
+                       const StageResult& result, bool changed, std::int64_t* requeued = nullptr);
 
   // ---- Reports --------------------------------------------------------------
   // Bulk reads for `doasido report` (db/database_reports.cc). Read-only.
@@ -240,6 +265,10 @@ class Database {
     // 'human'); empty without one.
     std::string verdict_source;
     std::string param_hash;  // empty until done
+    std::int64_t run_id = 0;
+    std::optional<double> finished_at;  // set once done
+    Json inputs;                        // UpstreamInputs when it finished; null before
+    std::string requeued_by;            // the upstream stage that queued it again
   };
   // Every stage run, ordered by clip id and pipeline position.
   std::vector<ReportRun> ReportRuns();
@@ -426,12 +455,20 @@ class Database {
     std::int64_t open_runs = 0;      // still pending or running there
     std::int64_t changed_clips = 0;  // clips whose rows changed here
     std::int64_t events = 0;         // new events folded in
+    std::int64_t handed_back = 0;    // clips the parent owns again (shard finished)
   };
+  // The shard's meta key naming the database it was merged into.
+  static constexpr const char* kMergedIntoKey = "merged_into";
+  // Throws Error("merged_shard") naming the parent when this database is a
+  // shard already merged back (its clips are the parent's again).
+  void RefuseMergedShard();
   // Folds a shard's results into this database: for each of its clips the
   // runs, measurements, verdicts, reviews, artifact rows and detections here
   // become the shard's (rows already equal are left alone, so merging twice
   // changes nothing), and its new events are appended. Unfinished runs stay
-  // pending here and remain the shard's to finish. Throws
+  // pending here and remain the shard's to finish; a shard with none left
+  // hands its clips back (no longer in shard_clips) and is marked merged
+  // (kMergedIntoKey in its meta), so it refuses further runs. Throws
   // Error("not_a_shard"), Error("foreign_shard") for a shard of another
   // database or one this database does not list, Error("pipeline_mismatch"),
   // and Error("config_mismatch") when a run was done with parameters other

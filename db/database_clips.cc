@@ -1,6 +1,8 @@
 // Database: ingest (videos, clips, detections, events) and reading them back.
 #include "db/database.h"
 
+#include "core/bounded_text.h"
+
 #include <sqlite3.h>
 
 #include "db/clip_row.h"
@@ -98,7 +100,7 @@ void Database::LogEvent(std::optional<ClipId> clip, const std::string& stage,
       .Bind(3, stage)
       .Bind(4, kind)
       .Bind(5, worker)
-      .Bind(6, detail)
+      .Bind(6, BoundedTail(detail))
       .Run();
 }
 

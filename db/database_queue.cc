@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "core/bounded_text.h"
 #include "db/statement.h"
 
 namespace doasido {
@@ -14,10 +15,14 @@ namespace doasido {
 std::optional<Claim> Database::ClaimNext(const std::string& worker,
                                          const std::vector<std::string>& stages, double lease_s,
                                          int max_attempts) {
+  RefuseMergedShard();
   std::string sql =
       "SELECT id, clip_id, stage, attempts, state FROM stage_runs"
       " WHERE state IN ('pending', 'running') AND (state = 'pending' OR lease_expires < ?)"
-      " AND clip_id NOT IN (SELECT clip_id FROM shard_clips)";  // shards run those
+      " AND clip_id NOT IN (SELECT clip_id FROM shard_clips)"  // shards run those
+      // A run waits for the earlier runs of its clip (queued again upstream).
+      " AND NOT EXISTS (SELECT 1 FROM stage_runs u WHERE u.clip_id = stage_runs.clip_id"
+      "  AND u.position < stage_runs.position AND u.state != 'done')";
   if (!stages.empty()) {
     sql += " AND stage IN (";
     for (size_t i = 0; i < stages.size(); ++i) sql += (i ? ",?" : "?");
@@ -42,10 +47,12 @@ std::optional<Claim> Database::ClaimNext(const std::string& worker,
       const std::string error = "lease expired " + std::to_string(claim.attempts - 1) +
                                 " times: the worker died or hung on this clip";
       Prepare("UPDATE stage_runs SET state = 'failed', error = ?, lease_owner = NULL,"
-              " lease_expires = NULL WHERE id = ?")
+              " lease_expires = NULL, verdict = NULL, reason = NULL, param_hash = NULL,"
+              " inputs = NULL WHERE id = ?")
           .Bind(1, error)
           .Bind(2, claim.run_id)
           .Run();
+      DropLaterStages(claim.clip_id, claim.stage);
       LogEvent(claim.clip_id, claim.stage, "failed", worker, error);
       continue;
     }
@@ -61,6 +68,15 @@ std::optional<Claim> Database::ClaimNext(const std::string& worker,
              "attempt " + std::to_string(claim.attempts));
     tx.Commit();
     return claim;
+  }
+}
+
+void Database::RefuseMergedShard() {
+  if (const auto parent = GetMeta(kMergedIntoKey)) {
+    throw Error("merged_shard",
+                "this shard was merged into " + *parent +
+                    "; its clips belong to that database again: run, re-queue or re-shard there",
+                {.file = path_.string()});
   }
 }
 
@@ -82,16 +98,18 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
                         double duration_s) {
   Transaction tx(*this);
   const double now = Now();
+  const std::string inputs = UpstreamInputs(claim.clip_id, claim.stage).dump();
   Prepare("UPDATE stage_runs SET state = 'done', lease_owner = NULL, lease_expires = NULL,"
-          " param_hash = ?, verdict = ?, reason = ?, finished_at = ?, duration_s = ?, error = NULL"
-          " WHERE id = ? AND state = 'running' AND lease_owner = ?")
+          " param_hash = ?, verdict = ?, reason = ?, finished_at = ?, duration_s = ?, error = NULL,"
+          " inputs = ?, requeued_by = NULL WHERE id = ? AND state = 'running' AND lease_owner = ?")
       .Bind(1, param_hash)
       .Bind(2, ToString(result.verdict))
       .Bind(3, result.reason)
       .Bind(4, now)
       .Bind(5, duration_s)
-      .Bind(6, claim.run_id)
-      .Bind(7, worker)
+      .Bind(6, inputs)
+      .Bind(7, claim.run_id)
+      .Bind(8, worker)
       .Run();
   if (sqlite3_changes(db_) == 0) return false;  // lease lost: roll back
   Prepare("INSERT OR REPLACE INTO measurements (clip_id, stage, param_hash, data, created_at)"
@@ -143,6 +161,13 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
         .Bind(10, claim.clip_id)
         .Run();
   }
+  // Later runs consumed the previous result of this stage (there are none
+  // on a clip's first pass): they run again after it.
+  const std::int64_t requeued = RequeueDownstream(claim.clip_id, claim.stage);
+  if (requeued > 0) {
+    LogEvent(claim.clip_id, claim.stage, "requeue_downstream", worker,
+             std::to_string(requeued) + " later runs queued again");
+  }
   MoveOn(claim.clip_id, claim.stage, result.verdict);
   LogEvent(claim.clip_id, claim.stage, "done", worker,
            std::string(ToString(result.verdict)) +
@@ -155,16 +180,22 @@ bool Database::Fail(const Claim& claim, const std::string& worker, const std::st
                     int max_attempts) {
   Transaction tx(*this);
   const bool final = claim.attempts >= max_attempts;
+  const std::string stored = BoundedTail(error);
+  // A failed attempt has no verdict: the one of an earlier run (other
+  // parameters, other upstream results) does not describe it.
   Prepare("UPDATE stage_runs SET state = ?, error = ?, lease_owner = NULL, lease_expires = NULL,"
-          " finished_at = ? WHERE id = ? AND state = 'running' AND lease_owner = ?")
+          " finished_at = ?, verdict = NULL, reason = NULL, param_hash = NULL, inputs = NULL"
+          " WHERE id = ? AND state = 'running' AND lease_owner = ?")
       .Bind(1, final ? "failed" : "pending")
-      .Bind(2, error)
+      .Bind(2, stored)
       .Bind(3, Now())
       .Bind(4, claim.run_id)
       .Bind(5, worker)
       .Run();
   const bool held = sqlite3_changes(db_) > 0;
-  if (held) LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, error);
+  // Runs after a failed one would wait for it forever.
+  if (held && final) DropLaterStages(claim.clip_id, claim.stage);
+  if (held) LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, stored);
   tx.Commit();
   return held;
 }
@@ -193,7 +224,10 @@ void Database::MoveOn(ClipId clip, const std::string& stage, Verdict verdict) {
     flagged.Bind(1, clip).Bind(2, position);
     const bool waits = flagged.Step() && flagged.Int(0) > 0;
     flagged.Reset();
-    if (waits) return;  // the review queue lists it (ListFlagged)
+    if (waits) {  // the review queue lists it (ListFlagged); Release goes on
+      DropLaterStages(clip, stage);
+      return;
+    }
   }
   QueueNextStage(clip, stage);
 }
@@ -221,23 +255,94 @@ void Database::DropLaterStages(ClipId clip, const std::string& stage) {
 }
 
 std::int64_t Database::InvalidateOtherParams(const std::string& stage,
-                                             const std::string& param_hash) {
+                                             const std::string& param_hash,
+                                             std::int64_t* downstream) {
   Transaction tx(*this);
   // A run whose current verdict a person gave is not run again.
-  Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL"
-          " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?"
-          " AND IFNULL((SELECT source FROM verdicts v WHERE v.clip_id = stage_runs.clip_id"
-          " AND v.stage = stage_runs.stage ORDER BY v.id DESC LIMIT 1), '') != 'human'")
+  const char* const kChanged =
+      " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?"
+      " AND IFNULL((SELECT source FROM verdicts v WHERE v.clip_id = stage_runs.clip_id"
+      " AND v.stage = stage_runs.stage ORDER BY v.id DESC LIMIT 1), '') != 'human'";
+  auto& find = Prepare(std::string("SELECT clip_id FROM stage_runs") + kChanged);
+  find.Bind(1, stage).Bind(2, param_hash);
+  std::vector<ClipId> clips;
+  while (find.Step()) clips.push_back(find.Int(0));
+  find.Reset();
+  Prepare(std::string("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL,"
+                      " verdict = NULL, reason = NULL") + kChanged)
       .Bind(1, stage)
       .Bind(2, param_hash)
       .Run();
   const std::int64_t n = sqlite3_changes(db_);
+  std::int64_t later = 0;
+  for (const ClipId clip : clips) later += RequeueDownstream(clip, stage);
+  if (downstream) *downstream = later;
   if (n > 0) {
     LogEvent(std::nullopt, stage, "params_changed", "",
-             std::to_string(n) + " runs queued again for parameters " + param_hash);
+             std::to_string(n) + " runs queued again for parameters " + param_hash + ", " +
+                 std::to_string(later) + " later runs with them");
   }
   tx.Commit();
   return n;
+}
+
+std::int64_t Database::RequeueDownstream(ClipId clip, const std::string& stage) {
+  Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL, verdict = NULL,"
+          " reason = NULL, lease_owner = NULL, lease_expires = NULL, requeued_by = ?"
+          " WHERE clip_id = ? AND position > ?"
+          " AND NOT (state = 'pending' AND IFNULL(requeued_by, '') = ?)")
+      .Bind(1, stage)
+      .Bind(2, clip)
+      .Bind(3, StagePosition(stage))
+      .Bind(4, stage)
+      .Run();
+  return sqlite3_changes(db_);
+}
+
+Json Database::UpstreamInputs(ClipId clip, const std::string& stage) {
+  auto& q = Prepare(
+      "SELECT r.stage, IFNULL(r.param_hash, ''), r.finished_at,"
+      " (SELECT json_group_array(a.path) FROM artifacts a WHERE a.clip_id = r.clip_id"
+      "  AND a.stage = r.stage)"
+      " FROM stage_runs r WHERE r.clip_id = ? AND r.position < ? AND r.state = 'done'"
+      " ORDER BY r.position");
+  q.Bind(1, clip).Bind(2, StagePosition(stage));
+  Json out = Json::array();
+  while (q.Step()) {
+    out.push_back({{"stage", q.Text(0)},
+                   {"param_hash", q.Text(1)},
+                   {"finished_at", q.OptReal(2).value_or(0)},
+                   {"artifacts", Json::parse(q.Text(3), nullptr, false)}});
+  }
+  q.Reset();
+  return out;
+}
+
+std::int64_t Database::CountOpen(const std::vector<std::string>& stages) {
+  std::string sql =
+      "SELECT COUNT(*) FROM stage_runs r WHERE (r.state = 'running' OR (r.state = 'pending'"
+      " AND NOT EXISTS (SELECT 1 FROM stage_runs u WHERE u.clip_id = r.clip_id"
+      "  AND u.position < r.position AND u.state != 'done')))"
+      " AND r.clip_id NOT IN (SELECT clip_id FROM shard_clips)";
+  if (!stages.empty()) {
+    sql += " AND r.stage IN (";
+    for (size_t i = 0; i < stages.size(); ++i) sql += (i ? ",?" : "?");
+    sql += ")";
+  }
+  auto& q = Prepare(sql);
+  for (size_t i = 0; i < stages.size(); ++i) q.Bind(static_cast<int>(i + 1), stages[i]);
+  const std::int64_t n = q.Step() ? q.Int(0) : 0;
+  q.Reset();
+  return n;
+}
+
+std::map<std::string, std::int64_t> Database::CountRequeued() {
+  std::map<std::string, std::int64_t> out;
+  auto& q = Prepare("SELECT requeued_by, COUNT(*) FROM stage_runs WHERE state IN ('pending',"
+                    " 'running') AND requeued_by IS NOT NULL GROUP BY 1");
+  while (q.Step()) out[q.Text(0)] = q.Int(1);
+  q.Reset();
+  return out;
 }
 
 std::int64_t Database::Retry(const std::string& stage, std::optional<ClipId> clip) {
@@ -266,8 +371,8 @@ std::int64_t Database::Reset(const std::string& stage, std::optional<ClipId> cli
       .Bind(4, clip)
       .Run();
   Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL, verdict = NULL,"
-          " reason = NULL, lease_owner = NULL, lease_expires = NULL, param_hash = NULL"
-          " WHERE stage = ? AND (? IS NULL OR clip_id = ?)")
+          " reason = NULL, lease_owner = NULL, lease_expires = NULL, param_hash = NULL,"
+          " inputs = NULL, requeued_by = NULL WHERE stage = ? AND (? IS NULL OR clip_id = ?)")
       .Bind(1, stage)
       .Bind(2, clip)
       .Bind(3, clip)

@@ -10,7 +10,8 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
       "SELECT r.clip_id, r.stage, r.position, r.state, IFNULL(r.verdict, ''),"
       " IFNULL(r.reason, ''), IFNULL(r.error, ''), r.attempts, r.duration_s,"
       " IFNULL((SELECT v.source FROM verdicts v WHERE v.clip_id = r.clip_id"
-      "         AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), ''), IFNULL(r.param_hash, '')"
+      "         AND v.stage = r.stage ORDER BY v.id DESC LIMIT 1), ''), IFNULL(r.param_hash, ''),"
+      " r.id, r.finished_at, r.inputs, IFNULL(r.requeued_by, '')"
       " FROM stage_runs r ORDER BY r.clip_id, r.position");
   std::vector<ReportRun> out;
   while (q.Step()) {
@@ -26,6 +27,12 @@ std::vector<Database::ReportRun> Database::ReportRuns() {
     if (r.state == "done") r.duration_s = q.OptReal(8);
     r.verdict_source = q.Text(9);
     r.param_hash = q.Text(10);
+    r.run_id = q.Int(11);
+    if (r.state == "done") {
+      r.finished_at = q.OptReal(12);
+      if (!q.IsNull(13)) r.inputs = Json::parse(q.Text(13), nullptr, false);
+    }
+    r.requeued_by = q.Text(14);
     out.push_back(std::move(r));
   }
   q.Reset();

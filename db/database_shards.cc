@@ -25,7 +25,7 @@ struct ClipTable {
 constexpr ClipTable kClipTables[] = {
     {"stage_runs",
      "clip_id, stage, position, state, attempts, lease_owner, lease_expires, param_hash, "
-     "verdict, reason, started_at, finished_at, duration_s, error"},
+     "verdict, reason, started_at, finished_at, duration_s, error, inputs, requeued_by"},
     {"measurements", "clip_id, stage, param_hash, data, created_at"},
     {"verdicts", "clip_id, stage, verdict, reason, source, param_hash, created_at"},
     {"reviews", "clip_id, stage, reviewer, decision, reason, created_at"},
@@ -41,7 +41,7 @@ constexpr const char* kRunsHandedOver =
     "clip_id, stage, position, CASE state WHEN 'running' THEN 'pending' ELSE state END, "
     "attempts, CASE state WHEN 'running' THEN NULL ELSE lease_owner END, "
     "CASE state WHEN 'running' THEN NULL ELSE lease_expires END, param_hash, verdict, reason, "
-    "started_at, finished_at, duration_s, error";
+    "started_at, finished_at, duration_s, error, inputs, requeued_by";
 
 const char* SourceColumns(const ClipTable& t) {
   return std::string_view(t.name) == "stage_runs" ? kRunsHandedOver : t.columns;
@@ -414,6 +414,15 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
                               " AND kind NOT IN ('pipeline') ORDER BY id");
     events.Bind(1, from).Run();
     stats.events = sqlite3_changes(db_);
+    if (stats.open_runs == 0) {
+      // Finished: the clips are this database's again (re-queue, re-shard
+      // and its workers treat them as any clip), and the shard takes no
+      // more runs (RefuseMergedShard), so nothing it does later competes.
+      Prepare("DELETE FROM shard_clips WHERE shard_id = ?").Bind(1, shard_id).Run();
+      stats.handed_back = sqlite3_changes(db_);
+      db::Statement mark(db_, "INSERT OR REPLACE INTO shard.meta (key, value) VALUES (?, ?)");
+      mark.Bind(1, kMergedIntoKey).Bind(2, std::filesystem::absolute(path_).string()).Run();
+    }
     if (stats.events > 0 || stats.changed_clips > 0) {
       db::Statement update(db_, "UPDATE shards SET merged_at = ?, merged_event ="
                                 " (SELECT COALESCE(MAX(id), 0) FROM shard.events) WHERE id = ?");

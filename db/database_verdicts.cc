@@ -43,7 +43,7 @@ void Database::SetVerdict(ClipId clip, const std::string& stage, Verdict verdict
 
 bool Database::StoreRedecision(ClipId clip, const std::string& stage,
                                const std::string& param_hash, const StageResult& result,
-                               bool changed) {
+                               bool changed, std::int64_t* requeued) {
   Transaction tx(*this);
   auto& last = Prepare("SELECT source FROM verdicts WHERE clip_id = ? AND stage = ?"
                        " ORDER BY id DESC LIMIT 1");
@@ -82,8 +82,17 @@ bool Database::StoreRedecision(ClipId clip, const std::string& stage,
         .Bind(5, param_hash)
         .Bind(6, now)
         .Run();
-    DropLaterStages(clip, stage);
+    // The same mechanism as a changed or re-run stage: what follows runs
+    // again on the new verdict (MoveOn drops it again when the clip stops).
+    RequeueDownstream(clip, stage);
     MoveOn(clip, stage, result.verdict);
+    if (requeued) {
+      auto& n = Prepare("SELECT COUNT(*) FROM stage_runs WHERE clip_id = ? AND position > ?"
+                        " AND state = 'pending'");
+      n.Bind(1, clip).Bind(2, StagePosition(stage));
+      *requeued = n.Step() ? n.Int(0) : 0;
+      n.Reset();
+    }
     LogEvent(clip, stage, "rethreshold", "",
              std::string(ToString(result.verdict)) + " " + result.reason);
   }

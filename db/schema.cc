@@ -210,6 +210,15 @@ CREATE INDEX shard_clips_shard ON shard_clips(shard_id);
       R"sql(
 ALTER TABLE pipeline ADD COLUMN flag_continues INTEGER NOT NULL DEFAULT 0;
 )sql",
+      // 7: stage run dependencies. A finished run records the upstream runs
+      // it consumed (JSON: stage, parameter hash, finish time,
+      // artifacts); a run queued again because an upstream run changed names
+      // that stage. A run that is not done carries no verdict.
+      R"sql(
+ALTER TABLE stage_runs ADD COLUMN inputs TEXT;
+ALTER TABLE stage_runs ADD COLUMN requeued_by TEXT;
+UPDATE stage_runs SET verdict = NULL, reason = NULL WHERE state != 'done';
+)sql",
   };
   return kMigrations;
 }

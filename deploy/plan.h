@@ -134,6 +134,8 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
 // "arm": [[6]], "hand": [[n]], "position_error", "rotation_error",
 // "unreachable": [{frame, time, position_error, rotation_error}],
 // "too_fast": [{frame, time, joint, speed, limit}], "replay": {...}, "ok"}.
+// The "format" member of a plan file.
+inline constexpr const char* kPlanFormat = "doasido_deploy_plan";
 void WritePlanJson(const Plan& plan, const std::filesystem::path& path);
 // Throws Error("bad_plan") naming the file and field.
 Plan ReadPlanJson(const std::filesystem::path& path);

@@ -7,7 +7,7 @@
 namespace doasido::deploy {
 namespace {
 
-constexpr const char* kFormat = "doasido_deploy_plan";
+constexpr const char* kFormat = kPlanFormat;
 
 Json PoseJson(const Pose& p) {
   return Json::array({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});

@@ -44,8 +44,11 @@ void RedecideFinished(Database& db, const Stage& stage, const std::string& hash,
           run.verdict != ToString(result->verdict) || run.reason != result->reason;
       const bool changed = verdict_changed || WithoutThresholds(*measurements) !=
                                                   WithoutThresholds(result->measurements);
+      std::int64_t requeued = 0;
       const bool kept = dry_run ? HumanVerdict(db, run.clip_id, name)
-                                : !db.StoreRedecision(run.clip_id, name, hash, *result, changed);
+                                : !db.StoreRedecision(run.clip_id, name, hash, *result, changed,
+                                                      &requeued);
+      tally.downstream += requeued;
       if (kept) {
         ++tally.human_kept;
         continue;

@@ -14,6 +14,7 @@ namespace doasido::pipeline {
 
 struct RethresholdTally {
   std::int64_t redecided = 0, unchanged = 0, human_kept = 0, rerun = 0;
+  std::int64_t downstream = 0;  // later runs queued again behind changed results
   std::map<std::string, std::int64_t> transitions;  // "pass -> reject:no_activity"
 };
 

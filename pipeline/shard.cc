@@ -123,6 +123,9 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   // Rows first: a refused shard (foreign, other pipeline or config) must not
   // leave its files in this database's artifact folder.
   Database::MergeStats stats = db.MergeShard(shard_db);
+  // A shard merged before handed its clips back: their files are this
+  // database's now, and may be newer than the shard's.
+  if (stats.clips == 0) return stats;
   Database shard(shard_db);
   for (const ClipRecord& clip : shard.ListClips()) {
     TransferArtifacts(shard.root(), db.root(), clip.id, Transfer::kLink);

@@ -3,7 +3,9 @@
 #include <chrono>
 #include <filesystem>
 
+#include "core/bounded_text.h"
 #include "core/error_codes.h"
+#include "core/output_path.h"
 #include "core/log.h"
 #include "core/permanent_error.h"
 
@@ -13,6 +15,23 @@ namespace {
 std::string ClipLabel(const ClipContext& context) {
   return context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                           : context.clip.external_id;
+}
+
+// Writes `text` whole into the run's artifact folder when it is too long for
+// the database; returns the path named in the stored tail, or "" when the
+// text fits or the file cannot be written.
+std::string KeepWhole(Database& db, const Claim& claim, const std::string& file,
+                      const std::string& text) {
+  if (text.size() <= kMaxStoredTextBytes) return "";
+  const std::filesystem::path path = db.ArtifactDir(claim.clip_id, claim.stage) / file;
+  try {
+    std::filesystem::create_directories(path.parent_path());
+    WriteFileAtomically(path, text);
+  } catch (const std::exception& e) {
+    spdlog::warn("cannot keep the whole text in {}: {}", path.string(), e.what());
+    return "";
+  }
+  return path.string();
 }
 
 }  // namespace
@@ -37,6 +56,24 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
     permanent = IsPermanentError(e.code());
   } catch (const std::exception& e) {
     report.error = std::string("unexpected: ") + e.what();
+  }
+  if (report.error.empty()) {
+    // Measurements are bounded in the database; a stage that measures more
+    // is a bug a retry does not fix. The whole JSON stays in the folder.
+    const std::string json = report.result.measurements.dump();
+    if (json.size() > kMaxMeasurementBytes) {
+      const std::string path = KeepWhole(db, claim, kMeasurementsTooLargeFile, json);
+      report.error = Error(kMeasurementsTooLarge,
+                           std::to_string(json.size()) + " bytes of measurements, more than the " +
+                               std::to_string(kMaxMeasurementBytes) + " the database keeps",
+                           {.clip = report.clip, .file = path})
+                         .what();
+      permanent = true;
+    }
+  }
+  if (report.error.size() > kMaxStoredTextBytes) {
+    report.error = BoundedTail(report.error, kMaxStoredTextBytes,
+                               KeepWhole(db, claim, kErrorLogFile, report.error));
   }
   report.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -190,10 +191,8 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   while (!g_stop) {
     watch.Set(claim);
     if (!claim) {
-      if (options.until_empty) {
-        const auto s = db.Summary();
-        if (s.pending == 0 && s.running == 0) break;
-      }
+      // Runs of other stages (or waiting for them) are not this worker's.
+      if (options.until_empty && db.CountOpen(names) == 0) break;
       std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));
       claim = claim_next();
       continue;
@@ -215,6 +214,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
 int RunWorkers(const WorkerOptions& options) {
   {
     Database db(options.db);
+    db.RefuseMergedShard();
     const auto pipeline = db.Pipeline();
     if (pipeline.empty()) {
       throw Error("pipeline", "the database has no pipeline: run `doasido init` first",
@@ -222,9 +222,12 @@ int RunWorkers(const WorkerOptions& options) {
     }
     for (const auto& name : options.stages.empty() ? pipeline : options.stages) {
       const auto stage = MakeStage(name, options.config);
-      const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()));
+      std::int64_t downstream = 0;
+      const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()), &downstream);
       if (changed > 0) {
-        spdlog::info("{}: parameters changed, {} clips queued again", name, changed);
+        std::printf("%s: parameters changed, %lld clips queued again, and %lld later runs of "
+                    "them\n", name.c_str(), static_cast<long long>(changed),
+                    static_cast<long long>(downstream));
       }
     }
   }
@@ -254,7 +257,7 @@ int RunWorkers(const WorkerOptions& options) {
       if (pid < 0) throw Error("worker", "fork failed");
       children[pid] = slot;
     };
-    for (int i = 0; i < std::max(1, options.jobs); ++i) spawn(i);
+    for (int i = 0; i < options.jobs; ++i) spawn(i);
     Database db(options.db);
     while (!children.empty()) {
       int status = 0;

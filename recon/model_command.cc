@@ -1,5 +1,7 @@
 #include "recon/model_command.h"
 
+#include "core/bounded_text.h"
+
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -80,7 +82,8 @@ std::string LogTail(const std::filesystem::path& log, int lines) {
   }
   std::string out;
   for (const auto& l : last) out += (out.empty() ? "" : "\n") + l;
-  return out;
+  // Lines are not bounded (a program may print one 9 MB line): bytes are.
+  return BoundedTail(out, kMaxStoredTextBytes / 2, log.string());
 }
 
 }  // namespace doasido::recon

@@ -1,0 +1,196 @@
+#include "core/output_path.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+
+#include "core/error.h"
+
+namespace doasido {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kManifestName = "manifest.json";   // dataset/version.h kManifestFile
+constexpr const char* kArtifactsName = "artifacts";       // Database::ArtifactDir
+constexpr char kSqliteHeader[] = "SQLite format 3";
+
+[[noreturn]] void Refuse(const OutputRequest& r, const fs::path& resolved, const std::string& why,
+                         const char* code = kUnsafeOutput) {
+  std::string text = "refusing to write " + (r.what.empty() ? std::string("the output") : r.what) +
+                     " to " + r.path.string();
+  if (resolved != r.path) text += " (" + resolved.string() + ")";
+  throw Error(code, text + ": " + why, {.file = r.path.string(), .field = r.option});
+}
+
+bool IsInside(const fs::path& path, const fs::path& folder) {
+  auto p = path.begin();
+  for (auto f = folder.begin(); f != folder.end(); ++f, ++p) {
+    if (p == path.end() || *p != *f) return false;
+  }
+  return true;
+}
+
+fs::path Canonical(const fs::path& p) {
+  std::error_code ec;
+  fs::path out = fs::weakly_canonical(fs::absolute(p), ec);
+  return ec ? fs::absolute(p).lexically_normal() : out;
+}
+
+// A folder holding a doasido dataset manifest (not any manifest.json).
+bool IsVersionFolder(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::is_regular_file(dir / kManifestName, ec)) return false;
+  std::ifstream f(dir / kManifestName, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return text.find("doasido-dataset") != std::string::npos;
+}
+
+bool HasSqliteBeside(const fs::path& folder) {
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_regular_file(ec) && IsSqliteFile(it->path())) return true;
+  }
+  return false;
+}
+
+// Why `resolved` lies in a version or an artifact root, or "".
+std::string InsideProtected(const fs::path& resolved, const OutputRequest& r) {
+  for (const auto& db : r.databases) {
+    const fs::path root = Canonical(db).parent_path() / kArtifactsName;
+    if (IsInside(resolved, root)) return "it lies inside the artifact root " + root.string();
+  }
+  std::error_code ec;
+  for (fs::path dir = resolved; !dir.empty(); dir = dir.parent_path()) {
+    if (IsVersionFolder(dir)) {
+      return "it lies inside the dataset version " + dir.string() + " (versions never change)";
+    }
+    if (dir.filename() == kArtifactsName && HasSqliteBeside(dir.parent_path())) {
+      return "it lies inside the artifact root " + dir.string();
+    }
+    if (dir == dir.parent_path()) break;
+  }
+  return "";
+}
+
+bool IsEmptyFolder(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_directory(p, ec) && fs::is_empty(p, ec);
+}
+
+}  // namespace
+
+bool FileStartsWith(const fs::path& path, const std::string& magic) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  std::ifstream f(path, std::ios::binary);
+  std::string head(magic.size(), '\0');
+  f.read(head.data(), static_cast<std::streamsize>(head.size()));
+  return f.gcount() == static_cast<std::streamsize>(magic.size()) && head == magic;
+}
+
+bool IsSqliteFile(const fs::path& path) { return FileStartsWith(path, kSqliteHeader); }
+
+void CheckOutputPath(const OutputRequest& r) {
+  if (r.path.empty()) Refuse(r, r.path, "the path is empty");
+  const fs::path resolved = Canonical(r.path);
+  for (const char* system : {"/dev", "/proc", "/sys"}) {
+    if (IsInside(resolved, system)) Refuse(r, resolved, std::string("it lies under ") + system);
+  }
+  std::error_code ec;
+  const fs::file_status status = fs::status(resolved, ec);
+  const bool exists = fs::exists(status);
+  if (exists && !fs::is_regular_file(status) && !fs::is_directory(status)) {
+    Refuse(r, resolved, "it is a device, FIFO or socket, not a file or folder");
+  }
+  for (const auto& db : r.databases) {
+    const fs::path d = Canonical(db);
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) {
+      if (resolved == fs::path(d.string() + suffix)) {
+        Refuse(r, resolved, "it is the database " + d.string() + suffix);
+      }
+    }
+  }
+  if (IsSqliteFile(resolved)) Refuse(r, resolved, "it is a SQLite database");
+  if (const std::string why = InsideProtected(resolved, r); !why.empty()) Refuse(r, resolved, why);
+  if (!exists) return;
+  const bool folder = fs::is_directory(status);
+  if (r.kind == OutputRequest::Kind::kFile && folder) {
+    Refuse(r, resolved, "it is a folder; the output is a file");
+  }
+  if (r.kind == OutputRequest::Kind::kFolder && !folder) {
+    Refuse(r, resolved, "it is a file; the output is a folder");
+  }
+  if (folder && IsEmptyFolder(resolved)) return;
+  if (!r.is_own_output || !r.is_own_output(resolved)) {
+    Refuse(r, resolved,
+           std::string(folder ? "the folder is not empty" : "the file exists") +
+               " and is not an earlier output of this command");
+  }
+  if (!r.force) {
+    Refuse(r, resolved, "it holds an earlier output of this command; --force replaces it",
+           kOutputExists);
+  }
+}
+
+fs::path TempSibling(const fs::path& path) {
+  const fs::path absolute = fs::absolute(path).lexically_normal();
+  const fs::path name = absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename();
+  const fs::path parent = absolute.has_filename() ? absolute.parent_path()
+                                                  : absolute.parent_path().parent_path();
+  return parent / ("." + name.string() + ".tmp-" + std::to_string(getpid()));
+}
+
+void RenameIntoPlace(const fs::path& temp, const fs::path& path) {
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) {
+    fs::remove_all(temp, ec);
+    throw Error("io", "cannot rename into place: " + ec.message(), {.file = path.string()});
+  }
+}
+
+void WriteFolderAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  const fs::path temp = TempSibling(path);
+  std::error_code ec;
+  fs::remove_all(temp, ec);
+  fs::create_directories(temp, ec);
+  if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
+  try {
+    write(temp);
+  } catch (...) {
+    fs::remove_all(temp, ec);
+    throw;
+  }
+  const fs::path old = temp.string() + ".old";
+  const bool had = fs::exists(path, ec);
+  if (had) {
+    fs::rename(path, old, ec);
+    if (ec) {
+      fs::remove_all(temp, ec);
+      throw Error("io", "cannot move the earlier output aside: " + ec.message(),
+                  {.file = path.string()});
+    }
+  }
+  RenameIntoPlace(temp, path);
+  if (had) fs::remove_all(old, ec);
+}
+
+void WriteFileAtomically(const fs::path& path, const std::string& bytes) {
+  const fs::path temp = TempSibling(path);
+  {
+    std::ofstream f(temp, std::ios::binary | std::ios::trunc);
+    f << bytes;
+    f.close();
+    if (!f) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      throw Error("io", "cannot write", {.file = temp.string()});
+    }
+  }
+  RenameIntoPlace(temp, path);
+}
+
+}  // namespace doasido

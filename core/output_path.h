@@ -1,0 +1,71 @@
+// The one check every writing command makes before it writes: an output
+// path must never be one of the project's inputs. A robomimic export named
+// like the database would otherwise replace the queue with an HDF5 file, an
+// export into a version's folder would break its manifest, and `--out
+// /dev/null` would "succeed".
+//
+// CheckOutputPath refuses (Error("unsafe_output"), naming the path and the
+// option) an output that
+//   - is a device, FIFO or socket, or lies under /dev, /proc or /sys;
+//   - is a SQLite database (any file starting with SQLite's header, or a
+//     database the caller names, or its -wal/-shm/-journal companion);
+//   - is or lies inside a dataset version (a folder holding manifest.json);
+//   - is or lies inside an artifact root (<database folder>/artifacts of a
+//     database the caller names, or any `artifacts` folder beside a
+//     SQLite database);
+//   - exists and is of another kind than the command writes (a folder for
+//     a file output, a file for a folder output, or a file/folder the
+//     command does not recognise as its own output);
+//   - exists as the command's own earlier output while `force` is false
+//     (Error("output_exists"), saying --force replaces it).
+// An empty existing folder is always accepted for a folder output.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace doasido {
+
+inline constexpr const char* kUnsafeOutput = "unsafe_output";
+inline constexpr const char* kOutputExists = "output_exists";
+
+struct OutputRequest {
+  std::filesystem::path path;  // as given (relative to the working directory)
+  enum class Kind { kFile, kFolder } kind = Kind::kFile;
+  std::string option = "--out";  // named in the error
+  std::string what;              // "robomimic HDF5 file", named in errors
+  // Whether an existing file or non-empty folder at `path` is an earlier
+  // output of the same command (only those may be replaced, with `force`).
+  // Empty: nothing existing may be replaced.
+  std::function<bool(const std::filesystem::path&)> is_own_output;
+  bool force = false;
+  // Databases (and so their artifact roots) the command works with.
+  std::vector<std::filesystem::path> databases;
+};
+
+void CheckOutputPath(const OutputRequest& request);
+
+// True when `path` is a regular file starting with SQLite's header.
+bool IsSqliteFile(const std::filesystem::path& path);
+// True when `path` is a regular file whose first bytes are `magic`.
+bool FileStartsWith(const std::filesystem::path& path, const std::string& magic);
+
+// Calls `write(folder)` with a fresh temporary sibling of `path`, then puts
+// that folder in place of `path`; an earlier output at `path` is removed
+// only once the new one is complete (a failed write leaves it as it was).
+void WriteFolderAtomically(const std::filesystem::path& path,
+                           const std::function<void(const std::filesystem::path&)>& write);
+
+// A temporary sibling of `path`: hidden, named after it and this process.
+std::filesystem::path TempSibling(const std::filesystem::path& path);
+// Renames `temp` onto `path` (replacing a file); throws Error("io").
+void RenameIntoPlace(const std::filesystem::path& temp, const std::filesystem::path& path);
+
+// Writes `bytes` to a temporary sibling of `path` and renames it into place,
+// so a reader never sees part of the file and a failed write leaves the old
+// one. Throws Error("io") naming the file.
+void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
+
+}  // namespace doasido

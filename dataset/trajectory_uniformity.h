@@ -1,0 +1,25 @@
+// Exports write a version as one dataset with one robot, one rate and one
+// set of features: every episode's trajectory must agree with the first on
+// what the export writes once (issue #42: a version mixing sharpa and
+// allegro was written to robomimic with one embodiment attribute).
+#pragma once
+
+#include <string>
+
+#include "retarget/kinematic_retarget.h"
+
+namespace doasido::dataset {
+
+inline constexpr const char* kMixedTrajectories = "mixed_trajectories";
+
+// The field in which `t` differs from `first` ("embodiment", "fps",
+// "qpos_names", "ctrl_names", "object_poses", "reference_keypoints") with a
+// sentence saying how, or {"", ""} when they agree.
+struct Mismatch {
+  std::string field;
+  std::string why;
+};
+Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
+                            const retarget::HandTrajectory& first);
+
+}  // namespace doasido::dataset

@@ -114,6 +114,13 @@ void CheckOutputPath(const OutputRequest& r) {
     }
   }
   if (IsSqliteFile(resolved)) Refuse(r, resolved, "it is a SQLite database");
+  for (const std::string suffix : {"-wal", "-shm", "-journal"}) {
+    const std::string name = resolved.string();
+    if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
+        IsSqliteFile(name.substr(0, name.size() - suffix.size()))) {
+      Refuse(r, resolved, "it is the journal of the database " + name.substr(0, name.size() - suffix.size()));
+    }
+  }
   if (const std::string why = InsideProtected(resolved, r); !why.empty()) Refuse(r, resolved, why);
   if (!exists) return;
   const bool folder = fs::is_directory(status);

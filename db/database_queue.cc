@@ -9,6 +9,17 @@
 #include "db/statement.h"
 
 namespace doasido {
+namespace {
+
+// " AND <column> IN (?,...)" for `n` stages bound in order; "" for none.
+std::string StageFilter(const char* column, size_t n) {
+  if (n == 0) return "";
+  std::string sql = std::string(" AND ") + column + " IN (";
+  for (size_t i = 0; i < n; ++i) sql += (i ? ",?" : "?");
+  return sql + ")";
+}
+
+}  // namespace
 
 // ---- Queue ------------------------------------------------------------------
 
@@ -23,11 +34,7 @@ std::optional<Claim> Database::ClaimNext(const std::string& worker,
       // A run waits for the earlier runs of its clip (queued again upstream).
       " AND NOT EXISTS (SELECT 1 FROM stage_runs u WHERE u.clip_id = stage_runs.clip_id"
       "  AND u.position < stage_runs.position AND u.state != 'done')";
-  if (!stages.empty()) {
-    sql += " AND stage IN (";
-    for (size_t i = 0; i < stages.size(); ++i) sql += (i ? ",?" : "?");
-    sql += ")";
-  }
+  sql += StageFilter("stage", stages.size());
   sql += " ORDER BY id LIMIT 1";
   Transaction tx(*this);
   const double now = Now();
@@ -324,11 +331,7 @@ std::int64_t Database::CountOpen(const std::vector<std::string>& stages) {
       " AND NOT EXISTS (SELECT 1 FROM stage_runs u WHERE u.clip_id = r.clip_id"
       "  AND u.position < r.position AND u.state != 'done')))"
       " AND r.clip_id NOT IN (SELECT clip_id FROM shard_clips)";
-  if (!stages.empty()) {
-    sql += " AND r.stage IN (";
-    for (size_t i = 0; i < stages.size(); ++i) sql += (i ? ",?" : "?");
-    sql += ")";
-  }
+  sql += StageFilter("r.stage", stages.size());
   auto& q = Prepare(sql);
   for (size_t i = 0; i < stages.size(); ++i) q.Bind(static_cast<int>(i + 1), stages[i]);
   const std::int64_t n = q.Step() ? q.Int(0) : 0;

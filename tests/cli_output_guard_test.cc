@@ -61,7 +61,7 @@ class OutputGuard : public ::testing::Test {
   static std::string Bytes(const fs::path& p) { return ReadFile(p); }
 
   // Runs `args`, which must be refused with `code` naming `named`; the
-  // database and the version are unchanged and still open and verify.
+  // database file and the version's manifest are byte for byte unchanged.
   void ExpectRefused(const std::vector<std::string>& args, const std::string& named,
                      const std::string& code = "unsafe_output") {
     const std::string db_before = Bytes(Db());
@@ -74,8 +74,11 @@ class OutputGuard : public ::testing::Test {
     EXPECT_NE(r.err.find(named), std::string::npos) << line << r.err;
     EXPECT_TRUE(Bytes(Db()) == db_before) << line << ": the database changed";
     EXPECT_EQ(Bytes(Version() / "manifest.json"), manifest_before) << line;
-    EXPECT_EQ(RunDoasido({"status", "--db", Db()}).exit_code, 0) << line;
-    EXPECT_EQ(RunDoasido({"dataset", "verify", "--root", Root(), "v1"}).exit_code, 0) << line;
+  }
+  // After each test: the database still opens, the version still verifies.
+  void TearDown() override {
+    EXPECT_EQ(RunDoasido({"status", "--db", Db()}).exit_code, 0);
+    EXPECT_EQ(RunDoasido({"dataset", "verify", "--root", Root(), "v1"}).exit_code, 0);
   }
 
   static TempDir* dir_;

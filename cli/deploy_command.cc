@@ -254,6 +254,7 @@ void AddStream(CLI::App& deploy) {
   struct StreamArgs {
     std::string plan;
     std::string dry_run;
+    bool force = false;
     deploy::StreamOptions options;
   };
   auto a = std::make_shared<StreamArgs>();
@@ -267,6 +268,7 @@ void AddStream(CLI::App& deploy) {
       ->capture_default_str();
   cmd->add_option("--dry-run", a->dry_run, "Write the messages to this LCM log file instead "
                   "(no network, no waiting)");
+  AddForceFlag(*cmd, a->force);
   cmd->footer(
       "Messages are doasido_lcm.arm_hand_command (deploy/arm_hand_command.lcm):\n"
       "timestamp_us, sequence, plan_time, arm_q[6], hand_q[num_hand]; for a plan from\n"
@@ -278,6 +280,17 @@ void AddStream(CLI::App& deploy) {
       "  doasido deploy stream --plan work/plan12.json\n"
       "  doasido deploy stream --plan work/plan12.json --dry-run work/plan12.lcmlog");
   cmd->callback([a] {
+    if (!a->dry_run.empty()) {
+      // An LCM log starts with the event sync word 0xEDA1DA01 (big-endian).
+      CheckOutputPath({.path = a->dry_run,
+                       .kind = OutputRequest::Kind::kFile,
+                       .option = "--dry-run",
+                       .what = "the LCM log",
+                       .is_own_output = [](const std::filesystem::path& p) {
+                         return FileStartsWith(p, std::string("\xED\xA1\xDA\x01", 4));
+                       },
+                       .force = a->force});
+    }
     const Json file = deploy::ReadPlanFile(a->plan);
     const bool two = file.is_object() && file.value("format", "") == deploy::kBimanualPlanFormat;
     std::optional<deploy::Plan> one;

@@ -103,6 +103,7 @@ std::vector<std::vector<std::string>> Writers(const std::string& db, const std::
       {"hand", "import", "--mjcf", "/nonexistent/hand.xml", "--out", out},
       {"hand", "mirror", "shadow", "--out", out},
       {"retarget-kinematic", "--keypoints", "/nonexistent.csv", "--out", out},
+      {"deploy", "stream", "--plan", "/nonexistent/plan.json", "--dry-run", out},
   };
 }
 

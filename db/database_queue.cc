@@ -111,14 +111,20 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
       .Bind(5, param_hash)
       .Bind(6, now)
       .Run();
-  const auto dir = ArtifactDir(claim.clip_id, claim.stage);
+  // Only this run's files are the stage's output now; paths relative to the
+  // artifact root (db/database_artifacts.cc).
+  Prepare("DELETE FROM artifacts WHERE clip_id = ? AND stage = ?")
+      .Bind(1, claim.clip_id)
+      .Bind(2, claim.stage)
+      .Run();
+  const auto dir = std::filesystem::path(std::to_string(claim.clip_id)) / claim.stage;
   for (const auto& [kind, rel] : result.artifacts) {
     Prepare("INSERT OR IGNORE INTO artifacts (clip_id, stage, kind, path, created_at)"
             " VALUES (?,?,?,?,?)")
         .Bind(1, claim.clip_id)
         .Bind(2, claim.stage)
         .Bind(3, kind)
-        .Bind(4, Store((dir / rel).string()))
+        .Bind(4, (dir / rel).lexically_normal().generic_string())
         .Bind(5, now)
         .Run();
   }
@@ -165,6 +171,7 @@ bool Database::Fail(const Claim& claim, const std::string& worker, const std::st
       .Run();
   const bool held = sqlite3_changes(db_) > 0;
   if (held) LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, error);
+  if (held) DiscardArtifacts(claim.clip_id, {claim.stage});  // no earlier run's output stays
   tx.Commit();
   return held;
 }
@@ -214,6 +221,7 @@ void Database::Release(ClipId clip) {
 }
 
 void Database::DropLaterStages(ClipId clip, const std::string& stage) {
+  DiscardArtifacts(clip, StagesAfter(stage));
   Prepare("DELETE FROM stage_runs WHERE clip_id = ? AND position > ?")
       .Bind(1, clip)
       .Bind(2, StagePosition(stage))
@@ -224,14 +232,22 @@ std::int64_t Database::InvalidateOtherParams(const std::string& stage,
                                              const std::string& param_hash) {
   Transaction tx(*this);
   // A run whose current verdict a person gave is not run again.
-  Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL"
-          " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?"
-          " AND IFNULL((SELECT source FROM verdicts v WHERE v.clip_id = stage_runs.clip_id"
-          " AND v.stage = stage_runs.stage ORDER BY v.id DESC LIMIT 1), '') != 'human'")
+  const std::string which =
+      " WHERE stage = ? AND state = 'done' AND IFNULL(param_hash, '') != ?"
+      " AND IFNULL((SELECT source FROM verdicts v WHERE v.clip_id = stage_runs.clip_id"
+      " AND v.stage = stage_runs.stage ORDER BY v.id DESC LIMIT 1), '') != 'human'";
+  std::vector<ClipId> requeued;
+  auto& find = Prepare("SELECT clip_id FROM stage_runs" + which);
+  find.Bind(1, stage).Bind(2, param_hash);
+  while (find.Step()) requeued.push_back(find.Int(0));
+  find.Reset();
+  Prepare("UPDATE stage_runs SET state = 'pending', attempts = 0, error = NULL" + which)
       .Bind(1, stage)
       .Bind(2, param_hash)
       .Run();
   const std::int64_t n = sqlite3_changes(db_);
+  // Their old outputs are no longer the recorded result of any run.
+  for (ClipId clip : requeued) DiscardArtifacts(clip, {stage});
   if (n > 0) {
     LogEvent(std::nullopt, stage, "params_changed", "",
              std::to_string(n) + " runs queued again for parameters " + param_hash);
@@ -258,6 +274,16 @@ std::int64_t Database::Retry(const std::string& stage, std::optional<ClipId> cli
 std::int64_t Database::Reset(const std::string& stage, std::optional<ClipId> clip) {
   const int position = StagePosition(stage);
   Transaction tx(*this);
+  {
+    std::vector<std::string> stages = StagesAfter(stage);
+    stages.insert(stages.begin(), stage);
+    std::vector<ClipId> clips;
+    auto& find = Prepare("SELECT clip_id FROM stage_runs WHERE stage = ? AND (? IS NULL OR clip_id = ?)");
+    find.Bind(1, stage).Bind(2, clip).Bind(3, clip);
+    while (find.Step()) clips.push_back(find.Int(0));
+    find.Reset();
+    for (ClipId c : clips) DiscardArtifacts(c, stages);
+  }
   Prepare("DELETE FROM stage_runs WHERE position > ? AND clip_id IN (SELECT clip_id FROM"
           " stage_runs WHERE stage = ? AND (? IS NULL OR clip_id = ?))")
       .Bind(1, position)

@@ -210,6 +210,17 @@ CREATE INDEX shard_clips_shard ON shard_clips(shard_id);
       R"sql(
 ALTER TABLE pipeline ADD COLUMN flag_continues INTEGER NOT NULL DEFAULT 0;
 )sql",
+      // 7: artifact paths are relative to the database's artifact root
+      // (meta 'artifact_root', "artifacts" for databases made before it);
+      // a person's decision records the SHA-256 of the trajectory file and
+      // the parameter hash it was shown, so it binds to that trajectory only.
+      R"sql(
+UPDATE artifacts SET path = substr(path, 11) WHERE path LIKE 'artifacts/%';
+INSERT OR IGNORE INTO meta (key, value)
+  SELECT 'artifact_root', 'artifacts' WHERE EXISTS (SELECT 1 FROM artifacts);
+ALTER TABLE reviews ADD COLUMN artifact_sha256 TEXT;
+ALTER TABLE reviews ADD COLUMN param_hash TEXT;
+)sql",
   };
   return kMigrations;
 }

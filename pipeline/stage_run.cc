@@ -10,6 +10,26 @@
 namespace doasido::pipeline {
 namespace {
 
+// Stored measurements name folders relative to the artifact root, and the
+// published folder rather than the run's work folder, so they survive a
+// move of the database folder and a merge from a shard.
+void StoreRelativePaths(Json& value, const std::filesystem::path& work,
+                        const std::filesystem::path& published, const std::filesystem::path& root) {
+  if (value.is_object() || value.is_array()) {
+    for (Json& member : value) StoreRelativePaths(member, work, published, root);
+    return;
+  }
+  if (!value.is_string()) return;
+  std::filesystem::path p = value.get<std::string>();
+  if (!p.is_absolute()) return;
+  auto under = [](const std::filesystem::path& path, const std::filesystem::path& dir) {
+    const auto rel = path.lexically_relative(dir);
+    return !rel.empty() && *rel.begin() != "..";
+  };
+  if (under(p, work)) p = published / p.lexically_relative(work);
+  if (under(p, root)) value = p.lexically_relative(root).generic_string();
+}
+
 std::string ClipLabel(const ClipContext& context) {
   return context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                           : context.clip.external_id;
@@ -24,11 +44,20 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
   bool permanent = false;  // a retry cannot fix it: fail now
   report.clip = std::to_string(claim.clip_id);
   const auto start = std::chrono::steady_clock::now();
+  // The run writes into a fresh folder, published only when it succeeded
+  // (Database::PublishArtifacts); what a killed run left is removed first.
+  const std::filesystem::path work = db.ArtifactWorkDir(claim);
   try {
     ClipContext context = db.LoadContext(claim.clip_id, claim.stage);
     report.clip = ClipLabel(context);
-    std::filesystem::create_directories(context.artifact_dir);
+    db.ClaimArtifactRoot();
+    db.RemoveArtifactLeftovers(claim.clip_id, claim.stage);
+    context.artifact_dir = work;
+    std::filesystem::create_directories(work);
     report.result = stage.Run(context);
+    db.PublishArtifacts(claim);
+    StoreRelativePaths(report.result.measurements, work,
+                       db.ArtifactDir(claim.clip_id, claim.stage), db.ArtifactRoot());
   } catch (const PermanentError& e) {
     report.error = e.what();
     permanent = true;
@@ -42,6 +71,8 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Database::Transaction tx(db);
   if (!report.error.empty()) {
+    std::error_code ec;
+    std::filesystem::remove_all(work, ec);
     spdlog::warn("{} on clip {} (attempt {}): {}", claim.stage, report.clip, claim.attempts,
                  report.error);
     db.Fail(claim, worker, report.error, permanent ? claim.attempts : max_attempts);

@@ -24,6 +24,7 @@
 #include "dataset/version_files.h"
 #include "dataset/version_store.h"
 #include "db/database.h"
+#include "ingest/file_sha256.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
 #include "tests/test_util.h"
@@ -120,7 +121,9 @@ TEST_F(CliDataset, VersionsDiffVerifyAndRobomimic) {
   }
   {
     Database d(db);
-    d.RecordVerification(verified, retarget::kKinematicStageName, "alice", true, "follows the mug");
+    d.RecordVerification(verified, retarget::kKinematicStageName, "alice", true, "follows the mug",
+                         ingest::FileSha256(d.ArtifactDir(verified, retarget::kKinematicStageName) /
+                                            "trajectory.json"));
   }
   const auto re = RunDoasido({"rethreshold", "--db", db, "--config", (work / "strict.toml").string()});
   ASSERT_EQ(re.exit_code, 0) << re.err;

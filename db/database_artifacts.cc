@@ -33,6 +33,21 @@ std::string OwnerPath(const fs::path& root) {
              : std::string("another database");
 }
 
+// Writes the owner file naming database `uuid` at `database` (renamed into
+// place, so a reader never sees half of one).
+void WriteOwnerFile(const fs::path& root, const std::string& uuid, const fs::path& database) {
+  std::error_code ec;
+  const fs::path owner = root / Database::kArtifactOwnerFile;
+  const fs::path temp = owner.string() + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << Json{{"uuid", uuid}, {"database", database.string()}}.dump() << "\n";
+    if (!out) throw Error("io", "cannot write the artifact folder's owner file", {.file = temp.string()});
+  }
+  fs::rename(temp, owner, ec);
+  if (ec) throw Error("io", "cannot write: " + ec.message(), {.file = owner.string()});
+}
+
 const std::string kWorkTag = ".run-";
 const std::string kAsideTag = ".old-";
 
@@ -51,6 +66,14 @@ void Database::OpenArtifactRoot() {
   }
   artifact_root_ = (root_ / *stored).lexically_normal();
   const std::string owner = OwnerOf(artifact_root_);
+  if (owner == uuid && OwnerPath(artifact_root_) != path_.string()) {
+    // The database and its folder were moved or copied together: the owner
+    // file names where it is now (best effort; the uuid is what is checked).
+    try {
+      WriteOwnerFile(artifact_root_, uuid, path_);
+    } catch (const Error&) {
+    }
+  }
   if (!owner.empty() && owner != uuid) {
     throw Error("foreign_artifacts",
                 "the artifact folder " + artifact_root_.string() + " belongs to " +
@@ -64,15 +87,7 @@ void Database::ClaimArtifactRoot() {
   std::error_code ec;
   if (fs::exists(artifact_root_ / kArtifactOwnerFile, ec)) return;
   fs::create_directories(artifact_root_, ec);
-  const fs::path owner = artifact_root_ / kArtifactOwnerFile;
-  const fs::path temp = owner.string() + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << Json{{"uuid", Uuid()}, {"database", path_.string()}}.dump() << "\n";
-    if (!out) throw Error("io", "cannot write the artifact folder's owner file", {.file = temp.string()});
-  }
-  fs::rename(temp, owner, ec);
-  if (ec) throw Error("io", "cannot write: " + ec.message(), {.file = owner.string()});
+  WriteOwnerFile(artifact_root_, Uuid(), path_);
 }
 
 fs::path Database::ArtifactDir(ClipId clip, const std::string& stage) const {

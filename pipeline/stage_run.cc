@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "core/error_codes.h"
 #include "core/log.h"
@@ -30,6 +32,30 @@ void StoreRelativePaths(Json& value, const std::filesystem::path& work,
   if (under(p, root)) value = p.lexically_relative(root).generic_string();
 }
 
+// MJCF files a run wrote name their meshes by absolute path (MuJoCo
+// compiles them from a temporary copy elsewhere), so a declared .xml file
+// that names the run's work folder is rewritten to name the folder it is
+// published as.
+void PointXmlAtPublished(const StageResult& result, const std::filesystem::path& work,
+                         const std::filesystem::path& published) {
+  const std::string from = work.string() + "/", to = published.string() + "/";
+  for (const auto& [kind, rel] : result.artifacts) {
+    if (std::filesystem::path(rel).extension() != ".xml") continue;
+    const auto file = work / rel;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) continue;
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    if (text.find(from) == std::string::npos) continue;
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+      text.replace(at, from.size(), to);
+    }
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw Error("io", "cannot rewrite", {.file = file.string()});
+  }
+}
+
 std::string ClipLabel(const ClipContext& context) {
   return context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                           : context.clip.external_id;
@@ -55,6 +81,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
     context.artifact_dir = work;
     std::filesystem::create_directories(work);
     report.result = stage.Run(context);
+    PointXmlAtPublished(report.result, work, db.ArtifactDir(claim.clip_id, claim.stage));
     db.PublishArtifacts(claim);
     StoreRelativePaths(report.result.measurements, work,
                        db.ArtifactDir(claim.clip_id, claim.stage), db.ArtifactRoot());

@@ -87,7 +87,7 @@ def lerobot_whole(out):
 
 
 def robomimic_whole(out):
-    r = subprocess.run([sys.executable, "-c",
+    r = subprocess.run(["/usr/bin/python3", "-c",
                         "import h5py,sys; f=h5py.File(sys.argv[1],'r'); "
                         "[f['data'][k]['actions'][()] for k in f['data']]", out],
                        capture_output=True)

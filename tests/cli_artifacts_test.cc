@@ -164,9 +164,10 @@ TEST_F(CliArtifacts, ResetAndFailedRunsLeaveNothingToTake) {
   EXPECT_TRUE(Has(bad.err, "retarget_kinematic.hand")) << bad.err;
   EXPECT_EQ(QueryRows(db, std::string("SELECT MAX(attempts) FROM stage_runs WHERE stage = '") +
                               kTrajectoryStage + "'")[0], "0");
-  // A run that fails: its reconstruction is gone.
+  // A run that fails: its reconstruction and its bundle are gone.
   for (const auto& clip : clips) {
     fs::remove_all(work_ / "w/artifacts" / clip / "recon" / "reconstruction.npz");
+    fs::remove_all(work_ / "w/artifacts" / clip / "bundle" / "meta.json");
   }
   RunDoasido({"run", "--db", db.string(), "--config", (*pool_ / "run.toml").string()});
   EXPECT_EQ(QueryRows(db, std::string("SELECT COUNT(*) FROM stage_runs WHERE stage = '") +
@@ -218,7 +219,7 @@ TEST_F(CliArtifacts, MergeCopiesAndHoldsBackAClipWithAMissingFile) {
   EXPECT_EQ(ingest::FileSha256(mine), before);
   // Paths in merged measurements are relative to the artifact root.
   for (const auto& data : QueryRows(db, "SELECT data FROM measurements WHERE stage = 'recon'")) {
-    EXPECT_FALSE(Has(data, work_.operator/("sh").string())) << data;
+    EXPECT_FALSE(Has(data, (work_ / "sh").string())) << data;
   }
   // Self-merge and a non-database, each refused naming the right file.
   const auto self = RunDoasido({"merge", "--db", db.string(), db.string()});
@@ -344,7 +345,7 @@ TEST_F(CliArtifacts, AKilledExportLeavesTheOldOneOrTheNewOneWhole) {
     const std::string marker = format == "lerobot" ? "meta/info.json" : "";
     auto whole = [&] {
       return format == "lerobot" ? fs::exists(out / marker) && fs::exists(out / "meta/doasido_manifest.json")
-                                 : testing::ShellOk("python3 -c \"import h5py; f = h5py.File('" + out.string() +
+                                 : testing::ShellOk("/usr/bin/python3 -c \"import h5py; f = h5py.File('" + out.string() +
                                            "'); print(len(f['data']))\"") != "";
     };
     for (int kill = 0; kill < 3; ++kill) {
@@ -364,7 +365,7 @@ TEST_F(CliArtifacts, AKilledExportLeavesTheOldOneOrTheNewOneWhole) {
       }
       ASSERT_EQ(RunDoasido(args).exit_code, 0) << format << " re-run after kill " << kill;
       EXPECT_TRUE(whole());
-      for (const auto& entry : fs::directory_iterator(work_)) {
+      for (const auto& entry : fs::directory_iterator(work_ / "")) {
         EXPECT_FALSE(Has(entry.path().filename().string(), ".tmp-")) << entry.path();
       }
     }
@@ -374,7 +375,9 @@ TEST_F(CliArtifacts, AKilledExportLeavesTheOldOneOrTheNewOneWhole) {
 // Finding 7: no stage leaves an empty folder per clip.
 TEST_F(CliArtifacts, NoEmptyArtifactFolders) {
   for (const auto& entry : fs::recursive_directory_iterator(*pool_ / "base" / "artifacts")) {
-    if (entry.is_directory()) EXPECT_FALSE(fs::is_empty(entry.path())) << entry.path();
+    if (entry.is_directory()) {
+      EXPECT_FALSE(fs::is_empty(entry.path())) << entry.path();
+    }
   }
   EXPECT_TRUE(fs::exists(*pool_ / "base/artifacts" / Database::kArtifactOwnerFile));
 }

@@ -252,10 +252,18 @@ print(json.dumps(out))
   EXPECT_EQ(info["total_frames"], total);
   EXPECT_EQ(info["robot_type"], v2.episodes[0].embodiment);
   EXPECT_EQ(info["features"]["observation.images.source"]["shape"], (Json{240, 320, 3}));
+  // Exporting again replaces the complete export whole; a folder that is
+  // not an export is never replaced.
   const auto again = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
                                  "--format", "lerobot", "--out", (work / "lerobot").string()});
-  EXPECT_EQ(again.exit_code, 1);
-  EXPECT_THAT(again.err, HasSubstr("output_exists"));
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(fs::exists(work / "lerobot/meta/info.json"));
+  WriteFile(work / "notes/todo.txt", "mine");
+  const auto foreign = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
+                                   "--format", "lerobot", "--out", (work / "notes").string()});
+  EXPECT_EQ(foreign.exit_code, 1);
+  EXPECT_THAT(foreign.err, HasSubstr("output_exists"));
+  EXPECT_EQ(testing::ReadFile(work / "notes/todo.txt"), "mine");
 
   // One byte of an episode changed: verify fails naming the file.
   const fs::path victim = work / "datasets/pour/v2/episodes" / v2.episodes[0].id / "trajectory.json";

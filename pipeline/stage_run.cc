@@ -100,6 +100,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
   if (!report.error.empty()) {
     std::error_code ec;
     std::filesystem::remove_all(work, ec);
+    std::filesystem::remove(work.parent_path(), ec);  // only when empty
     spdlog::warn("{} on clip {} (attempt {}): {}", claim.stage, report.clip, claim.attempts,
                  report.error);
     db.Fail(claim, worker, report.error, permanent ? claim.attempts : max_attempts);

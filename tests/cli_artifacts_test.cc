@@ -59,11 +59,7 @@ class CliArtifacts : public ::testing::Test {
   static void SetUpTestSuite() {
     pool_ = new TempDir();
     const fs::path synth = *pool_ / "s";
-    ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "3", "--seed", "5",
-                          "--frames", "30", "--width", "160", "--height", "120", "--mix",
-                          "clean=1"})
-                  .exit_code,
-              0);
+    testing::SynthPool(synth, 3, 5, 30, 160, 120, "clean=1");
     WriteFile(*pool_ / "run.toml", BundleConfig());
     const auto base = *pool_ / "base" / "d.db";
     fs::create_directories(base.parent_path());
@@ -76,11 +72,7 @@ class CliArtifacts : public ::testing::Test {
     delete pool_;
     pool_ = nullptr;
   }
-  // The stand-in model: copies the synthetic bundle of the clip's video.
-  static std::string BundleConfig() {
-    return "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename "
-           "{video} .mp4)/. {output}/\"\n";
-  }
+  static std::string BundleConfig() { return testing::SyntheticBundleConfig(); }
   // A copy of the finished database (with its artifacts) in `dir`.
   fs::path CopyBase(const fs::path& dir) {
     fs::create_directories(dir);

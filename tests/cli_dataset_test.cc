@@ -49,15 +49,8 @@ class CliDataset : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new TempDir();
     const fs::path synth = *dir_ / "s";
-    ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "6", "--seed", "3",
-                          "--frames", "40", "--width", "320", "--height", "240", "--mix",
-                          "clean=0.5,no_contact=0.25,static=0.25"})
-                  .exit_code,
-              0);
-    // The stand-in model: copies the synthetic bundle of the clip's video.
-    WriteFile(*dir_ / "run.toml",
-              "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename "
-              "{video} .mp4)/. {output}/\"\n");
+    testing::SynthPool(synth, 6, 3, 40, 320, 240, "clean=0.5,no_contact=0.25,static=0.25");
+    WriteFile(*dir_ / "run.toml", testing::SyntheticBundleConfig());
     ASSERT_EQ(RunDoasido({"init", "--db", Db(), "--pipeline", kPipeline}).exit_code, 0);
     const auto run = RunDoasido({"run", "--db", Db(), "--jobs", "2", "--config",
                                  (*dir_ / "run.toml").string(), synth.string()});

@@ -12,6 +12,7 @@
 #include "dataset/version_diff.h"
 #include "dataset/version_files.h"
 #include "dataset/version_store.h"
+#include "dataset/whole_output.h"
 #include "db/database.h"
 
 namespace doasido::cli {
@@ -35,6 +36,7 @@ struct Options {
   std::string out;
   bool json = false;
   bool no_videos = false;
+  bool no_verify = false;
 };
 
 void AddRootOptions(CLI::App& cmd, Options& o) {
@@ -101,6 +103,10 @@ void Create(const Options& o) {
 
 void List(const Options& o) {
   const auto versions = ListVersions(o.root);
+  for (const VersionRef& v : ListStrayVersions(o.root)) {
+    std::printf("%s/%s is not a version: %s has no %s\n", v.name.c_str(), v.version.c_str(),
+                v.dir.c_str(), kManifestFile);
+  }
   if (versions.empty()) {
     std::printf("no versions under %s (make one with `doasido dataset create`)\n", o.root.c_str());
     return;
@@ -108,7 +114,17 @@ void List(const Options& o) {
   std::printf("%-16s %-6s %-16s %8s %9s %-8s %s\n", "name", "vers", "created", "episodes",
               "selection", "parent", "revision");
   for (const VersionRef& v : versions) {
-    const Manifest m = ReadManifest(v.dir);
+    // One broken version is named; the healthy ones are still listed.
+    Manifest m;
+    try {
+      if (const std::string why = ManifestHashProblem(v.dir); !why.empty()) {
+        throw Error("corrupt_version", why, {.file = (v.dir / kManifestFile).string()});
+      }
+      m = ReadManifest(v.dir);
+    } catch (const Error& e) {
+      std::printf("%-16s %-6s BROKEN: %s\n", v.name.c_str(), v.version.c_str(), e.what());
+      continue;
+    }
     std::printf("%-16s %-6s %-16s %8zu %9s %-8s %s\n", v.name.c_str(), v.version.c_str(),
                 Date(m.created_at).c_str(), m.episodes.size(), ToString(m.selection),
                 m.parent.empty() ? "-" : m.parent.c_str(), m.tool_revision.c_str());
@@ -117,6 +133,10 @@ void List(const Options& o) {
 
 void Show(const Options& o) {
   const fs::path dir = FindVersion(o.root, o.name, o.version);
+  if (const std::string why = ManifestHashProblem(dir); !why.empty()) {
+    throw Error("corrupt_version", why + " (doasido dataset verify names every difference)",
+                {.file = (dir / kManifestFile).string()});
+  }
   const Manifest m = ReadManifest(dir);
   if (o.json) {
     std::printf("%s\n", ToJson(m).dump(2).c_str());
@@ -171,21 +191,29 @@ void Diff(const Options& o) {
               n[EpisodeChange::Kind::kChanged]);
 }
 
+void RequireIntact(const fs::path& dir);
+
 void Verify(const Options& o) {
   const fs::path dir = FindVersion(o.root, o.name, o.version);
   const auto problems = VerifyVersion(dir);
-  const Manifest m = ReadManifest(dir);
   if (problems.empty()) {
+    const Manifest m = ReadManifest(dir);
     std::printf("%s/%s: all %zu files match the manifest\n", m.name.c_str(), m.version.c_str(),
                 m.files.size());
     return;
   }
+  RequireIntact(dir);
+}
+
+// The problems `dataset verify` finds, printed; throws Error("corrupt_version").
+void RequireIntact(const fs::path& dir) {
+  const auto problems = VerifyVersion(dir);
+  if (problems.empty()) return;
   for (const FileProblem& p : problems) {
     std::fprintf(stderr, "%s: %s\n", (dir / p.path).c_str(), p.what.c_str());
   }
   throw Error("corrupt_version",
-              std::to_string(problems.size()) + " of " + std::to_string(m.files.size()) +
-                  " files do not match the manifest",
+              std::to_string(problems.size()) + " files of the version do not match its manifest",
               {.file = (dir / problems.front().path).string()});
 }
 
@@ -203,13 +231,23 @@ void Export(const Options& o) {
                                     })
                                   : FolderHolds({"meta/info.json"}),
        .force = true});
-  ExportSummary s;
-  if (o.format == "robomimic") {
-    s = ExportRobomimic(dir, o.out);
-  } else if (o.format == "lerobot") {
-    s = ExportLeRobot(dir, o.out, {.videos = !o.no_videos});
+  // What is exported is what the manifest proves, or it is not exported.
+  if (o.no_verify) {
+    std::fprintf(stderr, "not verifying %s against its manifest (--no-verify)\n", dir.c_str());
   } else {
+    RequireIntact(dir);
+  }
+  ExportSummary s;
+  std::vector<fs::path> removed;
+  const bool lerobot = o.format == "lerobot";
+  if (!lerobot && o.format != "robomimic") {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
+  }
+  WriteWhole(o.out, lerobot, "meta/doasido_manifest.json", [&](const fs::path& temp) {
+    s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos}) : ExportRobomimic(dir, temp);
+  }, &removed);
+  for (const fs::path& p : removed) {
+    std::fprintf(stderr, "removed %s (left by a killed export)\n", p.c_str());
   }
   std::printf("wrote %s: %lld episodes, %lld frames, %.2f MB\n", o.out.c_str(),
               static_cast<long long>(s.episodes), static_cast<long long>(s.frames),
@@ -289,8 +327,12 @@ void AddDatasetCommand(CLI::App& app) {
                   "lerobot: a LeRobot v3.0 folder (Parquet and MP4); robomimic: one HDF5 file")
       ->required()
       ->check(CLI::IsMember({"lerobot", "robomimic"}));
-  exp->add_option("--out", o->out, "Output folder (lerobot, empty or new) or file (robomimic)")
+  exp->add_option("--out", o->out,
+                  "Output folder (lerobot) or file (robomimic); written beside it and renamed "
+                  "into place, replacing an earlier export only when complete")
       ->required();
+  exp->add_flag("--no-verify", o->no_verify,
+                "Export without first checking every file against the manifest (says so)");
   exp->add_flag("--no-videos", o->no_videos,
                 "lerobot: leave out the source video feature (no decoding or encoding)");
   exp->callback([o] { Export(*o); });

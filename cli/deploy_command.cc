@@ -99,11 +99,15 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
     files = deploy::FilesBeside(std::filesystem::absolute(a.trajectory));
   } else {
     Database db(a.db.db, Database::OpenMode::kExisting);
-    auto found = deploy::FindTrajectoryFiles(db, a.clip);
+    std::string why;
+    auto found = deploy::FindTrajectoryFiles(db, a.clip, &why);
     if (!found) {
-      throw Error("no_trajectory", "no trajectory.json from the retarget or retarget_kinematic stage",
-                  {.clip = std::to_string(a.clip)});
+      throw Error("no_trajectory", "no trajectory to plan: " + why,
+                  {.clip = std::to_string(a.clip), .file = db.path().string()});
     }
+    std::fprintf(stderr, "planning %s run %lld of clip %lld: %s\n", found->stage.c_str(),
+                 static_cast<long long>(found->run_id), static_cast<long long>(a.clip),
+                 found->trajectory.c_str());
     files = *found;
   }
   const retarget::HandTrajectory trajectory = retarget::ReadTrajectoryJson(files.trajectory);

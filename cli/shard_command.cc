@@ -110,7 +110,7 @@ void AddMerge(CLI::App& app) {
       "Example:\n  doasido merge --db work/doasido.db work/shards/shard-*/doasido.db");
   cmd->callback([o] {
     Database db(o->db.db, Database::OpenMode::kExisting);
-    int refused = 0;
+    int refused = 0, held_back = 0;
     for (const auto& path : o->shards) {
       try {
         const auto s = pipeline::MergeShard(db, path);
@@ -123,10 +123,18 @@ void AddMerge(CLI::App& app) {
           std::printf("%s: finished; its %lld clips are this database's again\n",
                       s.shard.c_str(), static_cast<long long>(s.handed_back));
         }
+        for (const std::string& why : s.held_back) {
+          std::fprintf(stderr, "%s: not merged: %s\n", s.shard.c_str(), why.c_str());
+          ++held_back;
+        }
       } catch (const Error& e) {
         std::fprintf(stderr, "refused: %s\n", e.what());
         ++refused;
       }
+    }
+    if (held_back > 0 && refused == 0) {
+      throw Error("merge", std::to_string(held_back) +
+                               " clips not merged: a file their rows record is missing (named above)");
     }
     if (refused > 0) {
       throw Error("merge", std::to_string(refused) + " of " + std::to_string(o->shards.size()) +

@@ -29,6 +29,7 @@ inline bool IsPermanentError(std::string_view code) {
        {std::string_view(kNotARegularFile), std::string_view(kUnsupportedVideo),
         std::string_view(kVideoUnreadable), std::string_view(kVideoTruncated),
         std::string_view(kVideoNotDownloaded), std::string_view("bad_config"),
+        std::string_view("bad_embodiment"),  // a hand description that does not load
         std::string_view("bad_span")}) {
     if (code == permanent) return true;
   }

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "ingest/file_sha256.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 
@@ -34,6 +35,16 @@ std::string Refusal(const Database::ReportRun& r, Selection selection) {
     return r.stage + ": not verified by a person";
   }
   return "";
+}
+
+// The SHA-256 of the trajectory file of the clip's recorded trajectory run,
+// or "" when there is none to read.
+std::string CurrentTrajectorySha(Database& db, ClipId clip, const std::string& stage) {
+  const auto run = db.RecordedOutput(clip, stage, true);
+  if (!run) return "";
+  const auto file = run->dir / kTrajectoryFile;
+  std::error_code ec;
+  return std::filesystem::exists(file, ec) ? ingest::FileSha256(file) : "";
 }
 
 std::string Text(const Json& metadata, const char* key) {
@@ -83,9 +94,22 @@ EpisodeSelection SelectEpisodes(Database& db, Selection selection) {
     for (const Database::ReportRun& r : runs[clip.id]) {
       e.stages.push_back(ProvenanceOf(r));
       const bool trajectory = r.stage == out.trajectory_stage;
-      const std::string why = trajectory             ? Refusal(r, selection)
-                              : r.verdict != "pass" ? Describe(r)
-                                                    : "";
+      std::string why = trajectory             ? Refusal(r, selection)
+                        : r.verdict != "pass" ? Describe(r)
+                                              : "";
+      if (trajectory && why.empty() && r.state == "done") {
+        // A person's acceptance counts for the trajectory they saw only.
+        const auto it = accepted.find(clip.id);
+        const std::string sha = it == accepted.end() || it->second.artifact_sha256.empty()
+                                    ? ""
+                                    : CurrentTrajectorySha(db, clip.id, r.stage);
+        if (it != accepted.end() && (sha.empty() || sha != it->second.artifact_sha256)) {
+          if (selection == Selection::kVerified) {
+            why = r.stage + ": the trajectory changed since " + it->second.reviewer + " verified it";
+          }
+          accepted.erase(it);  // verified a trajectory this one replaced
+        }
+      }
       if (!why.empty()) {
         stop = Exclusion{clip.id, clip.external_id, ProvenanceOf(r), why};
         break;

@@ -26,6 +26,9 @@ namespace doasido::dataset {
 inline constexpr const char* kManifestFormat = "doasido-dataset";
 inline constexpr int kManifestFormatVersion = 1;
 inline constexpr const char* kManifestFile = "manifest.json";
+// Beside the manifest: its own SHA-256 ("<hex>  manifest.json", as sha256sum
+// writes it), so an edited manifest is caught by `dataset verify`.
+inline constexpr const char* kManifestHashFile = "manifest.sha256";
 inline constexpr const char* kEpisodesFolder = "episodes";
 inline constexpr const char* kPlaybookFolder = "playbook";
 // Every episode folder holds its robot trajectory under this name.

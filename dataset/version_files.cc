@@ -20,7 +20,7 @@ std::map<std::string, std::int64_t> ListFiles(const fs::path& dir) {
        it.increment(ec)) {
     if (!it->is_regular_file()) continue;
     const std::string rel = fs::relative(it->path(), dir).generic_string();
-    if (rel == kManifestFile) continue;
+    if (rel == kManifestFile || rel == kManifestHashFile) continue;
     out[rel] = static_cast<std::int64_t>(it->file_size());
   }
   if (ec) throw Error("io", "cannot list the version: " + ec.message(), {.file = dir.string()});
@@ -43,12 +43,35 @@ void WriteManifest(const Manifest& m, const fs::path& dir) {
   out << ToJson(m).dump(1) << "\n";
   out.close();
   if (!out) throw Error("io", "cannot write the manifest", {.file = path.string()});
+  const fs::path hash = dir / kManifestHashFile;
+  std::ofstream h(hash, std::ios::binary | std::ios::trunc);
+  h << ingest::FileSha256(path) << "  " << kManifestFile << "\n";
+  h.close();
+  if (!h) throw Error("io", "cannot write the manifest's hash", {.file = hash.string()});
+}
+
+std::string ManifestHashProblem(const fs::path& version_dir) {
+  std::ifstream in(version_dir / kManifestHashFile);
+  std::string recorded;
+  if (!(in >> recorded)) {
+    return std::string(kManifestHashFile) + " is missing: nothing proves the manifest unedited";
+  }
+  std::error_code ec;
+  if (!fs::exists(version_dir / kManifestFile, ec)) return std::string(kManifestFile) + " is missing";
+  if (ingest::FileSha256(version_dir / kManifestFile) != recorded) {
+    return std::string(kManifestFile) + "'s SHA-256 differs from " + kManifestHashFile +
+           ": the manifest was edited";
+  }
+  return "";
 }
 
 std::vector<FileProblem> VerifyVersion(const fs::path& version_dir) {
+  std::vector<FileProblem> problems;
+  if (const std::string why = ManifestHashProblem(version_dir); !why.empty()) {
+    problems.push_back({kManifestFile, why});
+  }
   const Manifest m = ReadManifest(version_dir);
   std::map<std::string, std::int64_t> present = ListFiles(version_dir);
-  std::vector<FileProblem> problems;
   for (const FileEntry& f : m.files) {
     const auto it = present.find(f.path);
     if (it == present.end()) {

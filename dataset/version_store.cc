@@ -64,12 +64,31 @@ void CopyTree(const fs::path& from, const fs::path& to, const std::string& clip)
 
 // Copies one episode's files into `episode_dir` and fills in what the
 // trajectory says (frames, fps, embodiment).
+// Why an episode cannot be written (its recorded trajectory run's file is
+// missing), naming the run and the file; empty when it can.
+std::string MissingTrajectory(Database& db, const Episode& e) {
+  std::string why;
+  const auto run = db.RecordedOutput(e.clip_id, e.trajectory_stage, true, &why);
+  if (!run) return why;
+  std::error_code ec;
+  if (!fs::exists(run->dir / kTrajectoryFile, ec)) {
+    return "missing_trajectory: " + e.trajectory_stage + " run " + std::to_string(run->run_id) +
+           " has no " + (run->dir / kTrajectoryFile).string();
+  }
+  return "";
+}
+
+// Copies one episode's files into `episode_dir` and fills in what the
+// trajectory says (frames, fps, embodiment). The files are those of the
+// runs the database records (Database::RecordedOutput); MissingTrajectory
+// was checked first.
 void WriteEpisode(Database& db, Episode& e, const fs::path& episode_dir) {
   const std::string clip = e.external_id.empty() ? std::to_string(e.clip_id) : e.external_id;
   const fs::path trajectory_dir = db.ArtifactDir(e.clip_id, e.trajectory_stage);
   CopyTree(trajectory_dir, episode_dir / e.trajectory_stage, clip);
-  CopyTree(db.ArtifactDir(e.clip_id, recon::kReconStageName), episode_dir / recon::kReconStageName,
-           clip);
+  if (const auto recon = db.RecordedOutput(e.clip_id, recon::kReconStageName, true)) {
+    CopyTree(recon->dir, episode_dir / recon::kReconStageName, clip);
+  }
   const fs::path trajectory = episode_dir / e.trajectory_stage / kTrajectoryFile;
   std::error_code ec;
   if (!fs::exists(trajectory, ec)) {
@@ -104,7 +123,10 @@ std::string TempSuffix() {
 
 }  // namespace
 
-std::vector<VersionRef> ListVersions(const fs::path& root) {
+namespace {
+
+// Folders named vK under `root`, with (`with_manifest`) or without one.
+std::vector<VersionRef> VersionFolders(const fs::path& root, bool with_manifest) {
   std::vector<VersionRef> out;
   std::error_code ec;
   for (const auto& name_dir : fs::directory_iterator(root, ec)) {
@@ -113,7 +135,10 @@ std::vector<VersionRef> ListVersions(const fs::path& root) {
     for (const auto& v : fs::directory_iterator(name_dir.path(), ec)) {
       std::smatch m;
       const std::string leaf = v.path().filename().string();
-      if (!std::regex_match(leaf, m, kVersionName) || !fs::exists(v.path() / kManifestFile)) continue;
+      if (!std::regex_match(leaf, m, kVersionName) ||
+          fs::exists(v.path() / kManifestFile) != with_manifest) {
+        continue;
+      }
       out.push_back({name, leaf, std::stoi(m[1]), v.path()});
     }
   }
@@ -121,6 +146,14 @@ std::vector<VersionRef> ListVersions(const fs::path& root) {
     return a.name != b.name ? a.name < b.name : a.number < b.number;
   });
   return out;
+}
+
+}  // namespace
+
+std::vector<VersionRef> ListVersions(const fs::path& root) { return VersionFolders(root, true); }
+
+std::vector<VersionRef> ListStrayVersions(const fs::path& root) {
+  return VersionFolders(root, false);
 }
 
 fs::path FindVersion(const fs::path& root, const std::string& name, const std::string& version) {
@@ -177,6 +210,13 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
     number = v.number + 1;
     m.parent = v.version;
   }
+  // A vK folder without a manifest is not a version; the next one numbers
+  // past it instead of colliding with it on every run.
+  for (const VersionRef& v : ListStrayVersions(root)) {
+    if (v.name != options.name) continue;
+    std::fprintf(stderr, "%s is not a version (no %s); left alone\n", v.dir.c_str(), kManifestFile);
+    number = std::max(number, v.number + 1);
+  }
   m.version = "v" + std::to_string(number);
   m.created_at = static_cast<double>(std::time(nullptr));
   m.tool_version = ToolVersion();
@@ -196,10 +236,27 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
   fs::create_directories(temp / kEpisodesFolder, ec);
   if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
   try {
+    // An episode whose file is missing is left out, named; the others are
+    // written.
+    std::vector<Episode> written;
     for (size_t i = 0; i < m.episodes.size(); ++i) {
-      m.episodes[i].index = static_cast<std::int64_t>(i);
-      WriteEpisode(db, m.episodes[i], temp / kEpisodesFolder / m.episodes[i].id);
+      Episode& e = m.episodes[i];
+      if (const std::string missing = MissingTrajectory(db, e); !missing.empty()) {
+        std::fprintf(stderr, "left out clip %lld: %s\n", static_cast<long long>(e.clip_id),
+                     missing.c_str());
+        m.excluded.push_back({e.clip_id, e.external_id,
+                              e.stages.empty() ? StageProvenance{} : e.stages.back(), missing});
+        continue;
+      }
+      e.index = static_cast<std::int64_t>(written.size());
+      WriteEpisode(db, e, temp / kEpisodesFolder / e.id);
+      written.push_back(std::move(e));
       if (progress) progress(static_cast<int>(i + 1), static_cast<int>(m.episodes.size()));
+    }
+    m.episodes = std::move(written);
+    if (m.episodes.empty() && !options.allow_empty) {
+      throw Error("empty_version", "every selected episode's trajectory file is missing",
+                  {.field = "--select"});
     }
     reports::ReportOptions report;
     report.thumbnails = options.thumbnails;

@@ -38,6 +38,10 @@ struct VersionRef {
   std::filesystem::path dir;
 };
 std::vector<VersionRef> ListVersions(const std::filesystem::path& root);
+// Folders named vK that hold no manifest (copied by hand, or left by other
+// tools): not versions, never written to; `create` numbers past them and
+// names them, `list` names them.
+std::vector<VersionRef> ListStrayVersions(const std::filesystem::path& root);
 
 // Resolves "v3", "name/v3" or a folder path to a version folder holding a
 // manifest; `name` is used for a bare "vK". Throws Error("no_version")

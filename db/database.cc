@@ -89,6 +89,7 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s, Ope
     db::Exec(db_, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;"
                   " PRAGMA mmap_size=268435456; PRAGMA cache_size=-65536;");
     Migrate();
+    OpenArtifactRoot();
   } catch (const Error& e) {
     // Statements still prepared keep sqlite3_close from closing (found by
     // LeakSanitizer: every refused foreign database leaked its connection).
@@ -161,10 +162,6 @@ void Database::Migrate() {
 }
 
 // ---- Paths ------------------------------------------------------------------
-
-std::filesystem::path Database::ArtifactDir(ClipId clip, const std::string& stage) const {
-  return root_ / "artifacts" / std::to_string(clip) / stage;
-}
 
 std::filesystem::path Database::Resolve(const std::string& stored) const {
   if (IsUrl(stored)) return stored;

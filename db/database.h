@@ -114,8 +114,51 @@ class Database {
   int SchemaVersion();
   static int LatestSchemaVersion();
 
-  // <root>/artifacts/<clip>/<stage>/ (not created).
+  // ---- Artifacts (db/database_artifacts.cc) ---------------------------------
+  // The folder of this database's artifacts, recorded in the database (meta
+  // key kArtifactRootKey, relative to the database folder) the first time it
+  // is opened: <database folder>/artifacts, unless that folder already
+  // belongs to another database, then <database folder>/<file stem>.artifacts.
+  // The folder holds kArtifactOwnerFile with the database's uuid; opening a
+  // database whose recorded folder belongs to another one throws
+  // Error("foreign_artifacts") naming both. Stored artifact paths are
+  // relative to it.
+  static constexpr const char* kArtifactRootKey = "artifact_root";
+  static constexpr const char* kArtifactOwnerFile = ".doasido-database";
+  const std::filesystem::path& ArtifactRoot() const { return artifact_root_; }
+  // Writes the owner file (creating the folder); before the first artifact.
+  void ClaimArtifactRoot();
+  // <artifact root>/<clip>/<stage>/, the published output of the clip's
+  // recorded run of `stage` (not created). The ONE place that computes it.
   std::filesystem::path ArtifactDir(ClipId clip, const std::string& stage) const;
+  // The fresh folder a claimed run writes into, a hidden sibling of its
+  // ArtifactDir (<root>/<clip>/.<stage>.run-<run id>-<attempt>), published
+  // by renaming when the run completes (PublishArtifacts).
+  std::filesystem::path ArtifactWorkDir(const Claim& claim) const;
+  // The output of the run the database records for (clip, stage), for every
+  // reader of artifacts (deploy plan, dataset create, /verify, the next
+  // stage): the run must be done with verdict pass (a flag a person accepted
+  // is a pass), or flag too when `allow_flag`, and its folder must exist.
+  // Otherwise nullopt, with *why (when given) naming the run and what it is.
+  struct RunOutput {
+    std::int64_t run_id = 0;
+    ClipId clip_id = 0;
+    std::string stage;
+    std::filesystem::path dir;  // ArtifactDir(clip, stage)
+    std::string verdict, reason, param_hash;
+  };
+  // Renames the claim's work folder into place as its ArtifactDir; the
+  // folder it replaces is moved aside (removed by RemoveArtifactLeftovers).
+  // An empty work folder is removed and nothing is published (the previous
+  // folder is then removed too: it is not this run's). Call before
+  // Complete: a process killed in between leaves the run `running`, whose
+  // folder no reader takes. Throws Error("io") naming the folder.
+  void PublishArtifacts(const Claim& claim);
+  // Removes what killed or replaced runs of (clip, stage) left: work
+  // folders and folders moved aside.
+  void RemoveArtifactLeftovers(ClipId clip, const std::string& stage);
+  std::optional<RunOutput> RecordedOutput(ClipId clip, const std::string& stage, bool allow_flag,
+                                          std::string* why = nullptr);
   // Absolute form of a stored path, and stored form of a path.
   std::filesystem::path Resolve(const std::string& stored) const;
   std::string Store(const std::string& path_or_url) const;
@@ -311,6 +354,9 @@ class Database {
     ClipId clip_id = 0;
     std::string stage, reviewer, decision, reason;  // decision: accept | reject
     double created_at = 0;
+    // What a verification was given for (schema v7): the SHA-256 of the
+    // trajectory file shown and the run's parameter hash; empty for reviews.
+    std::string artifact_sha256, param_hash;
   };
   struct VerdictRow {
     std::string verdict, reason, source;  // source: stage | rethreshold | human
@@ -456,6 +502,9 @@ class Database {
     std::int64_t changed_clips = 0;  // clips whose rows changed here
     std::int64_t events = 0;         // new events folded in
     std::int64_t handed_back = 0;    // clips the parent owns again (shard finished)
+    // Clips left unmerged because a file their rows record is missing,
+    // each "clip N: <file>" (pipeline::MergeShard fills it in).
+    std::vector<std::string> held_back;
   };
   // The shard's meta key naming the database it was merged into.
   static constexpr const char* kMergedIntoKey = "merged_into";
@@ -473,7 +522,12 @@ class Database {
   // database or one this database does not list, Error("pipeline_mismatch"),
   // and Error("config_mismatch") when a run was done with parameters other
   // than the shard was made for; nothing is written then.
-  MergeStats MergeShard(const std::filesystem::path& shard);
+  // `hold_back`: clips of the shard whose rows stay as they are here.
+  // Throws Error("self_merge") at once when `shard` is this database.
+  MergeStats MergeShard(const std::filesystem::path& shard, const std::set<ClipId>& hold_back = {});
+  // The artifact rows of `clip` as stored: (stage, path relative to the
+  // artifact root).
+  std::vector<std::pair<std::string, std::string>> ListArtifacts(ClipId clip);
   // Every running run back to pending with its lease cleared (attempts
   // kept), logged as "release" events; returns how many. Only for a
   // database no live worker holds, e.g. a shard whose task was killed: its
@@ -499,8 +553,12 @@ class Database {
   // verdict (accept -> pass with reason "", reject -> reject with `reason`)
   // and a "review" event. Throws Error("not_verifiable") and writes nothing
   // unless the run is done with verdict pass or flag.
+  // The decision binds to the trajectory shown: `trajectory_sha256` (its
+  // file's SHA-256) and the run's parameter hash are recorded with it, and
+  // only a trajectory with that hash counts as verified by it.
   void RecordVerification(ClipId clip, const std::string& stage, const std::string& reviewer,
-                          bool accept, const std::string& reason);
+                          bool accept, const std::string& reason,
+                          const std::string& trajectory_sha256);
 
  private:
   db::Statement& Prepare(const std::string& sql);
@@ -529,8 +587,17 @@ class Database {
   void Release(ClipId clip);
   int StagePosition(const std::string& stage);
 
+  // Artifacts (db/database_artifacts.cc): picks and checks artifact_root_.
+  void OpenArtifactRoot();
+  // Drops the artifact rows and published folders of `clip`'s runs of
+  // `stages` (a run that is no longer the recorded result).
+  void DiscardArtifacts(ClipId clip, const std::vector<std::string>& stages);
+  // The stages after `stage` in the pipeline.
+  std::vector<std::string> StagesAfter(const std::string& stage);
+
   std::filesystem::path path_;
   std::filesystem::path root_;
+  std::filesystem::path artifact_root_;
   sqlite3* db_ = nullptr;
   double busy_timeout_s_;
   std::map<std::string, std::unique_ptr<db::Statement>> statements_;

@@ -195,6 +195,10 @@ ClipContext Database::LoadContext(ClipId clip, const std::string& stage) {
   while (q.Step()) ctx.measurements[q.Text(0)] = Json::parse(q.Text(1));
   q.Reset();
   ctx.artifact_dir = ArtifactDir(clip, stage);
+  for (const std::string& earlier : Pipeline()) {
+    if (earlier == stage) break;
+    if (auto out = RecordedOutput(clip, earlier, true)) ctx.inputs[earlier] = out->dir;
+  }
   return ctx;
 }
 

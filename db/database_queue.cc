@@ -136,14 +136,20 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
       .Bind(5, param_hash)
       .Bind(6, now)
       .Run();
-  const auto dir = ArtifactDir(claim.clip_id, claim.stage);
+  // Only this run's files are the stage's output now; paths relative to the
+  // artifact root (db/database_artifacts.cc).
+  Prepare("DELETE FROM artifacts WHERE clip_id = ? AND stage = ?")
+      .Bind(1, claim.clip_id)
+      .Bind(2, claim.stage)
+      .Run();
+  const auto dir = std::filesystem::path(std::to_string(claim.clip_id)) / claim.stage;
   for (const auto& [kind, rel] : result.artifacts) {
     Prepare("INSERT OR IGNORE INTO artifacts (clip_id, stage, kind, path, created_at)"
             " VALUES (?,?,?,?,?)")
         .Bind(1, claim.clip_id)
         .Bind(2, claim.stage)
         .Bind(3, kind)
-        .Bind(4, Store((dir / rel).string()))
+        .Bind(4, (dir / rel).lexically_normal().generic_string())
         .Bind(5, now)
         .Run();
   }
@@ -203,6 +209,7 @@ bool Database::Fail(const Claim& claim, const std::string& worker, const std::st
   // Runs after a failed one would wait for it forever.
   if (held && final) DropLaterStages(claim.clip_id, claim.stage);
   if (held) LogEvent(claim.clip_id, claim.stage, final ? "failed" : "retry", worker, stored);
+  if (held) DiscardArtifacts(claim.clip_id, {claim.stage});  // no earlier run's output stays
   tx.Commit();
   return held;
 }
@@ -255,6 +262,7 @@ void Database::Release(ClipId clip) {
 }
 
 void Database::DropLaterStages(ClipId clip, const std::string& stage) {
+  DiscardArtifacts(clip, StagesAfter(stage));
   Prepare("DELETE FROM stage_runs WHERE clip_id = ? AND position > ?")
       .Bind(1, clip)
       .Bind(2, StagePosition(stage))
@@ -282,7 +290,10 @@ std::int64_t Database::InvalidateOtherParams(const std::string& stage,
       .Run();
   const std::int64_t n = sqlite3_changes(db_);
   std::int64_t later = 0;
-  for (const ClipId clip : clips) later += RequeueDownstream(clip, stage);
+  for (const ClipId clip : clips) {
+    DiscardArtifacts(clip, {stage});  // its old output is no longer any run's recorded result
+    later += RequeueDownstream(clip, stage);
+  }
   if (downstream) *downstream = later;
   if (n > 0) {
     LogEvent(std::nullopt, stage, "params_changed", "",
@@ -303,7 +314,10 @@ std::int64_t Database::RequeueDownstream(ClipId clip, const std::string& stage) 
       .Bind(3, StagePosition(stage))
       .Bind(4, stage)
       .Run();
-  return sqlite3_changes(db_);
+  const std::int64_t n = sqlite3_changes(db_);
+  // Their old outputs came from the previous upstream result.
+  if (n > 0) DiscardArtifacts(clip, StagesAfter(stage));
+  return n;
 }
 
 Json Database::UpstreamInputs(ClipId clip, const std::string& stage) {
@@ -366,6 +380,16 @@ std::int64_t Database::Retry(const std::string& stage, std::optional<ClipId> cli
 std::int64_t Database::Reset(const std::string& stage, std::optional<ClipId> clip) {
   const int position = StagePosition(stage);
   Transaction tx(*this);
+  {
+    std::vector<std::string> stages = StagesAfter(stage);
+    stages.insert(stages.begin(), stage);
+    std::vector<ClipId> clips;
+    auto& find = Prepare("SELECT clip_id FROM stage_runs WHERE stage = ? AND (? IS NULL OR clip_id = ?)");
+    find.Bind(1, stage).Bind(2, clip).Bind(3, clip);
+    while (find.Step()) clips.push_back(find.Int(0));
+    find.Reset();
+    for (ClipId c : clips) DiscardArtifacts(c, stages);
+  }
   Prepare("DELETE FROM stage_runs WHERE position > ? AND clip_id IN (SELECT clip_id FROM"
           " stage_runs WHERE stage = ? AND (? IS NULL OR clip_id = ?))")
       .Bind(1, position)

@@ -72,11 +72,12 @@ void Database::RecordHumanDecision(ClipId clip, const std::string& stage,
 
 std::vector<Database::ReviewRow> Database::ListReviews() {
   auto& q = Prepare(
-      "SELECT id, clip_id, stage, reviewer, decision, IFNULL(reason, ''), created_at"
-      " FROM reviews ORDER BY id");
+      "SELECT id, clip_id, stage, reviewer, decision, IFNULL(reason, ''), created_at,"
+      " IFNULL(artifact_sha256, ''), IFNULL(param_hash, '') FROM reviews ORDER BY id");
   std::vector<ReviewRow> out;
   while (q.Step()) {
-    out.push_back({q.Int(0), q.Int(1), q.Text(2), q.Text(3), q.Text(4), q.Text(5), q.Real(6)});
+    out.push_back({q.Int(0), q.Int(1), q.Text(2), q.Text(3), q.Text(4), q.Text(5), q.Real(6),
+                   q.Text(7), q.Text(8)});
   }
   q.Reset();
   return out;

@@ -7,6 +7,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -269,15 +270,32 @@ void Database::SetShardJob(const std::string& name, const std::string& job, std:
       .Run();
 }
 
-Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
+Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
+                                          const std::set<ClipId>& hold_back) {
   const std::string where = std::filesystem::absolute(file).string();
   if (!std::filesystem::is_regular_file(file)) {
     throw Error("not_a_shard", "no such shard database", {.file = where});
   }
-  Attached attached(db_, file);
+  std::error_code ec;
+  if (std::filesystem::equivalent(file, path_, ec)) {
+    throw Error("self_merge", "this is the database being merged into, not a shard of it",
+                {.file = where});
+  }
+  // Errors about the file are the shard's, not this database's.
+  std::optional<Attached> attached;
+  try {
+    attached.emplace(db_, file);
+    if (Count(db_, "SELECT COUNT(*) FROM shard.sqlite_master WHERE name = 'meta'") == 0) {
+      throw Error("not_a_shard", "");
+    }
+  } catch (const Error& e) {
+    throw Error("not_a_shard",
+                "not a doasido shard database (made by doasido shard)" +
+                    (e.message().empty() ? std::string() : ": " + e.message()),
+                {.file = where});
+  }
   Transaction tx(*this);
-  if (Count(db_, "SELECT COUNT(*) FROM shard.sqlite_master WHERE name = 'meta'") == 0 ||
-      ShardMeta(db_, "shard_name").empty()) {
+  if (ShardMeta(db_, "shard_name").empty()) {
     throw Error("not_a_shard", "not a doasido shard database (made by doasido shard)",
                 {.file = where});
   }
@@ -327,6 +345,9 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file) {
   Prepare("INSERT INTO temp.selected SELECT clip_id FROM shard_clips WHERE shard_id = ?")
       .Bind(1, shard_id)
       .Run();
+  for (ClipId clip : hold_back) {
+    Prepare("DELETE FROM temp.selected WHERE clip_id = ?").Bind(1, clip).Run();
+  }
   {
     db::Statement runs(db_, "SELECT stage, param_hash FROM shard.stage_runs"
                             " WHERE state = 'done' AND clip_id IN temp.selected");

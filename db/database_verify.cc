@@ -27,7 +27,8 @@ std::vector<Database::TrajectoryRun> Database::ListTrajectoriesToVerify(
 
 void Database::RecordVerification(ClipId clip, const std::string& stage,
                                   const std::string& reviewer, bool accept,
-                                  const std::string& reason) {
+                                  const std::string& reason,
+                                  const std::string& trajectory_sha256) {
   Transaction tx(*this);
   auto& check = Prepare(
       "SELECT COUNT(*) FROM stage_runs WHERE clip_id = ? AND stage = ? AND state = 'done'"
@@ -41,6 +42,15 @@ void Database::RecordVerification(ClipId clip, const std::string& stage,
   }
   RecordHumanDecision(clip, stage, reviewer, accept, reason, accept ? "" : reason,
                       std::string(accept ? "verify accept " : "verify reject ") + reason);
+  Prepare("UPDATE reviews SET artifact_sha256 = ?, param_hash = (SELECT param_hash FROM stage_runs"
+          " WHERE clip_id = ? AND stage = ?) WHERE id = (SELECT MAX(id) FROM reviews"
+          " WHERE clip_id = ? AND stage = ?)")
+      .Bind(1, trajectory_sha256)
+      .Bind(2, clip)
+      .Bind(3, stage)
+      .Bind(4, clip)
+      .Bind(5, stage)
+      .Run();
   tx.Commit();
 }
 

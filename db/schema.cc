@@ -219,6 +219,17 @@ ALTER TABLE stage_runs ADD COLUMN inputs TEXT;
 ALTER TABLE stage_runs ADD COLUMN requeued_by TEXT;
 UPDATE stage_runs SET verdict = NULL, reason = NULL WHERE state != 'done';
 )sql",
+      // 8: artifact paths are relative to the database's artifact root
+      // (meta 'artifact_root', "artifacts" for databases made before it);
+      // a person's decision records the SHA-256 of the trajectory file and
+      // the parameter hash it was shown, so it binds to that trajectory only.
+      R"sql(
+UPDATE artifacts SET path = substr(path, 11) WHERE path LIKE 'artifacts/%';
+INSERT OR IGNORE INTO meta (key, value)
+  SELECT 'artifact_root', 'artifacts' WHERE EXISTS (SELECT 1 FROM artifacts);
+ALTER TABLE reviews ADD COLUMN artifact_sha256 TEXT;
+ALTER TABLE reviews ADD COLUMN param_hash TEXT;
+)sql",
   };
   return kMigrations;
 }

@@ -26,8 +26,14 @@ struct ClipContext {
   std::vector<Detection> detections;
   // Measurements of the stages this clip already passed, by stage name.
   std::map<std::string, Json> measurements;
-  // <database folder>/artifacts/<clip id>/<stage>/, created before Run.
+  // The folder the run writes into, created before Run: a fresh hidden
+  // sibling of the stage's published folder <artifact root>/<clip>/<stage>/,
+  // renamed into place when the run succeeds (Database::PublishArtifacts).
   std::filesystem::path artifact_dir;
+  // Published folders of the clip's earlier stages whose recorded runs are
+  // done with verdict pass or flag (Database::RecordedOutput), by stage;
+  // read them through recon::SiblingArtifactDir.
+  std::map<std::string, std::filesystem::path> inputs;
 };
 
 struct StageResult {

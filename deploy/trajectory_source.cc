@@ -1,5 +1,7 @@
 #include "deploy/trajectory_source.h"
 
+#include <algorithm>
+
 #include "core/error.h"
 #include "core/file_text.h"
 #include "retarget/kinematic_stage.h"
@@ -14,19 +16,31 @@ TrajectoryFiles FilesBeside(const std::filesystem::path& trajectory_json) {
   return f;
 }
 
-std::optional<TrajectoryFiles> FindTrajectoryFiles(const Database& db, ClipId clip) {
-  const std::filesystem::path kinematic = db.ArtifactDir(clip, retarget::kKinematicStageName);
-  for (const char* stage : {retarget::kRetargetStageName, retarget::kKinematicStageName}) {
-    const std::filesystem::path dir = db.ArtifactDir(clip, stage);
-    if (!std::filesystem::exists(dir / "trajectory.json")) continue;
-    TrajectoryFiles f = FilesBeside(dir / "trajectory.json");
-    f.stage = stage;
-    if (f.scene_dir.empty() && std::filesystem::exists(kinematic / "scene" / "scene.xml")) {
-      f.scene_dir = kinematic / "scene";
-    }
-    return f;
+std::optional<TrajectoryFiles> FindTrajectoryFiles(Database& db, ClipId clip, std::string* why,
+                                                   bool allow_flag) {
+  const auto pipeline = db.Pipeline();
+  const bool dynamic = std::find(pipeline.begin(), pipeline.end(), retarget::kRetargetStageName) !=
+                       pipeline.end();
+  const std::string stage = dynamic ? retarget::kRetargetStageName : retarget::kKinematicStageName;
+  const auto run = db.RecordedOutput(clip, stage, allow_flag, why);
+  if (!run) return std::nullopt;
+  if (!std::filesystem::exists(run->dir / "trajectory.json")) {
+    if (why) *why = "clip " + std::to_string(clip) + "'s " + stage + " run " +
+                    std::to_string(run->run_id) + " wrote no trajectory.json in " + run->dir.string();
+    return std::nullopt;
   }
-  return std::nullopt;
+  TrajectoryFiles f = FilesBeside(run->dir / "trajectory.json");
+  f.stage = stage;
+  f.run_id = run->run_id;
+  f.param_hash = run->param_hash;
+  if (f.scene_dir.empty() && dynamic) {
+    // The dynamic stage retargets in the kinematic stage's scene.
+    const auto kinematic = db.RecordedOutput(clip, retarget::kKinematicStageName, true);
+    if (kinematic && std::filesystem::exists(kinematic->dir / "scene" / "scene.xml")) {
+      f.scene_dir = kinematic->dir / "scene";
+    }
+  }
+  return f;
 }
 
 std::string ReadSceneXml(const std::filesystem::path& scene_dir) {

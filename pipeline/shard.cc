@@ -1,8 +1,16 @@
 #include "pipeline/shard.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <set>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "core/error.h"
 
@@ -29,45 +37,101 @@ std::vector<std::vector<const VideoGroup*>> Balance(std::vector<VideoGroup>& gro
   return out;
 }
 
-// How a clip's artifact folder travels. A shard gets copies (it writes its
-// own results beside them); results come home as hard links, which cost no
-// space or time, and as copies where the two roots are on different file
-// systems (or the file system has no links). A file already linked to its
-// source is left alone, so merging twice changes nothing.
-enum class Transfer { kCopy, kLink };
+namespace fs = std::filesystem;
 
-void PlaceFile(const std::filesystem::path& from, const std::filesystem::path& to,
-               Transfer how) {
-  namespace fs = std::filesystem;
+// Regular files under `dir`, relative path -> size.
+std::map<std::string, std::uintmax_t> FilesUnder(const fs::path& dir) {
+  std::map<std::string, std::uintmax_t> out;
   std::error_code ec;
-  if (how == Transfer::kLink) {
-    if (fs::exists(to, ec) && fs::equivalent(from, to, ec)) return;
-    fs::remove(to, ec);
-    fs::create_hard_link(from, to, ec);
-    if (!ec) return;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::end(it);
+       it.increment(ec)) {
+    if (it->is_regular_file()) out[fs::relative(it->path(), dir).generic_string()] = it->file_size();
   }
-  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
-  if (ec) throw Error("io", "cannot place artifact: " + ec.message(), {.file = from.string()});
+  return out;
 }
 
-void TransferArtifacts(const std::filesystem::path& from_root, const std::filesystem::path& to_root,
-                       ClipId clip, Transfer how) {
-  namespace fs = std::filesystem;
-  const auto from = from_root / "artifacts" / std::to_string(clip);
-  if (!fs::is_directory(from)) return;
-  const auto to = to_root / "artifacts" / std::to_string(clip);
+bool SameBytes(const fs::path& a, const fs::path& b) {
+  std::ifstream x(a, std::ios::binary), y(b, std::ios::binary);
+  return std::equal(std::istreambuf_iterator<char>(x), std::istreambuf_iterator<char>(),
+                    std::istreambuf_iterator<char>(y), std::istreambuf_iterator<char>());
+}
+
+// Whether two folders hold the same files with the same bytes.
+bool SameTree(const fs::path& a, const fs::path& b) {
+  const auto files = FilesUnder(a);
+  if (files != FilesUnder(b)) return false;
+  for (const auto& [rel, size] : files) {
+    if (!SameBytes(a / rel, b / rel)) return false;
+  }
+  return true;
+}
+
+// Copies one stage folder into place: into a hidden staging sibling first,
+// then swapped in (renameat2 RENAME_EXCHANGE), so the folder is the old one
+// or the complete new one. Copies, never links: the two databases never
+// share a file, so a re-run of either cannot change the other's.
+void PlaceFolder(const fs::path& from, const fs::path& to) {
   std::error_code ec;
-  fs::create_directories(to, ec);
-  for (auto it = fs::recursive_directory_iterator(from, ec); !ec && it != fs::end(it);
-       it.increment(ec)) {
-    const auto target = to / fs::relative(it->path(), from);
-    if (it->is_directory()) {
-      fs::create_directories(target, ec);
-    } else if (it->is_regular_file()) {
-      PlaceFile(it->path(), target, how);
+  if (fs::is_directory(to, ec) && SameTree(from, to)) return;
+  const fs::path staging = to.parent_path() / ("." + to.filename().string() + ".merge-" +
+                                               std::to_string(getpid()));
+  fs::remove_all(staging, ec);
+  fs::create_directories(to.parent_path(), ec);
+  fs::copy(from, staging, fs::copy_options::recursive, ec);
+  if (ec) {
+    fs::remove_all(staging, ec);
+    throw Error("io", "cannot copy artifacts: " + ec.message(), {.file = from.string()});
+  }
+  const bool replace = fs::exists(to, ec);
+  const int rc = replace ? renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, to.c_str(), RENAME_EXCHANGE)
+                         : std::rename(staging.c_str(), to.c_str());
+  if (rc != 0) {
+    const int err = errno;
+    fs::remove_all(staging, ec);
+    throw Error("io", std::string("cannot place artifacts: ") + std::strerror(err), {.file = to.string()});
+  }
+  fs::remove_all(staging, ec);  // the replaced folder, after an exchange
+}
+
+// Copies the stage folders of `clip` from one artifact root to another.
+// Hidden folders (runs still writing, staging) are not results and stay.
+// `mirror`: a stage folder the source lacks is removed at the destination
+// too (the source's rows, which replace the destination's, record none).
+void CopyClipArtifacts(const fs::path& from_root, const fs::path& to_root, ClipId clip,
+                       bool mirror) {
+  const fs::path from = from_root / std::to_string(clip);
+  const fs::path to = to_root / std::to_string(clip);
+  std::error_code ec;
+  std::set<std::string> stages;
+  for (const auto& entry : fs::directory_iterator(from, ec)) {
+    const std::string leaf = entry.path().filename().string();
+    if (leaf.empty() || leaf[0] == '.' || !entry.is_directory()) continue;
+    stages.insert(leaf);
+    PlaceFolder(entry.path(), to / leaf);
+  }
+  if (!mirror) return;
+  for (const auto& entry : fs::directory_iterator(to, ec)) {
+    const std::string leaf = entry.path().filename().string();
+    if (leaf.empty() || leaf[0] == '.' || !entry.is_directory() || stages.count(leaf)) continue;
+    fs::remove_all(entry.path(), ec);
+  }
+}
+
+// Clips of the shard with a recorded artifact file that is missing, each
+// named with the file.
+std::map<ClipId, std::string> MissingArtifacts(Database& shard) {
+  std::map<ClipId, std::string> out;
+  std::error_code ec;
+  for (const ClipRecord& clip : shard.ListClips()) {
+    for (const auto& [stage, rel] : shard.ListArtifacts(clip.id)) {
+      const fs::path file = shard.ArtifactRoot() / rel;
+      if (fs::exists(file, ec)) continue;
+      out[clip.id] = "clip " + std::to_string(clip.id) + ": " + stage + " file " + file.string() +
+                     " is missing";
+      break;
     }
   }
-  if (ec) throw Error("io", "cannot read artifacts: " + ec.message(), {.file = from.string()});
+  return out;
 }
 
 }  // namespace
@@ -111,24 +175,44 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options) {
     info.frames = spec.frames;
     std::filesystem::create_directories(info.db.parent_path());
     db.ExportShard(spec);
-    for (ClipId c : spec.clips) {
-      TransferArtifacts(db.root(), info.db.parent_path(), c, Transfer::kCopy);
-    }
+    Database shard(info.db);
+    shard.ClaimArtifactRoot();
+    for (ClipId c : spec.clips) CopyClipArtifacts(db.ArtifactRoot(), shard.ArtifactRoot(), c, false);
     made.push_back(info);
   }
   return made;
 }
 
 Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard_db) {
-  // Rows first: a refused shard (foreign, other pipeline or config) must not
-  // leave its files in this database's artifact folder.
-  Database::MergeStats stats = db.MergeShard(shard_db);
+  std::error_code ec;
+  if (fs::equivalent(shard_db, db.path(), ec)) {
+    throw Error("self_merge", "this is the database being merged into, not a shard of it",
+                {.file = fs::absolute(shard_db).string()});
+  }
+  if (!fs::is_regular_file(shard_db, ec)) {
+    throw Error("not_a_shard", "no such shard database", {.file = fs::absolute(shard_db).string()});
+  }
+  // A clip whose recorded file is missing stays unmerged, named; the rows
+  // go first (a refused shard must not leave files here), then the files.
+  std::map<ClipId, std::string> missing;
+  fs::path shard_root;
+  {
+    Database shard(shard_db, Database::OpenMode::kExisting);
+    missing = MissingArtifacts(shard);
+    shard_root = shard.ArtifactRoot();
+  }
+  std::set<ClipId> hold_back;
+  for (const auto& [clip, why] : missing) hold_back.insert(clip);
+  Database::MergeStats stats = db.MergeShard(shard_db, hold_back);
+  for (const auto& [clip, why] : missing) stats.held_back.push_back(why);
+  db.ClaimArtifactRoot();
   // A shard merged before handed its clips back: their files are this
   // database's now, and may be newer than the shard's.
   if (stats.clips == 0) return stats;
-  Database shard(shard_db);
+  Database shard(shard_db, Database::OpenMode::kExisting);
   for (const ClipRecord& clip : shard.ListClips()) {
-    TransferArtifacts(shard.root(), db.root(), clip.id, Transfer::kLink);
+    if (hold_back.count(clip.id)) continue;
+    CopyClipArtifacts(shard_root, db.ArtifactRoot(), clip.id, true);
   }
   return stats;
 }

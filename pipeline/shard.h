@@ -45,10 +45,13 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options);
 
 // The rows of shard database `shard_db` merged into `db`
 // (Database::MergeShard; a refused shard changes nothing), then its clips'
-// artifact files placed in the parent's artifact root as hard links
-// (copies where the two are on different file systems; a file in the way is
-// replaced). Safe to repeat. ShardQueue copies the other way, so a shard
-// never writes into a file its parent holds.
+// artifact folders copied into the parent's artifact root, each swapped
+// into place whole (never hard links: a re-run of the shard cannot change
+// the parent's files). A clip with a recorded artifact file missing in the
+// shard is not merged and is named in MergeStats::held_back; the others
+// are. Throws Error("self_merge") when `shard_db` is `db`. Safe to repeat;
+// a repeat also finishes placing folders a killed merge left. ShardQueue
+// copies the other way.
 Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard_db);
 
 // The shard folders' database name.

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "core/bounded_text.h"
 #include "core/error_codes.h"
@@ -11,6 +13,50 @@
 
 namespace doasido::pipeline {
 namespace {
+
+// Stored measurements name folders relative to the artifact root, and the
+// published folder rather than the run's work folder, so they survive a
+// move of the database folder and a merge from a shard.
+void StoreRelativePaths(Json& value, const std::filesystem::path& work,
+                        const std::filesystem::path& published, const std::filesystem::path& root) {
+  if (value.is_object() || value.is_array()) {
+    for (Json& member : value) StoreRelativePaths(member, work, published, root);
+    return;
+  }
+  if (!value.is_string()) return;
+  std::filesystem::path p = value.get<std::string>();
+  if (!p.is_absolute()) return;
+  auto under = [](const std::filesystem::path& path, const std::filesystem::path& dir) {
+    const auto rel = path.lexically_relative(dir);
+    return !rel.empty() && *rel.begin() != "..";
+  };
+  if (under(p, work)) p = published / p.lexically_relative(work);
+  if (under(p, root)) value = p.lexically_relative(root).generic_string();
+}
+
+// MJCF files a run wrote name their meshes by absolute path (MuJoCo
+// compiles them from a temporary copy elsewhere), so a declared .xml file
+// that names the run's work folder is rewritten to name the folder it is
+// published as.
+void PointXmlAtPublished(const StageResult& result, const std::filesystem::path& work,
+                         const std::filesystem::path& published) {
+  const std::string from = work.string() + "/", to = published.string() + "/";
+  for (const auto& [kind, rel] : result.artifacts) {
+    if (std::filesystem::path(rel).extension() != ".xml") continue;
+    const auto file = work / rel;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) continue;
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    if (text.find(from) == std::string::npos) continue;
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+      text.replace(at, from.size(), to);
+    }
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw Error("io", "cannot rewrite", {.file = file.string()});
+  }
+}
 
 std::string ClipLabel(const ClipContext& context) {
   return context.clip.external_id.empty() ? std::to_string(context.clip.id)
@@ -43,11 +89,21 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
   bool permanent = false;  // a retry cannot fix it: fail now
   report.clip = std::to_string(claim.clip_id);
   const auto start = std::chrono::steady_clock::now();
+  // The run writes into a fresh folder, published only when it succeeded
+  // (Database::PublishArtifacts); what a killed run left is removed first.
+  const std::filesystem::path work = db.ArtifactWorkDir(claim);
   try {
     ClipContext context = db.LoadContext(claim.clip_id, claim.stage);
     report.clip = ClipLabel(context);
-    std::filesystem::create_directories(context.artifact_dir);
+    db.ClaimArtifactRoot();
+    db.RemoveArtifactLeftovers(claim.clip_id, claim.stage);
+    context.artifact_dir = work;
+    std::filesystem::create_directories(work);
     report.result = stage.Run(context);
+    PointXmlAtPublished(report.result, work, db.ArtifactDir(claim.clip_id, claim.stage));
+    db.PublishArtifacts(claim);
+    StoreRelativePaths(report.result.measurements, work,
+                       db.ArtifactDir(claim.clip_id, claim.stage), db.ArtifactRoot());
   } catch (const PermanentError& e) {
     report.error = e.what();
     permanent = true;
@@ -79,6 +135,9 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Database::Transaction tx(db);
   if (!report.error.empty()) {
+    std::error_code ec;
+    std::filesystem::remove_all(work, ec);
+    std::filesystem::remove(work.parent_path(), ec);  // only when empty
     spdlog::warn("{} on clip {} (attempt {}): {}", claim.stage, report.clip, claim.attempts,
                  report.error);
     db.Fail(claim, worker, report.error, permanent ? claim.attempts : max_attempts);

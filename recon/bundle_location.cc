@@ -22,6 +22,9 @@ std::filesystem::path BundleDir(const ClipContext& context) {
 }
 
 std::filesystem::path SiblingArtifactDir(const ClipContext& context, const std::string& stage) {
+  // The output of the run the database records (ClipContext::inputs); a
+  // context made by hand (tests, tools) has no inputs: the sibling folder.
+  if (const auto it = context.inputs.find(stage); it != context.inputs.end()) return it->second;
   return context.artifact_dir.parent_path() / stage;
 }
 

@@ -22,7 +22,9 @@ std::filesystem::path BundleDir(const ClipContext& context);
 // Whether the clip's list row names a bundle folder.
 bool ListNamesBundle(const ClipContext& context);
 
-// <artifacts>/<clip>/<stage>/ for another stage of the same clip.
+// The published folder of another stage of the same clip: the one of its
+// recorded run (ClipContext::inputs) when the context was loaded from the
+// database, else <artifacts>/<clip>/<stage>/ beside `context.artifact_dir`.
 std::filesystem::path SiblingArtifactDir(const ClipContext& context, const std::string& stage);
 
 // The clip's external id, else its numeric id: the name errors use.

@@ -3,6 +3,7 @@
 #include <numbers>
 
 #include "core/config_check.h"
+#include "retarget/embodiment.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::retarget {
@@ -46,8 +47,20 @@ void CheckConfig(const SceneConfig& c, const std::string& section) {
   CheckConfig(c.decomposition, section + ".decomposition");
 }
 
+void CheckHandName(const std::string& name, const std::string& robots_dir,
+                   const std::string& section, const std::string& field) {
+  if (name.empty()) return;
+  try {
+    FindEmbodiment(name, robots_dir.empty() ? DefaultRobotsDir() : robots_dir);
+  } catch (const Error& e) {
+    throw Error("bad_config", "no hand '" + name + "': " + e.message(),
+                {.file = e.site().file, .field = section + "." + field});
+  }
+}
+
 void CheckConfig(const KinematicStageConfig& c, const std::string& section) {
   RequireInRange(section, "flag_fingertip_error", c.flag_fingertip_error, 0, 1);  // m
+  CheckHandName(c.hand, c.robots_dir, section, "hand");
   CheckConfig(c.kinematic, section + ".kinematic");
   CheckConfig(c.scene, section + ".scene");
 }

@@ -45,6 +45,8 @@ HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, co
 
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
   if (!c.preset.empty()) SamplerPreset(c.preset);  // throws on an unknown name
+  CheckHandName(c.hand, c.robots_dir, section, "hand");
+  CheckHandName(c.left_hand, c.robots_dir, section, "left_hand");
   CheckConfig(c.sampler, section + ".sampler");
   CheckConfig(c.kinematic, section + ".kinematic");
   CheckConfig(c.scene, section + ".scene");

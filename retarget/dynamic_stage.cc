@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "retarget/bimanual_retarget.h"
+#include "recon/bundle_location.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::retarget {
@@ -17,7 +18,7 @@ DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : confi
 StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   const std::string clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                             : context.clip.external_id;
-  const std::filesystem::path dir = context.artifact_dir.parent_path() / recon::kReconStageName;
+  const std::filesystem::path dir = recon::SiblingArtifactDir(context, recon::kReconStageName);
   recon::Reconstruction r;
   TriMesh mesh;
   try {

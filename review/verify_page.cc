@@ -267,6 +267,7 @@ async function decide(decision) {
   if (!reviewer) { $('status').textContent = 'enter a reviewer name first'; $('reviewer').focus(); return; }
   try {
     await api('/api/verify/decision', { clip_id: q.clip_id, stage: q.stage, decision, reviewer,
+      trajectory_sha256: state.scene ? state.scene.trajectory_sha256 : '',
       reason_code: decision === 'reject' ? $('reason').value : '', reason_text: $('reason_text').value });
   } catch (e) { $('status').textContent = e.message; return; }
   state.decisions += 1; document.body.dataset.decisions = String(state.decisions);

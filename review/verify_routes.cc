@@ -1,5 +1,7 @@
 #include "review/verify_routes.h"
 
+#include "ingest/file_sha256.h"
+
 #include "review/request_body.h"
 
 #include <cstdlib>
@@ -108,17 +110,14 @@ Json Replay(const mjModel* m, const retarget::HandTrajectory& t) {
 }  // namespace
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
-  std::optional<deploy::TrajectoryFiles> files;
-  const std::filesystem::path dir = db.ArtifactDir(clip, stage);
-  if (std::filesystem::exists(dir / "trajectory.json")) {
-    files = deploy::FilesBeside(dir / "trajectory.json");
-    if (files->scene_dir.empty()) {
-      const auto found = deploy::FindTrajectoryFiles(db, clip);
-      if (found) files->scene_dir = found->scene_dir;
-    }
+  std::string why;
+  std::optional<deploy::TrajectoryFiles> files = deploy::FindTrajectoryFiles(db, clip, &why, true);
+  if (files && files->stage != stage) {
+    why = "stage " + stage + " is not the trajectory stage (" + files->stage + ")";
+    files.reset();
   }
   if (!files) {
-    throw Error("no_such_trajectory", "no trajectory.json for this clip and stage",
+    throw Error("no_such_trajectory", "no trajectory for this clip and stage: " + why,
                 {.clip = std::to_string(clip), .field = "stage"});
   }
   const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files->trajectory);
@@ -135,6 +134,8 @@ Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
                 .model;
   }
   Json out = Geometry(model.get());
+  out["trajectory_sha256"] = ingest::FileSha256(files->trajectory);
+  out["run_id"] = files->run_id;
   out["fps"] = t.fps;
   out["frames"] = t.qpos.size();
   out["embodiment"] = t.embodiment;
@@ -227,7 +228,26 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
       if (decision == "reject" && code.empty()) return bad("a rejection needs a reason");
       std::string reason = code;
       if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
-      d.RecordVerification(clip, stage, reviewer, decision == "accept", reason);
+      // The decision is for the trajectory file as it is now; a page that
+      // says which one it showed (trajectory_sha256) is refused when the
+      // trajectory changed since.
+      std::string why;
+      const auto files = deploy::FindTrajectoryFiles(d, clip, &why, true);
+      if (!files || files->stage != stage) {
+        res.status = 409;
+        res.set_content(Json({{"error", "no trajectory to verify: " + why}}).dump(),
+                        "application/json");
+        return;
+      }
+      const std::string sha = ingest::FileSha256(files->trajectory);
+      const std::string shown = body.value("trajectory_sha256", std::string());
+      if (!shown.empty() && shown != sha) {
+        res.status = 409;
+        res.set_content(Json({{"error", "the trajectory changed since it was shown; reload"}}).dump(),
+                        "application/json");
+        return;
+      }
+      d.RecordVerification(clip, stage, reviewer, decision == "accept", reason, sha);
       res.set_content(Json({{"ok", true},
                             {"remaining", d.ListTrajectoriesToVerify(stages).size()}}).dump(),
                       "application/json");

@@ -24,6 +24,7 @@
 #include "dataset/version_files.h"
 #include "dataset/version_store.h"
 #include "db/database.h"
+#include "ingest/file_sha256.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
 #include "tests/test_util.h"
@@ -48,15 +49,8 @@ class CliDataset : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new TempDir();
     const fs::path synth = *dir_ / "s";
-    ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "6", "--seed", "3",
-                          "--frames", "40", "--width", "320", "--height", "240", "--mix",
-                          "clean=0.5,no_contact=0.25,static=0.25"})
-                  .exit_code,
-              0);
-    // The stand-in model: copies the synthetic bundle of the clip's video.
-    WriteFile(*dir_ / "run.toml",
-              "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename "
-              "{video} .mp4)/. {output}/\"\n");
+    testing::SynthPool(synth, 6, 3, 40, 320, 240, "clean=0.5,no_contact=0.25,static=0.25");
+    WriteFile(*dir_ / "run.toml", testing::SyntheticBundleConfig());
     ASSERT_EQ(RunDoasido({"init", "--db", Db(), "--pipeline", kPipeline}).exit_code, 0);
     const auto run = RunDoasido({"run", "--db", Db(), "--jobs", "2", "--config",
                                  (*dir_ / "run.toml").string(), synth.string()});
@@ -120,7 +114,9 @@ TEST_F(CliDataset, VersionsDiffVerifyAndRobomimic) {
   }
   {
     Database d(db);
-    d.RecordVerification(verified, retarget::kKinematicStageName, "alice", true, "follows the mug");
+    d.RecordVerification(verified, retarget::kKinematicStageName, "alice", true, "follows the mug",
+                         ingest::FileSha256(d.ArtifactDir(verified, retarget::kKinematicStageName) /
+                                            "trajectory.json"));
   }
   const auto re = RunDoasido({"rethreshold", "--db", db, "--config", (work / "strict.toml").string()});
   ASSERT_EQ(re.exit_code, 0) << re.err;
@@ -249,10 +245,18 @@ print(json.dumps(out))
   EXPECT_EQ(info["total_frames"], total);
   EXPECT_EQ(info["robot_type"], v2.episodes[0].embodiment);
   EXPECT_EQ(info["features"]["observation.images.source"]["shape"], (Json{240, 320, 3}));
+  // Exporting again replaces the complete export whole; a folder that is
+  // not an export is never replaced.
   const auto again = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
                                  "--format", "lerobot", "--out", (work / "lerobot").string()});
-  EXPECT_EQ(again.exit_code, 1);
-  EXPECT_THAT(again.err, HasSubstr("output_exists"));
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(fs::exists(work / "lerobot/meta/info.json"));
+  WriteFile(work / "notes/todo.txt", "mine");
+  const auto foreign = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
+                                   "--format", "lerobot", "--out", (work / "notes").string()});
+  EXPECT_EQ(foreign.exit_code, 1);
+  EXPECT_THAT(foreign.err, HasSubstr("output_exists"));
+  EXPECT_EQ(testing::ReadFile(work / "notes/todo.txt"), "mine");
 
   // One byte of an episode changed: verify fails naming the file.
   const fs::path victim = work / "datasets/pour/v2/episodes" / v2.episodes[0].id / "trajectory.json";

@@ -104,7 +104,7 @@ TEST_F(ShardTest, ShardedRunEqualsOneMachineAndMergingTwiceChangesNothing) {
   EXPECT_EQ(ResultTables(parent), ResultTables(single));
   // Artifacts came back with their rows.
   for (const auto& path : QueryRows(parent, "SELECT path FROM artifacts")) {
-    EXPECT_TRUE(std::filesystem::exists(parent.parent_path() / path)) << path;
+    EXPECT_TRUE(std::filesystem::exists(parent.parent_path() / "artifacts" / path)) << path;
   }
   const auto once = AllRows(parent);
   ASSERT_EQ(Merge(parent, shards).exit_code, 0);

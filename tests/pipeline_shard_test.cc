@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 using testing::TempDir;
 using testing::WriteFile;
 
-TEST(ShardArtifacts, ShardsGetCopiesAndMergesLinkBack) {
+TEST(ShardArtifacts, ShardsAndMergesCopyNeverShareAFile) {
   TempDir dir;
   fs::create_directories(dir / "parent");
   Database parent(dir / "parent/doasido.db");
@@ -29,6 +29,7 @@ TEST(ShardArtifacts, ShardsGetCopiesAndMergesLinkBack) {
   clip.end_frame = 9;
   const ClipId id = parent.InsertClip(clip).id;
   const fs::path rel = fs::path("artifacts") / std::to_string(id) / "stage";
+  EXPECT_EQ(parent.ArtifactDir(id, "stage"), parent.root() / rel);
   WriteFile(parent.root() / rel / "before.txt", "the parent's");
 
   const auto shards = ShardQueue(parent, {.shards = 1, .out_dir = dir / "shards"});
@@ -40,16 +41,20 @@ TEST(ShardArtifacts, ShardsGetCopiesAndMergesLinkBack) {
 
   WriteFile(shard_root / rel / "nested/result.txt", "the shard's");
   MergeShard(parent, shards[0].db);
-  EXPECT_TRUE(fs::equivalent(shard_root / rel / "nested/result.txt",
-                             parent.root() / rel / "nested/result.txt"));
   EXPECT_EQ(TryReadFile(parent.root() / rel / "nested/result.txt"), "the shard's");
-  // The shard's copy of the parent's file replaces it, linked too.
-  EXPECT_TRUE(fs::equivalent(shard_root / rel / "before.txt", parent.root() / rel / "before.txt"));
-
-  MergeShard(parent, shards[0].db);  // again: the links are already there
-  EXPECT_TRUE(fs::equivalent(shard_root / rel / "nested/result.txt",
-                             parent.root() / rel / "nested/result.txt"));
-  EXPECT_EQ(fs::hard_link_count(parent.root() / rel / "nested/result.txt"), 2u);
+  EXPECT_FALSE(fs::equivalent(shard_root / rel / "nested/result.txt",
+                              parent.root() / rel / "nested/result.txt"));
+  EXPECT_EQ(fs::hard_link_count(parent.root() / rel / "nested/result.txt"), 1u);
+  // The shard writing its file again (a re-run) leaves the parent's alone
+  // until the next merge brings the new one over whole.
+  WriteFile(shard_root / rel / "nested/result.txt", "the shard's second run");
+  EXPECT_EQ(TryReadFile(parent.root() / rel / "nested/result.txt"), "the shard's");
+  MergeShard(parent, shards[0].db);
+  EXPECT_EQ(TryReadFile(parent.root() / rel / "nested/result.txt"), "the shard's second run");
+  EXPECT_EQ(fs::hard_link_count(parent.root() / rel / "nested/result.txt"), 1u);
+  for (const auto& entry : fs::directory_iterator(parent.root() / "artifacts" / std::to_string(id))) {
+    EXPECT_NE(entry.path().filename().string()[0], '.') << "leftover " << entry.path();
+  }
 }
 
 }  // namespace

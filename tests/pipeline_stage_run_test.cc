@@ -75,7 +75,12 @@ TEST(StageRun, ResultCompletesAndAnyExceptionIsAnAttempt) {
       EXPECT_NE(run.error.find("cannot judge bad"), std::string::npos);
     }
   }
-  EXPECT_TRUE(std::filesystem::is_directory(db.ArtifactDir(good, "picky")));
+  // The stage wrote no file: no empty folder is left for either clip.
+  EXPECT_FALSE(std::filesystem::exists(db.ArtifactDir(good, "picky")));
+  EXPECT_FALSE(std::filesystem::exists(db.ArtifactDir(good, "picky").parent_path()));
+  for (const auto& run : runs) {
+    EXPECT_FALSE(std::filesystem::exists(db.ArtifactRoot() / std::to_string(run.clip_id)));
+  }
 }
 
 TEST(StageRun, ALostLeaseDropsTheResultAndTheCommitHookStillRuns) {

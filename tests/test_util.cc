@@ -64,6 +64,20 @@ CommandResult RunDoasido(const std::vector<std::string>& args) {
   return result;
 }
 
+std::string SyntheticBundleConfig() {
+  return "[bundle]\ncommand = \"cp -r $(dirname $(dirname {video}))/bundles/$(basename "
+         "{video} .mp4)/. {output}/\"\n";
+}
+
+void SynthPool(const std::filesystem::path& out, int clips, int seed, int frames, int width,
+               int height, const std::string& mix) {
+  const CommandResult r =
+      RunDoasido({"synth", "--out", out.string(), "--clips", std::to_string(clips), "--seed",
+                  std::to_string(seed), "--frames", std::to_string(frames), "--width",
+                  std::to_string(width), "--height", std::to_string(height), "--mix", mix});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 void WriteFile(const std::filesystem::path& path, const std::string& text) {
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   std::ofstream out(path, std::ios::binary);

@@ -44,6 +44,14 @@ CommandResult RunDoasido(const std::vector<std::string>& args);
 // non-zero exit status is a test failure (EXPECT).
 std::string ShellOk(const std::string& command);
 
+// The synthetic pools' stand-in bundle model: a `[bundle]` config section
+// whose command copies the synthetic bundle of the clip's video.
+std::string SyntheticBundleConfig();
+// `doasido synth --out out --clips N --seed S --frames F --width W --height H
+// --mix mix`, asserting success (EXPECT).
+void SynthPool(const std::filesystem::path& out, int clips, int seed, int frames, int width,
+               int height, const std::string& mix);
+
 // Writes `text` to `path`, creating parent folders.
 void WriteFile(const std::filesystem::path& path, const std::string& text);
 std::string ReadFile(const std::filesystem::path& path);

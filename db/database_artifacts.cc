@@ -1,0 +1,202 @@
+// Database members of artifacts (database.h): the artifact root owned by
+// this database, the folder layout of a clip's stage outputs, publishing a
+// run's folder, and the one lookup every reader of artifacts goes through.
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "db/database.h"
+#include "db/statement.h"
+
+namespace doasido {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The uuid named in a root's owner file, or "" when it has none.
+std::string OwnerOf(const fs::path& root) {
+  std::ifstream in(root / Database::kArtifactOwnerFile);
+  if (!in) return "";
+  const Json j = Json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("uuid") || !j["uuid"].is_string()) {
+    return "?";  // unreadable: nobody's that we can prove, so not ours either
+  }
+  return j["uuid"].get<std::string>();
+}
+
+std::string OwnerPath(const fs::path& root) {
+  std::ifstream in(root / Database::kArtifactOwnerFile);
+  const Json j = Json::parse(in, nullptr, false);
+  return j.is_object() && j.contains("database") && j["database"].is_string()
+             ? j["database"].get<std::string>()
+             : std::string("another database");
+}
+
+// Writes the owner file naming database `uuid` at `database` (renamed into
+// place, so a reader never sees half of one).
+void WriteOwnerFile(const fs::path& root, const std::string& uuid, const fs::path& database) {
+  std::error_code ec;
+  const fs::path owner = root / Database::kArtifactOwnerFile;
+  const fs::path temp = owner.string() + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << Json{{"uuid", uuid}, {"database", database.string()}}.dump() << "\n";
+    if (!out) throw Error("io", "cannot write the artifact folder's owner file", {.file = temp.string()});
+  }
+  fs::rename(temp, owner, ec);
+  if (ec) throw Error("io", "cannot write: " + ec.message(), {.file = owner.string()});
+}
+
+const std::string kWorkTag = ".run-";
+const std::string kAsideTag = ".old-";
+
+}  // namespace
+
+void Database::OpenArtifactRoot() {
+  std::optional<std::string> stored = GetMeta(kArtifactRootKey);
+  const std::string uuid = Uuid();
+  if (!stored) {
+    // A folder another database owns is never shared: this one gets its own.
+    const std::string owner = OwnerOf(root_ / "artifacts");
+    stored = owner.empty() || owner == uuid ? "artifacts" : path_.stem().string() + ".artifacts";
+    Transaction tx(*this);
+    SetMeta(kArtifactRootKey, *stored);
+    tx.Commit();
+  }
+  artifact_root_ = (root_ / *stored).lexically_normal();
+  const std::string owner = OwnerOf(artifact_root_);
+  if (owner == uuid && OwnerPath(artifact_root_) != path_.string()) {
+    // The database and its folder were moved or copied together: the owner
+    // file names where it is now (best effort; the uuid is what is checked).
+    try {
+      WriteOwnerFile(artifact_root_, uuid, path_);
+    } catch (const Error&) {
+    }
+  }
+  if (!owner.empty() && owner != uuid) {
+    throw Error("foreign_artifacts",
+                "the artifact folder " + artifact_root_.string() + " belongs to " +
+                    OwnerPath(artifact_root_) + " (its " + kArtifactOwnerFile +
+                    " names database " + owner + ", this one is " + uuid +
+                    "); move one of the databases into its own folder");
+  }
+}
+
+void Database::ClaimArtifactRoot() {
+  std::error_code ec;
+  if (fs::exists(artifact_root_ / kArtifactOwnerFile, ec)) return;
+  fs::create_directories(artifact_root_, ec);
+  WriteOwnerFile(artifact_root_, Uuid(), path_);
+}
+
+fs::path Database::ArtifactDir(ClipId clip, const std::string& stage) const {
+  return artifact_root_ / std::to_string(clip) / stage;
+}
+
+fs::path Database::ArtifactWorkDir(const Claim& claim) const {
+  return artifact_root_ / std::to_string(claim.clip_id) /
+         ("." + claim.stage + kWorkTag + std::to_string(claim.run_id) + "-" +
+          std::to_string(claim.attempts));
+}
+
+void Database::RemoveArtifactLeftovers(ClipId clip, const std::string& stage) {
+  const fs::path clip_dir = artifact_root_ / std::to_string(clip);
+  std::error_code ec;
+  for (const std::string& tag : {kWorkTag, kAsideTag}) {
+    const std::string prefix = "." + stage + tag;
+    for (const auto& entry : fs::directory_iterator(clip_dir, ec)) {
+      if (entry.path().filename().string().rfind(prefix, 0) == 0) fs::remove_all(entry.path(), ec);
+    }
+  }
+}
+
+void Database::PublishArtifacts(const Claim& claim) {
+  const fs::path work = ArtifactWorkDir(claim);
+  const fs::path target = ArtifactDir(claim.clip_id, claim.stage);
+  const fs::path aside = target.parent_path() /
+                         ("." + claim.stage + kAsideTag + std::to_string(claim.run_id) + "-" +
+                          std::to_string(claim.attempts));
+  std::error_code ec;
+  if (fs::exists(target, ec)) {
+    fs::remove_all(aside, ec);
+    fs::rename(target, aside, ec);
+    if (ec) {
+      throw Error("io", "cannot move the previous output aside: " + ec.message(),
+                  {.clip = std::to_string(claim.clip_id), .file = target.string()});
+    }
+  }
+  if (fs::is_directory(work, ec) && fs::is_empty(work, ec)) {
+    fs::remove(work, ec);
+  } else if (fs::exists(work, ec)) {
+    fs::rename(work, target, ec);
+    if (ec) {
+      throw Error("io", "cannot publish the run's folder: " + ec.message(),
+                  {.clip = std::to_string(claim.clip_id), .file = work.string()});
+    }
+  }
+  fs::remove_all(aside, ec);
+  // A clip folder no stage wrote into is not left behind.
+  if (fs::is_directory(target.parent_path(), ec) && fs::is_empty(target.parent_path(), ec)) {
+    fs::remove(target.parent_path(), ec);
+  }
+}
+
+std::optional<Database::RunOutput> Database::RecordedOutput(ClipId clip, const std::string& stage,
+                                                            bool allow_flag, std::string* why) {
+  auto& q = Prepare(
+      "SELECT id, state, IFNULL(verdict, ''), IFNULL(reason, ''), IFNULL(param_hash, '')"
+      " FROM stage_runs WHERE clip_id = ? AND stage = ?");
+  q.Bind(1, clip).Bind(2, stage);
+  std::optional<RunOutput> out;
+  std::string state;
+  if (q.Step()) {
+    out = RunOutput{q.Int(0), clip, stage, ArtifactDir(clip, stage), q.Text(2), q.Text(3), q.Text(4)};
+    state = q.Text(1);
+  }
+  q.Reset();
+  auto refuse = [&](const std::string& text) -> std::optional<RunOutput> {
+    if (why) *why = text;
+    return std::nullopt;
+  };
+  const std::string name = "clip " + std::to_string(clip) + "'s " + stage + " run";
+  if (!out) return refuse(name + ": none recorded in " + path_.string());
+  const std::string run = name + " " + std::to_string(out->run_id);
+  if (state != "done") return refuse(run + " is " + state + ", not done");
+  if (out->verdict != "pass" && !(allow_flag && out->verdict == "flag")) {
+    return refuse(run + " gave " + out->verdict +
+                  (out->reason.empty() ? "" : " (" + out->reason + ")") +
+                  (allow_flag ? "" : ", not pass"));
+  }
+  std::error_code ec;
+  if (!fs::is_directory(out->dir, ec)) {
+    return refuse(run + " is recorded done but its folder is missing: " + out->dir.string());
+  }
+  return out;
+}
+
+std::vector<std::string> Database::StagesAfter(const std::string& stage) {
+  const auto& stages = Pipeline();
+  const auto it = std::find(stages.begin(), stages.end(), stage);
+  if (it == stages.end()) return {};
+  return {it + 1, stages.end()};
+}
+
+std::vector<std::pair<std::string, std::string>> Database::ListArtifacts(ClipId clip) {
+  auto& q = Prepare("SELECT stage, path FROM artifacts WHERE clip_id = ? ORDER BY id");
+  q.Bind(1, clip);
+  std::vector<std::pair<std::string, std::string>> out;
+  while (q.Step()) out.emplace_back(q.Text(0), q.Text(1));
+  q.Reset();
+  return out;
+}
+
+void Database::DiscardArtifacts(ClipId clip, const std::vector<std::string>& stages) {
+  std::error_code ec;
+  for (const std::string& stage : stages) {
+    Prepare("DELETE FROM artifacts WHERE clip_id = ? AND stage = ?").Bind(1, clip).Bind(2, stage).Run();
+    fs::remove_all(ArtifactDir(clip, stage), ec);
+  }
+}
+
+}  // namespace doasido

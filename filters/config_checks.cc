@@ -163,6 +163,7 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
   RequireFraction(section, "min_object_edges", c.min_object_edges);
   RequireInRange(section, "hold_samples", c.hold_samples, 0, 100);
   RequireFraction(section, "border_reach", c.border_reach);
+  RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
 }
 
 }  // namespace doasido::filters

@@ -66,7 +66,8 @@ FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedH
 
 LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip)
     : config_(config),
-      landmarker_(HandLandmarkerOptions{.max_hands = config.max_hands, .clip = clip}) {}
+      landmarker_(HandLandmarkerOptions{
+          .max_hands = config.max_hands, .clip = clip, .backend = config.backend}) {}
 
 void LearnedHandDetector::Begin(const VideoGeometry& geometry) {
   geometry_ = geometry;

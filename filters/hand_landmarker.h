@@ -82,7 +82,7 @@ class HandLandmarker {
   void Reset();
   // The palm detector alone on a BGR frame (no tracking, no landmarks).
   std::vector<DetectedPalm> DetectPalms(const cv::Mat& bgr);
-  // Milliseconds the models took on the last frame (inside the runtime).
+  // CPU milliseconds the models took on the last frame (in the runtime).
   double last_ms() const { return last_ms_; }
   // The runtime that runs the models ("native" or "wasm"), and why it is
   // not the one asked for (empty when it is).

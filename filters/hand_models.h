@@ -48,7 +48,8 @@ class HandModels {
   // `input`: size x size x 3 floats, RGB in [0, 1], rows top to bottom.
   virtual void Palm(const float* input, PalmOutput* out) = 0;
   virtual void Landmark(const float* input, LandmarkOutput* out) = 0;
-  // Milliseconds the models took since the last call of this (and resets it).
+  // CPU milliseconds the models took since the last call of this (and
+  // resets it): the calling thread's (native) or the Node process's (wasm).
   virtual double TakeModelMs() = 0;
   virtual const char* backend() const = 0;
 };

@@ -164,6 +164,7 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
   RequireInRange(section, "hold_samples", c.hold_samples, 0, 100);
   RequireFraction(section, "border_reach", c.border_reach);
   RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
+  RequireInRange(section, "keep_mb", c.keep_mb, 1, 1e6);
 }
 
 }  // namespace doasido::filters

@@ -135,19 +135,21 @@ void ReadOptions(const FlatReader& r, std::size_t options, TfliteOperator* o) {
   auto activation = [&](int index) {
     return static_cast<TfliteActivation>(r.Scalar<std::int8_t>(options, index, 0, "activation"));
   };
+  // Fields 0-2 of the convolution and pooling options: padding, strides.
+  auto padding_and_strides = [&] {
+    o->same_padding = r.Scalar<std::int8_t>(options, 0, 0, "padding") == 0;
+    o->stride_w = r.Scalar<std::int32_t>(options, 1, 1, "stride_w");
+    o->stride_h = r.Scalar<std::int32_t>(options, 2, 1, "stride_h");
+  };
   switch (o->op) {
     case TfliteOp::kConv2d:
-      o->same_padding = r.Scalar<std::int8_t>(options, 0, 0, "padding") == 0;
-      o->stride_w = r.Scalar<std::int32_t>(options, 1, 1, "stride_w");
-      o->stride_h = r.Scalar<std::int32_t>(options, 2, 1, "stride_h");
+      padding_and_strides();
       o->activation = activation(3);
       o->dilation_w = r.Scalar<std::int32_t>(options, 4, 1, "dilation_w_factor");
       o->dilation_h = r.Scalar<std::int32_t>(options, 5, 1, "dilation_h_factor");
       break;
     case TfliteOp::kDepthwiseConv2d:
-      o->same_padding = r.Scalar<std::int8_t>(options, 0, 0, "padding") == 0;
-      o->stride_w = r.Scalar<std::int32_t>(options, 1, 1, "stride_w");
-      o->stride_h = r.Scalar<std::int32_t>(options, 2, 1, "stride_h");
+      padding_and_strides();
       o->depth_multiplier = r.Scalar<std::int32_t>(options, 3, 1, "depth_multiplier");
       o->activation = activation(4);
       o->dilation_w = r.Scalar<std::int32_t>(options, 5, 1, "dilation_w_factor");
@@ -155,9 +157,7 @@ void ReadOptions(const FlatReader& r, std::size_t options, TfliteOperator* o) {
       break;
     case TfliteOp::kMaxPool2d:
     case TfliteOp::kAveragePool2d:
-      o->same_padding = r.Scalar<std::int8_t>(options, 0, 0, "padding") == 0;
-      o->stride_w = r.Scalar<std::int32_t>(options, 1, 1, "stride_w");
-      o->stride_h = r.Scalar<std::int32_t>(options, 2, 1, "stride_h");
+      padding_and_strides();
       o->filter_w = r.Scalar<std::int32_t>(options, 3, 1, "filter_width");
       o->filter_h = r.Scalar<std::int32_t>(options, 4, 1, "filter_height");
       o->activation = activation(5);

@@ -89,6 +89,10 @@ int main(int argc, char** argv) {
   const std::filesystem::path dir =
       argc > 1 ? std::filesystem::path(argv[1]) : std::filesystem::path(DOASIDO_SHARED_DATA) / "videos";
   AnalyzeConfig config;
+  // Every filter judges every clip, so the models run on every clip (the
+  // pipeline's default runs them only on clips the cheap verdicts keep; a
+  // config with after_cheap_verdicts = true measures that).
+  config.learned_detector.after_cheap_verdicts = false;
   if (argc > 3) ReadSection(LoadConfigFile(argv[3]), "filters_analyze", config);
   if (argc > 2) config.hand_detector = argv[2];
   std::vector<std::string> found;

@@ -47,6 +47,17 @@ target_include_directories(doasido_hdf5 SYSTEM INTERFACE ${HDF5_INCLUDE_DIRS})
 target_link_libraries(doasido_hdf5 INTERFACE ${HDF5_LIBRARIES})
 add_library(deps::hdf5 ALIAS doasido_hdf5)
 
+# XNNPACK (the engine TFLite uses on CPU) runs the MediaPipe hand models
+# natively (filters/xnnpack_graph.h); its header includes pthreadpool's.
+find_library(XNNPACK_LIBRARY NAMES XNNPACK REQUIRED)
+find_path(XNNPACK_INCLUDE_DIR NAMES xnnpack.h REQUIRED)
+find_path(PTHREADPOOL_INCLUDE_DIR NAMES pthreadpool.h REQUIRED)
+add_library(doasido_xnnpack INTERFACE)
+target_include_directories(doasido_xnnpack SYSTEM INTERFACE ${XNNPACK_INCLUDE_DIR}
+                                                             ${PTHREADPOOL_INCLUDE_DIR})
+target_link_libraries(doasido_xnnpack INTERFACE ${XNNPACK_LIBRARY})
+add_library(deps::xnnpack ALIAS doasido_xnnpack)
+
 # DuckDB's C library for Parquet (dataset/parquet_writer.h). Debian has no
 # Parquet library; scripts/setup.sh installs the pinned npm package that
 # ships libduckdb.so into the npm cache folder.

@@ -2,13 +2,16 @@
 
 #include <memory>
 
+#include "core/config_check.h"
 #include "core/error.h"
+#include "filters/deferred_hand_models.h"
 #include "filters/stage_support.h"
 
 namespace doasido::filters {
 
 ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOptions& options,
-                         const std::vector<Detection>& detections, const AnalyzeConfig& config) {
+                         const std::vector<Detection>& detections, const AnalyzeConfig& config,
+                         const CheapVerdictConfigs& verdicts) {
   DecoderOptions decode = options;
   decode.analysis_size = config.analysis_size;
   decode.frame_count_tolerance = config.frame_count_tolerance;
@@ -22,14 +25,18 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   const bool detect = detections.empty() && config.use_builtin_detector;
   std::string note;
   std::unique_ptr<LearnedHandDetector> learned;
+  bool deferred = false;  // the models run after the cheap verdicts
   if (detect && config.hand_detector == "learned") {
-    if (HandLandmarkerAvailable(&note)) {
-      learned = std::make_unique<LearnedHandDetector>(config.learned_detector, options.clip);
-    } else {
+    if (!HandLandmarkerAvailable(&note)) {
       note = "learned detector unavailable: " + note;
+    } else if (config.learned_detector.after_cheap_verdicts) {
+      deferred = true;
+    } else {
+      learned = std::make_unique<LearnedHandDetector>(config.learned_detector, options.clip);
     }
   }
   const bool builtin = detect && !learned;
+  SampleKeeper keeper(config.learned_detector);
   BuiltinHandObjectDetector detector(config.detector);
   InteractionExtractor interaction;
   OutOfFrameExtractor out_of_frame(config.out_of_frame);
@@ -37,6 +44,7 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   ActivityExtractor activity(config.activity);
   CameraMotionExtractor camera(config.camera_motion);
   std::vector<FrameConsumer*> consumers;
+  if (deferred) consumers.push_back(&keeper);
   if (learned) consumers.push_back(learned.get());
   if (builtin) consumers.push_back(&detector);
   for (FrameConsumer* c : std::initializer_list<FrameConsumer*>{&interaction, &out_of_frame, &shots,
@@ -71,7 +79,33 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
     out.builtin_detections = learned->detections();
   }
   if (builtin) out.builtin_detections = detector.detections();
+  if (deferred) {
+    ShotSpan kept;
+    const std::string rejected =
+        CheapVerdictRejection(out.measurements, verdicts, options.clip, &kept);
+    if (rejected.empty()) {
+      RunHandModelsOnKeptShot(keeper, kept, g, config, options.clip, &out);
+    } else {
+      out.measurements["clip"]["detector_note"] =
+          "hand models not run: the clip is rejected by " + rejected;
+    }
+  }
   return out;
+}
+
+AnalyzeStage::AnalyzeStage(AnalyzeConfig config, const Json& whole_config)
+    : config_(std::move(config)) {
+  ReadCheckedSection(whole_config, kShotBoundaryStageName, verdicts_.shot);
+  ReadCheckedSection(whole_config, kCameraMotionStageName, verdicts_.camera_motion);
+}
+
+Json AnalyzeStage::Params() const {
+  Json params = config_;
+  if (config_.hand_detector == "learned" && config_.learned_detector.after_cheap_verdicts) {
+    params["cheap_verdicts"] = {{kShotBoundaryStageName, verdicts_.shot},
+                                {kCameraMotionStageName, verdicts_.camera_motion}};
+  }
+  return params;
 }
 
 StageResult AnalyzeStage::Run(const ClipContext& context) {
@@ -88,7 +122,8 @@ StageResult AnalyzeStage::Run(const ClipContext& context) {
   } else if (context.clip.end_s) {
     options.last_s = *context.clip.end_s;
   }
-  ClipAnalysis analysis = AnalyzeClip(context.video.path, options, context.detections, config_);
+  ClipAnalysis analysis =
+      AnalyzeClip(context.video.path, options, context.detections, config_, verdicts_);
   StageResult result;
   result.measurements = std::move(analysis.measurements);
   result.detections = std::move(analysis.builtin_detections);

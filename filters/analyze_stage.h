@@ -67,6 +67,13 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AnalyzeConfig, analysis_size, de
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const AnalyzeConfig& c, const std::string& section);
 
+// The verdicts the analysis applies itself before it pays for the hand
+// models (filters/deferred_hand_models.h), configured as their stages are.
+struct CheapVerdictConfigs {
+  ShotBoundaryConfig shot;
+  CameraMotionConfig camera_motion;
+};
+
 // Everything one analysis pass produced (for callers outside the queue,
 // such as benchmarks and tests).
 struct ClipAnalysis {
@@ -77,19 +84,26 @@ struct ClipAnalysis {
 // Decodes `video` over the span in `options` once and computes every
 // filter's signals. `detections` are the clip's boxes (full-resolution file
 // frames); when empty and config.use_builtin_detector, the built-in detector
-// supplies them.
+// supplies them (the learned one only on clips `verdicts` keep, when
+// config.learned_detector.after_cheap_verdicts).
 ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOptions& options,
-                         const std::vector<Detection>& detections, const AnalyzeConfig& config);
+                         const std::vector<Detection>& detections, const AnalyzeConfig& config,
+                         const CheapVerdictConfigs& verdicts = {});
 
 class AnalyzeStage : public Stage {
  public:
   explicit AnalyzeStage(AnalyzeConfig config = {}) : config_(std::move(config)) {}
+  // `whole_config`: the configuration file, for the cheap verdicts' sections.
+  AnalyzeStage(AnalyzeConfig config, const Json& whole_config);
   std::string Name() const override { return kAnalyzeStageName; }
-  Json Params() const override { return config_; }
+  // The config, and the cheap verdicts' configs when they decide whether
+  // the models run.
+  Json Params() const override;
   StageResult Run(const ClipContext& context) override;
 
  private:
   AnalyzeConfig config_;
+  CheapVerdictConfigs verdicts_;
 };
 
 }  // namespace doasido::filters

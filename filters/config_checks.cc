@@ -163,6 +163,8 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
   RequireFraction(section, "min_object_edges", c.min_object_edges);
   RequireInRange(section, "hold_samples", c.hold_samples, 0, 100);
   RequireFraction(section, "border_reach", c.border_reach);
+  RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
+  RequireInRange(section, "keep_mb", c.keep_mb, 1, 1e6);
 }
 
 }  // namespace doasido::filters

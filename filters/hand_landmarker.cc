@@ -1,208 +1,288 @@
 #include "filters/hand_landmarker.h"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-#include <filesystem>
+#include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "core/config.h"
-#include "core/data_dirs.h"
 #include "core/error.h"
-
-extern char** environ;
+#include "filters/hand_models.h"
 
 namespace doasido::filters {
 
-extern const char kMediapipeHandsScript[];
-
 namespace {
 
-constexpr const char* kPackages[] = {"@mediapipe/hands", "@tensorflow/tfjs-tflite",
-                                     "@tensorflow/tfjs-core", "@tensorflow/tfjs-backend-cpu"};
+// MediaPipe Hands' graph options.
+constexpr double kMinPalmScore = 0.5, kNmsIou = 0.3, kMinPresence = 0.5;
+constexpr double kPalmCropScale = 2.6, kPalmCropShift = -0.5;    // palm -> hand crop
+constexpr double kTrackCropScale = 2.0, kTrackCropShift = -0.1;  // keypoints -> next crop
+constexpr int kPalmWrist = 0, kPalmMiddleBase = 2;  // palm detector keypoints
+constexpr int kWrist = 0, kMiddleBase = 9;
 
-std::string MissingPackage() {
-  for (const char* package : kPackages) {
-    if (!std::filesystem::exists(NpmDir() / "node_modules" / package / "package.json")) {
-      return package;
+using Palm = DetectedPalm;
+
+// SSD anchors of the palm detector: strides 8, 16, 16, 16, two anchors per
+// layer and cell, fixed size, centred in their cell.
+std::vector<cv::Point2d> PalmAnchors() {
+  std::vector<cv::Point2d> anchors;
+  const int strides[] = {8, 16, 16, 16};
+  for (std::size_t layer = 0; layer < 4;) {
+    int per_cell = 0;
+    const int stride = strides[layer];
+    while (layer < 4 && strides[layer] == stride) {
+      per_cell += 2;
+      ++layer;
+    }
+    const int cells = (kPalmInputSize + stride - 1) / stride;
+    for (int y = 0; y < cells; ++y) {
+      for (int x = 0; x < cells; ++x) {
+        for (int a = 0; a < per_cell; ++a) {
+          anchors.emplace_back((x + 0.5) / cells, (y + 0.5) / cells);
+        }
+      }
     }
   }
-  return "";
+  return anchors;
 }
 
-cv::Point3d Point(const Json& j) {
-  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+// Bilinear sample of an RGB frame into a size x size float tensor in [0, 1]
+// through an affine map from output pixel centres to frame coordinates
+// (frame pixel centres at +0.5); taps outside the frame count as black.
+void SampleRgb(const cv::Mat& rgb, int size, const cv::Matx23d& map, std::vector<float>* out) {
+  out->assign(static_cast<std::size_t>(size) * size * 3, 0.f);
+  for (int v = 0; v < size; ++v) {
+    for (int u = 0; u < size; ++u) {
+      const double fx = map(0, 0) * (u + 0.5) + map(0, 1) * (v + 0.5) + map(0, 2) - 0.5;
+      const double fy = map(1, 0) * (u + 0.5) + map(1, 1) * (v + 0.5) + map(1, 2) - 0.5;
+      const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+      const double ax = fx - x0, ay = fy - y0;
+      float* o = out->data() + (static_cast<std::size_t>(v) * size + u) * 3;
+      for (int dy = 0; dy < 2; ++dy) {
+        const int y = y0 + dy;
+        if (y < 0 || y >= rgb.rows) continue;
+        const double wy = dy ? ay : 1 - ay;
+        const std::uint8_t* row = rgb.ptr<std::uint8_t>(y);
+        for (int dx = 0; dx < 2; ++dx) {
+          const int x = x0 + dx;
+          if (x < 0 || x >= rgb.cols) continue;
+          const double w = wy * (dx ? ax : 1 - ax) / 255;
+          const std::uint8_t* p = row + 3 * x;
+          for (int c = 0; c < 3; ++c) o[c] += static_cast<float>(w * p[c]);
+        }
+      }
+    }
+  }
+}
+
+double IoU(const cv::Rect2d& a, const cv::Rect2d& b) {
+  const double inter = (a & b).area();
+  const double uni = a.area() + b.area() - inter;
+  return uni > 0 ? inter / uni : 0;
+}
+
+// Weighted non-maximum suppression: each kept palm is the score-weighted
+// mean of the candidates overlapping the best one.
+std::vector<Palm> WeightedNms(std::vector<Palm> candidates) {
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Palm& a, const Palm& b) { return a.score > b.score; });
+  std::vector<Palm> kept;
+  while (!candidates.empty()) {
+    const Palm best = candidates.front();
+    std::vector<Palm> group, rest;
+    for (const Palm& c : candidates) (IoU(c.box, best.box) > kNmsIou ? group : rest).push_back(c);
+    candidates = std::move(rest);
+    double total = 0, x1 = 0, y1 = 0, x2 = 0, y2 = 0;
+    Palm mean;
+    mean.score = best.score;
+    for (const Palm& c : group) {
+      total += c.score;
+      x1 += c.score * c.box.x;
+      y1 += c.score * c.box.y;
+      x2 += c.score * c.box.br().x;
+      y2 += c.score * c.box.br().y;
+      for (int k = 0; k < 7; ++k) mean.keypoints[k] += c.score * c.keypoints[k];
+    }
+    mean.box = cv::Rect2d(cv::Point2d(x1, y1) / total, cv::Point2d(x2, y2) / total);
+    for (cv::Point2d& p : mean.keypoints) p /= total;
+    kept.push_back(mean);
+  }
+  return kept;
+}
+
+double NormalizeAngle(double a) { return a - 2 * M_PI * std::floor((a + M_PI) / (2 * M_PI)); }
+
+// Angle that turns the wrist -> middle-finger direction upright.
+double UprightAngle(const cv::Point2d& wrist, const cv::Point2d& middle) {
+  return NormalizeAngle(M_PI / 2 - std::atan2(-(middle.y - wrist.y), middle.x - wrist.x));
+}
+
+HandCrop CropFrom(double cx, double cy, double w, double h, double rotation, double scale,
+                  double shift_y) {
+  cx -= h * shift_y * std::sin(rotation);
+  cy += h * shift_y * std::cos(rotation);
+  return {cx, cy, std::max(w, h) * scale, rotation};
+}
+
+// The crop to look for a hand in the next frame: from the palm's keypoints
+// (wrist, thumb base, finger bases and middle joints), upright, doubled.
+HandCrop CropFromHand(const LandmarkedHand& hand) {
+  constexpr int ids[] = {0, 1, 2, 3, 5, 6, 9, 10, 13, 14, 17, 18};
+  const auto point = [&](int k) { return cv::Point2d(hand.keypoints[k].x, hand.keypoints[k].y); };
+  const double rotation = UprightAngle(point(kWrist), point(kMiddleBase));
+  const double c = std::cos(rotation), s = std::sin(rotation);
+  double min_u = INFINITY, max_u = -INFINITY, min_v = INFINITY, max_v = -INFINITY;
+  for (int i : ids) {
+    const cv::Point2d p = point(i);
+    const double u = p.x * c + p.y * s, v = -p.x * s + p.y * c;
+    min_u = std::min(min_u, u);
+    max_u = std::max(max_u, u);
+    min_v = std::min(min_v, v);
+    max_v = std::max(max_v, v);
+  }
+  const double mu = (min_u + max_u) / 2, mv = (min_v + max_v) / 2;
+  return CropFrom(mu * c - mv * s, mu * s + mv * c, max_u - min_u, max_v - min_v, rotation,
+                  kTrackCropScale, kTrackCropShift);
+}
+
+LandmarkedHand Scaled(LandmarkedHand hand, double scale) {
+  hand.box = cv::Rect2d(hand.box.tl() * scale, hand.box.br() * scale);
+  for (cv::Point3d& p : hand.keypoints) p *= scale;
+  return hand;
 }
 
 }  // namespace
 
 bool HandLandmarkerAvailable(std::string* why) {
-  const std::string missing = MissingPackage();
-  if (!missing.empty()) {
-    if (why) *why = "npm package " + missing + " is not in " + NpmDir().string();
-    return false;
+  std::string native_why, wasm_why;
+  if (HandModelFilesAvailable(&native_why) || WasmHandModelsAvailable(&wasm_why)) return true;
+  if (why) *why = native_why + "; " + wasm_why;
+  return false;
+}
+
+HandLandmarker::HandLandmarker(HandLandmarkerOptions options)
+    : options_(std::move(options)),
+      models_(MakeHandModels(options_.backend, options_.clip, true, &note_)),
+      anchors_(PalmAnchors()) {}
+
+HandLandmarker::~HandLandmarker() = default;
+
+const char* HandLandmarker::backend() const { return models_->backend(); }
+
+void HandLandmarker::Reset() { tracked_.clear(); }
+
+std::vector<DetectedPalm> HandLandmarker::Palms(const cv::Mat& rgb) {
+  const double scale = std::min(static_cast<double>(kPalmInputSize) / rgb.cols,
+                                static_cast<double>(kPalmInputSize) / rgb.rows);
+  const double pad_x = (kPalmInputSize - rgb.cols * scale) / 2;
+  const double pad_y = (kPalmInputSize - rgb.rows * scale) / 2;
+  SampleRgb(rgb, kPalmInputSize, {1 / scale, 0, -pad_x / scale, 0, 1 / scale, -pad_y / scale},
+            &input_);
+  PalmOutput out;
+  models_->Palm(input_.data(), &out);
+  const auto to_frame = [&](double x, double y) {
+    return cv::Point2d((x * kPalmInputSize - pad_x) / scale, (y * kPalmInputSize - pad_y) / scale);
+  };
+  std::vector<Palm> candidates;
+  for (std::size_t i = 0; i < anchors_.size() && i < out.logits.size(); ++i) {
+    const double score = 1 / (1 + std::exp(-std::clamp<double>(out.logits[i], -100, 100)));
+    if (score < kMinPalmScore) continue;
+    const float* r = out.regressors.data() + i * kPalmValues;
+    const cv::Point2d a = anchors_[i];
+    const double cx = r[0] / kPalmInputSize + a.x, cy = r[1] / kPalmInputSize + a.y;
+    const double w = r[2] / kPalmInputSize, h = r[3] / kPalmInputSize;
+    Palm p;
+    p.score = score;
+    p.box = cv::Rect2d(to_frame(cx - w / 2, cy - h / 2), to_frame(cx + w / 2, cy + h / 2));
+    for (int k = 0; k < 7; ++k) {
+      p.keypoints[k] =
+          to_frame(r[4 + 2 * k] / kPalmInputSize + a.x, r[5 + 2 * k] / kPalmInputSize + a.y);
+    }
+    candidates.push_back(p);
   }
-  if (std::system("command -v node >/dev/null 2>&1") != 0) {
-    if (why) *why = "node is not installed";
-    return false;
+  return WeightedNms(std::move(candidates));
+}
+
+std::vector<DetectedPalm> HandLandmarker::DetectPalms(const cv::Mat& bgr) {
+  double shrink = 1;
+  std::vector<DetectedPalm> palms = Palms(Rgb(bgr, &shrink));
+  for (DetectedPalm& p : palms) {
+    p.box = cv::Rect2d(p.box.tl() / shrink, p.box.br() / shrink);
+    for (cv::Point2d& k : p.keypoints) k /= shrink;
   }
+  return palms;
+}
+
+bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand) {
+  const double c = std::cos(crop.rotation), s = std::sin(crop.rotation);
+  const double k = crop.side / kLandmarkInputSize;
+  // Crop pixel (u, v) -> frame: centre + rotation of ((u, v) / size - 0.5) * side.
+  const cv::Matx23d map(k * c, -k * s, crop.cx - crop.side / 2 * (c - s), k * s, k * c,
+                        crop.cy - crop.side / 2 * (s + c));
+  SampleRgb(rgb, kLandmarkInputSize, map, &input_);
+  LandmarkOutput out;
+  models_->Landmark(input_.data(), &out);
+  if (out.presence < kMinPresence) return false;
+  hand->score = out.presence;
+  hand->right = out.right;
+  double x1 = INFINITY, y1 = INFINITY, x2 = -INFINITY, y2 = -INFINITY;
+  for (int i = 0; i < kHandKeypoints; ++i) {
+    const double u = out.screen[3 * i], v = out.screen[3 * i + 1];
+    const double x = map(0, 0) * u + map(0, 1) * v + map(0, 2);
+    const double y = map(1, 0) * u + map(1, 1) * v + map(1, 2);
+    hand->keypoints[i] = {x, y, out.screen[3 * i + 2] * k};
+    hand->world[i] = {out.world[3 * i], out.world[3 * i + 1], out.world[3 * i + 2]};
+    x1 = std::min(x1, x);
+    y1 = std::min(y1, y);
+    x2 = std::max(x2, x);
+    y2 = std::max(y2, y);
+  }
+  hand->box = cv::Rect2d(cv::Point2d(x1, y1), cv::Point2d(x2, y2));
   return true;
 }
 
-HandLandmarker::HandLandmarker(HandLandmarkerOptions options) : options_(std::move(options)) {
-  std::string why;
-  if (!HandLandmarkerAvailable(&why)) {
-    throw Error("hand_detector_unavailable",
-                why + " (scripts/setup.sh installs node and the pinned npm packages)",
+cv::Mat HandLandmarker::Rgb(const cv::Mat& bgr, double* shrink) const {
+  if (bgr.empty() || bgr.type() != CV_8UC3) {
+    throw Error("hand_detector_failed", "the hand detector needs a BGR frame of 8-bit pixels",
                 {.clip = options_.clip});
   }
-  // A detector that died must be an error on write, not the end of this process.
-  signal(SIGPIPE, SIG_IGN);
-  int in[2], out[2];
-  if (pipe2(in, O_CLOEXEC) != 0 || pipe2(out, O_CLOEXEC) != 0) {
-    throw Error("hand_detector_unavailable", std::string("pipe: ") + std::strerror(errno));
-  }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
-  std::vector<std::string> env_strings = {
-      "NODE_PATH=" + (NpmDir() / "node_modules").string(),
-      "DOASIDO_MAX_HANDS=" + std::to_string(options_.max_hands)};
-  for (char** e = environ; *e != nullptr; ++e) {
-    if (std::strncmp(*e, "NODE_PATH=", 10) != 0) env_strings.emplace_back(*e);
-  }
-  std::vector<char*> env;
-  for (std::string& s : env_strings) env.push_back(s.data());
-  env.push_back(nullptr);
-  std::string node = options_.node, flag = "-e", script = kMediapipeHandsScript;
-  char* argv[] = {node.data(), flag.data(), script.data(), nullptr};
-  const int spawned = posix_spawnp(&pid_, node.c_str(), &actions, nullptr, argv, env.data());
-  posix_spawn_file_actions_destroy(&actions);
-  close(in[0]);
-  close(out[1]);
-  to_child_ = in[1];
-  from_child_ = out[0];
-  if (spawned != 0) {
-    pid_ = -1;
-    throw Error("hand_detector_unavailable",
-                "cannot start " + node + ": " + std::strerror(spawned), {.clip = options_.clip});
-  }
-  const std::string first = ReadLine();
-  const Json hello = Json::parse(first, nullptr, false);
-  if (hello.is_discarded() || !hello.value("ready", false)) {
-    throw Error("hand_detector_unavailable",
-                "the detector did not start: " +
-                    (hello.is_object() ? hello.value("error", first) : first),
-                {.clip = options_.clip});
-  }
-}
-
-HandLandmarker::~HandLandmarker() {
-  if (to_child_ >= 0) close(to_child_);
-  if (from_child_ >= 0) close(from_child_);
-  if (pid_ > 0) {
-    int status = 0;
-    // End of input ends the program; a stuck one is killed.
-    for (int i = 0; i < 100 && waitpid(pid_, &status, WNOHANG) == 0; ++i) usleep(10000);
-    if (waitpid(pid_, &status, WNOHANG) == 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, &status, 0);
-    }
-  }
-}
-
-std::string HandLandmarker::ReadLine() {
-  while (true) {
-    const size_t nl = buffered_.find('\n');
-    if (nl != std::string::npos) {
-      std::string line = buffered_.substr(0, nl);
-      buffered_.erase(0, nl + 1);
-      return line;
-    }
-    char chunk[65536];
-    const ssize_t n = read(from_child_, chunk, sizeof chunk);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      throw Error("hand_detector_failed", "the detector process ended unexpectedly",
-                  {.clip = options_.clip});
-    }
-    buffered_.append(chunk, static_cast<size_t>(n));
-  }
-}
-
-void HandLandmarker::WriteAll(const void* data, size_t size) {
-  const char* p = static_cast<const char*>(data);
-  while (size > 0) {
-    const ssize_t n = write(to_child_, p, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      throw Error("hand_detector_failed",
-                  std::string("cannot write to the detector: ") + std::strerror(errno),
-                  {.clip = options_.clip});
-    }
-    p += n;
-    size -= static_cast<size_t>(n);
-  }
-}
-
-void HandLandmarker::Reset() {
-  const std::string request = "reset\n";
-  WriteAll(request.data(), request.size());
-}
-
-std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
-  const double shrink =
-      std::min(1.0, static_cast<double>(options_.max_side) / std::max(bgr.cols, bgr.rows));
+  *shrink = std::min(1.0, static_cast<double>(options_.max_side) / std::max(bgr.cols, bgr.rows));
   cv::Mat rgb;
-  if (shrink < 1.0) {
+  if (*shrink < 1.0) {
     cv::Mat small;
-    cv::resize(bgr, small, {}, shrink, shrink, cv::INTER_AREA);
+    cv::resize(bgr, small, {}, *shrink, *shrink, cv::INTER_AREA);
     cv::cvtColor(small, rgb, cv::COLOR_BGR2RGB);
   } else {
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   }
-  const std::int64_t id = next_id_++;
-  const std::string header = "frame " + std::to_string(id) + " " + std::to_string(rgb.cols) +
-                             " " + std::to_string(rgb.rows) + "\n";
-  WriteAll(header.data(), header.size());
-  WriteAll(rgb.data, rgb.total() * 3);
-  const std::string line = ReadLine();
+  return rgb;
+}
+
+std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
+  double shrink = 1;
+  const cv::Mat rgb = Rgb(bgr, &shrink);
+  models_->TakeModelMs();
   std::vector<LandmarkedHand> hands;
-  try {
-    const Json reply = Json::parse(line);
-    if (reply.contains("error")) {
-      throw Error("hand_detector_failed", reply.at("error").get<std::string>(),
-                  {.clip = options_.clip});
+  const auto consider = [&](const HandCrop& crop) {
+    LandmarkedHand hand;
+    if (!Landmarks(rgb, crop, &hand)) return;
+    for (const LandmarkedHand& h : hands) {
+      if (IoU(h.box, hand.box) >= 0.5) return;
     }
-    if (reply.at("id").get<std::int64_t>() != id) throw std::runtime_error("reply out of order");
-    last_ms_ = reply.at("ms").get<double>();
-    const double scale = 1.0 / shrink;
-    for (const Json& h : reply.at("hands")) {
-      LandmarkedHand hand;
-      hand.score = h.at("score").get<double>();
-      hand.right = h.at("right").get<double>();
-      const Json& b = h.at("box");
-      hand.box = cv::Rect2d(cv::Point2d(b.at(0).get<double>(), b.at(1).get<double>()) * scale,
-                            cv::Point2d(b.at(2).get<double>(), b.at(3).get<double>()) * scale);
-      for (int k = 0; k < kHandKeypoints; ++k) {
-        hand.keypoints[k] = Point(h.at("keypoints").at(k)) * scale;
-        hand.world[k] = Point(h.at("world").at(k));
-      }
-      hands.push_back(hand);
+    hands.push_back(hand);
+  };
+  for (const HandCrop& crop : tracked_) consider(crop);
+  if (static_cast<int>(hands.size()) < options_.max_hands) {
+    for (const Palm& p : Palms(rgb)) {
+      if (static_cast<int>(hands.size()) >= options_.max_hands) break;
+      consider(CropFrom(p.box.x + p.box.width / 2, p.box.y + p.box.height / 2, p.box.width,
+                        p.box.height,
+                        UprightAngle(p.keypoints[kPalmWrist], p.keypoints[kPalmMiddleBase]),
+                        kPalmCropScale, kPalmCropShift));
     }
-  } catch (const Error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw Error("hand_detector_failed",
-                std::string("unreadable answer from the detector: ") + e.what(),
-                {.clip = options_.clip});
   }
+  tracked_.clear();
+  for (const LandmarkedHand& h : hands) tracked_.push_back(CropFromHand(h));
+  last_ms_ = models_->TakeModelMs();
+  for (LandmarkedHand& h : hands) h = Scaled(h, 1.0 / shrink);
   return hands;
 }
 

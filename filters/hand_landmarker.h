@@ -1,10 +1,14 @@
 // The learned hand detector: MediaPipe Hands (palm detector + 21-keypoint
-// landmark model) in a long-lived Node process running
-// filters/mediapipe_hands.js on TFLite's WebAssembly runtime, one thread.
-// The models and the runtime come from npm packages that scripts/setup.sh
-// installs into NpmDir() (core/data_dirs.h); nothing is downloaded at run
-// time. About 50-90 ms per frame without hands and 35-50 ms more per hand
-// on one core here, so callers sample a few frames per second.
+// landmark model). The models run on one of two runtimes
+// (filters/hand_models.h): "native" (our TFLite reader + XNNPACK, in this
+// process; the default) or "wasm" (TFLite's WebAssembly runtime in a Node
+// process; the reference, and the fallback when the native one cannot
+// load). The pre- and post-processing here is the same for both: the palm
+// detector's anchors and weighted non-maximum suppression, the rotated
+// hand crop, keypoints back to the frame, tracking a hand from its last
+// keypoints; the numbers are MediaPipe's published graph options. The
+// models come from the npm package @mediapipe/hands that scripts/setup.sh
+// installs into NpmDir() (core/data_dirs.h); nothing is downloaded.
 //
 // Contract: Detect() sends one frame and waits for its hands; hands are
 // tracked from one call to the next (the next frame is searched around the
@@ -13,9 +17,8 @@
 // 13-16 ring, 17-20 little finger, tips at 4, 8, 12, 16, 20.
 #pragma once
 
-#include <sys/types.h>
-
 #include <array>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -41,14 +44,33 @@ struct HandLandmarkerOptions {
   // are sent (the palm detector sees 192 x 192, the landmark model a 224 x
   // 224 crop; 640 keeps a hand of a tenth of the frame at full detail).
   int max_side = 640;
-  std::string node = "node";
   std::string clip;  // for error messages
+  // Which runtime runs the models: "native" or "wasm" (kBackendNative,
+  // kBackendWasm in filters/hand_models.h).
+  std::string backend = "native";
 };
+
+// A square crop of the frame, rotated: where the landmark model looks.
+struct HandCrop {
+  double cx = 0, cy = 0;  // centre, pixels of the (shrunk) frame
+  double side = 0;        // pixels
+  double rotation = 0;    // radians; the crop's up is the hand's up
+};
+
+// A palm the palm detector found (after non-maximum suppression).
+struct DetectedPalm {
+  double score = 0;
+  cv::Rect2d box;                        // pixels of the frame passed in
+  std::array<cv::Point2d, 7> keypoints;  // 0 wrist, 2 middle finger's base, ...
+};
+
+class HandModels;
 
 class HandLandmarker {
  public:
-  // Starts Node and loads the models. Throws Error("hand_detector_unavailable")
-  // saying what is missing (node, the npm packages) and how to install it.
+  // Loads the models on the runtime asked for (the wasm one when the native
+  // one cannot load; note() says why). Throws Error("hand_detector_unavailable")
+  // saying what is missing (the npm packages, node) and how to install it.
   explicit HandLandmarker(HandLandmarkerOptions options = {});
   ~HandLandmarker();
   HandLandmarker(const HandLandmarker&) = delete;
@@ -58,23 +80,32 @@ class HandLandmarker {
   // Error("hand_detector_failed") when the process dies or answers garbage.
   std::vector<LandmarkedHand> Detect(const cv::Mat& bgr);
   void Reset();
-  // Milliseconds the models took on the last frame (inside Node).
+  // The palm detector alone on a BGR frame (no tracking, no landmarks).
+  std::vector<DetectedPalm> DetectPalms(const cv::Mat& bgr);
+  // CPU milliseconds the models took on the last frame (in the runtime).
   double last_ms() const { return last_ms_; }
+  // The runtime that runs the models ("native" or "wasm"), and why it is
+  // not the one asked for (empty when it is).
+  const char* backend() const;
+  const std::string& note() const { return note_; }
 
  private:
-  std::string ReadLine();
-  void WriteAll(const void* data, size_t size);
+  cv::Mat Rgb(const cv::Mat& bgr, double* shrink) const;
+  std::vector<DetectedPalm> Palms(const cv::Mat& rgb);
+  bool Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand);
 
   HandLandmarkerOptions options_;
-  pid_t pid_ = -1;
-  int to_child_ = -1, from_child_ = -1;
-  std::string buffered_;
+  std::unique_ptr<HandModels> models_;
+  std::string note_;
+  std::vector<cv::Point2d> anchors_;
+  std::vector<HandCrop> tracked_;  // where to look first in the next frame
+  std::vector<float> input_;
   double last_ms_ = 0;
-  std::int64_t next_id_ = 0;
 };
 
-// True when node and the npm packages are installed (tests and the bench
-// use it to say why they skip).
+// True when the models can run on some runtime (the model files for the
+// native one; node and the npm packages for the wasm one). Tests and the
+// bench use it to say why they skip.
 bool HandLandmarkerAvailable(std::string* why = nullptr);
 
 }  // namespace doasido::filters

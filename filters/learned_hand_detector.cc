@@ -66,12 +66,17 @@ FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedH
 
 LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip)
     : config_(config),
-      landmarker_(HandLandmarkerOptions{.max_hands = config.max_hands, .clip = clip}) {}
+      landmarker_(HandLandmarkerOptions{
+          .max_hands = config.max_hands, .clip = clip, .backend = config.backend}) {}
+
+std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config) {
+  const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
+  return std::max<std::int64_t>(1, std::llround(fps / config.sample_fps));
+}
 
 void LearnedHandDetector::Begin(const VideoGeometry& geometry) {
   geometry_ = geometry;
-  const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
-  every_ = std::max<std::int64_t>(1, std::llround(fps / config_.sample_fps));
+  every_ = SampleEvery(geometry, config_);
   landmarker_.Reset();
 }
 

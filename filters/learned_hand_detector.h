@@ -1,5 +1,5 @@
 // The learned hand detector inside the analysis pass (HandLandmarker:
-// MediaPipe Hands through Node), for clips without annotations.
+// MediaPipe Hands, native or through Node), for clips without annotations.
 //
 // It samples `sample_fps` frames per second of the span, finds up to
 // `max_hands` hands with 21 keypoints each, and holds a sample's hands
@@ -49,10 +49,21 @@ struct LearnedDetectorConfig {
   double min_object_edges = 0.04;  // edge pixels per disc pixel outside the hand
   int hold_samples = 1;
   double border_reach = 0.05;  // fraction of the width / height
+  // The models' runtime: "native" (in process, XNNPACK) or "wasm" (Node,
+  // TFLite's WebAssembly runtime; the reference). filters/hand_models.h.
+  std::string backend = "native";
+  // Run the models only after the cheap verdicts (shot boundary and camera
+  // motion, judged on the built-in detector's boxes in the one decode) keep
+  // the clip, and only on its kept shot: filters/deferred_hand_models.h.
+  // false: the models run in the decode, on every sample of every clip.
+  bool after_cheap_verdicts = true;
+  // Memory for the frames kept meanwhile (megabytes; see there).
+  double keep_mb = 1024;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
                                                 min_score, fingertip_reach, hand_thickness,
-                                                min_object_edges, hold_samples, border_reach)
+                                                min_object_edges, hold_samples, border_reach, backend,
+                                                after_cheap_verdicts, keep_mb)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const LearnedDetectorConfig& c, const std::string& section);
 
@@ -66,6 +77,9 @@ struct FingertipEvidence {
 };
 FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedHand& hand,
                                           const LearnedDetectorConfig& config);
+
+// Frames between two samples (>= 1) at the clip's frame rate.
+std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config);
 
 class LearnedHandDetector : public FrameConsumer {
  public:

@@ -1,6 +1,7 @@
 #include "pipeline/stage_registry.h"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "core/config_check.h"
 #include "pipeline/stage_timeouts.h"
@@ -34,7 +35,12 @@ StageEntry Entry(const std::string& name, std::string summary, bool in_default_p
           .make = [name](const Json& config) -> std::unique_ptr<Stage> {
             ConfigT c;
             ReadCheckedSection(config, name, c);
-            return std::make_unique<StageT>(c);
+            // A stage that also reads other sections gets the whole file.
+            if constexpr (std::is_constructible_v<StageT, ConfigT, const Json&>) {
+              return std::make_unique<StageT>(c, config);
+            } else {
+              return std::make_unique<StageT>(c);
+            }
           },
           .check =
               [name](const Json& config) {

@@ -14,6 +14,7 @@ PACKAGES=(
   libembree-dev
   libhdf5-dev python3-h5py python3-numpy
   libzip-dev
+  libxnnpack-dev libpthreadpool-dev
   libcurl4-openssl-dev libssl-dev
   libopenexr-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev

@@ -87,6 +87,10 @@ const Json& Analysis(const std::string& name) {
   if (it == cache.end()) {
     AnalyzeConfig config;
     config.hand_detector = "learned";
+    // The models on every clip, so each filter's verdict from the learned
+    // boxes is seen (the default runs them only on clips the cheap verdicts
+    // keep: filters_deferred_models_test).
+    config.learned_detector.after_cheap_verdicts = false;
     it = cache.emplace(name, AnalyzeClip(Video(name), DecoderOptions{}, {}, config).measurements)
              .first;
   }

@@ -1,0 +1,178 @@
+#include "filters/hand_models.h"
+
+#include <time.h>
+
+#include <fstream>
+#include <mutex>
+#include <regex>
+#include <sstream>
+#include <utility>
+
+#include "core/data_dirs.h"
+#include "core/error.h"
+#include "filters/xnnpack_graph.h"
+
+namespace doasido::filters {
+
+namespace {
+
+constexpr const char* kLandmarkFile = "hand_landmark_full.tflite";
+constexpr const char* kPackedAssets = "hands_solution_packed_assets.data";
+constexpr const char* kPackedLoader = "hands_solution_packed_assets_loader.js";
+
+// CPU time of this thread: what the models cost, whatever else the machine runs.
+double ThreadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+// Output index of the tensor called `name` (the models name them Identity,
+// Identity_1, ...).
+std::size_t OutputNamed(const TfliteModel& m, const std::string& name) {
+  for (std::size_t i = 0; i < m.outputs.size(); ++i) {
+    if (m.tensors[m.outputs[i]].name == name) return i;
+  }
+  throw Error("bad_model", "no output named " + name, {.file = m.path});
+}
+
+// The parsed models, read once per process and shared by every thread's
+// graphs (XNNPACK reads the weights from them).
+struct ParsedModels {
+  std::shared_ptr<const TfliteModel> palm, landmark;
+};
+ParsedModels LoadParsedModels() {
+  static std::mutex mutex;
+  static ParsedModels models;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (!models.palm) {
+    const std::filesystem::path dir = MediapipeHandsDir();
+    const auto [begin, end] = PalmModelRange(dir);
+    models.palm = std::make_shared<TfliteModel>(ReadTfliteModel(dir / kPackedAssets, begin, end));
+    models.landmark = std::make_shared<TfliteModel>(ReadTfliteModel(dir / kLandmarkFile));
+  }
+  return models;
+}
+
+// One thread's pair of graphs.
+struct ThreadGraphs {
+  explicit ThreadGraphs(const ParsedModels& m)
+      : palm(m.palm), landmark(m.landmark),
+        palm_boxes(OutputNamed(*m.palm, "Identity")),
+        palm_scores(OutputNamed(*m.palm, "Identity_1")),
+        screen(OutputNamed(*m.landmark, "Identity")),
+        presence(OutputNamed(*m.landmark, "Identity_1")),
+        right(OutputNamed(*m.landmark, "Identity_2")),
+        world(OutputNamed(*m.landmark, "Identity_3")) {
+    if (palm.input_size() != kPalmInputSize * kPalmInputSize * 3 ||
+        landmark.input_size() != kLandmarkInputSize * kLandmarkInputSize * 3 ||
+        palm.output(palm_boxes).size() != kPalmAnchors * kPalmValues) {
+      throw Error("bad_model", "the hand models' tensors are not the sizes MediaPipe Hands has",
+                  {.file = m.palm->path});
+    }
+  }
+  XnnpackGraph palm, landmark;
+  std::size_t palm_boxes, palm_scores, screen, presence, right, world;
+};
+
+class NativeHandModels : public HandModels {
+ public:
+  NativeHandModels() {
+    thread_local std::unique_ptr<ThreadGraphs> graphs;
+    if (!graphs) graphs = std::make_unique<ThreadGraphs>(LoadParsedModels());
+    graphs_ = graphs.get();
+  }
+  void Palm(const float* input, PalmOutput* out) override {
+    const double start = ThreadCpuMs();
+    XnnpackGraph& g = graphs_->palm;
+    std::copy(input, input + g.input_size(), g.input());
+    g.Run();
+    out->regressors = g.output(graphs_->palm_boxes);
+    out->logits = g.output(graphs_->palm_scores);
+    ms_ += ThreadCpuMs() - start;
+  }
+  void Landmark(const float* input, LandmarkOutput* out) override {
+    const double start = ThreadCpuMs();
+    XnnpackGraph& g = graphs_->landmark;
+    std::copy(input, input + g.input_size(), g.input());
+    g.Run();
+    out->screen = g.output(graphs_->screen);
+    out->presence = g.output(graphs_->presence).at(0);
+    out->right = g.output(graphs_->right).at(0);
+    out->world = g.output(graphs_->world);
+    ms_ += ThreadCpuMs() - start;
+  }
+  double TakeModelMs() override { return std::exchange(ms_, 0.0); }
+  const char* backend() const override { return kBackendNative; }
+
+ private:
+  ThreadGraphs* graphs_ = nullptr;  // this thread's, lives as long as the thread
+  double ms_ = 0;
+};
+
+}  // namespace
+
+std::filesystem::path MediapipeHandsDir() { return NpmDir() / "node_modules" / "@mediapipe/hands"; }
+
+std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& hands_dir) {
+  const std::filesystem::path loader = hands_dir / kPackedLoader;
+  std::ifstream in(loader);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string s = text.str();
+  std::smatch m;
+  static const std::regex range(
+      R"re(palm_detection_full\.tflite", "start": (\d+), "end": (\d+))re");
+  if (!std::regex_search(s, m, range)) {
+    throw Error("hand_detector_unavailable",
+                "palm_detection_full.tflite is not listed in the @mediapipe/hands loader",
+                {.file = loader.string()});
+  }
+  return {std::stoull(m[1].str()), std::stoull(m[2].str())};
+}
+
+bool HandModelFilesAvailable(std::string* why) {
+  const std::filesystem::path dir = MediapipeHandsDir();
+  for (const char* file : {kLandmarkFile, kPackedAssets, kPackedLoader}) {
+    if (!std::filesystem::exists(dir / file)) {
+      if (why) {
+        *why = (dir / file).string() +
+               " is missing (scripts/setup.sh installs the npm package @mediapipe/hands)";
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
+std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip) {
+  std::string why;
+  if (!HandModelFilesAvailable(&why)) {
+    throw Error("hand_detector_unavailable", why, {.clip = clip});
+  }
+  try {
+    return std::make_unique<NativeHandModels>();
+  } catch (const Error& e) {
+    throw Error("hand_detector_unavailable", "the native hand models cannot load: " + e.message(),
+                {.clip = clip, .file = e.site().file});
+  }
+}
+
+std::unique_ptr<HandModels> MakeHandModels(const std::string& backend, const std::string& clip,
+                                           bool fallback, std::string* note) {
+  if (backend == kBackendWasm) return MakeWasmHandModels(clip);
+  if (backend != kBackendNative) {
+    throw Error("bad_config", "hand model backend must be native or wasm, not " + backend,
+                {.clip = clip, .field = "backend"});
+  }
+  try {
+    return MakeNativeHandModels(clip);
+  } catch (const Error& e) {
+    if (!fallback) throw;
+    auto wasm = MakeWasmHandModels(clip);
+    if (note) *note = std::string(e.what()) + "; using the WebAssembly runtime instead";
+    return wasm;
+  }
+}
+
+}  // namespace doasido::filters

@@ -191,7 +191,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
     watch.Set(claim);
     if (!claim) {
       if (options.until_empty) {
-        const auto s = db.Summary();
+        const auto s = db.Summary(options.stages);
         if (s.pending == 0 && s.running == 0) break;
       }
       std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));
@@ -264,7 +264,7 @@ int RunWorkers(const WorkerOptions& options) {
         children.erase(pid);
         const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == kTimedOutExitCode;
         if ((WIFSIGNALED(status) || timed_out) && !g_stop) {
-          const auto s = db.Summary();
+          const auto s = db.Summary(options.stages);
           const std::string why = timed_out ? std::string("ended after a stage timeout")
                                             : "died from signal " + std::to_string(WTERMSIG(status));
           spdlog::warn("worker {} {}; {}", pid, why,

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
         std::to_string(clips) + " --frames 24 --width 96 --height 72 --mix clean=1 --seed 3" +
         " --no-annotations");
   }
-  const std::string tool = "python3 " + std::string(DOASIDO_SOURCE_DIR) + "/tools/bundle_server.py";
+  const std::string tool = "/usr/bin/python3 " + std::string(DOASIDO_SOURCE_DIR) + "/tools/bundle_server.py";
   const std::string load = " --load-s " + std::to_string(load_s);
   std::printf("%d clips, simulated load %.1f s, doasido run --jobs %d\n", clips, load_s, jobs);
   const ModeResult server = RunMode(dir, "server", "server = \"" + tool + load + "\"\n",

@@ -30,7 +30,8 @@ using doasido::testing::SourceDir;
 using doasido::testing::TempDir;
 using doasido::testing::WriteFile;
 
-std::string Tool() { return "python3 " + (SourceDir() / "tools/bundle_server.py").string(); }
+// Debian's python3, which has python3-numpy (a python3 earlier in PATH may not).
+std::string Tool() { return "/usr/bin/python3 " + (SourceDir() / "tools/bundle_server.py").string(); }
 
 // Synthetic clips with their ground-truth bundles; returns the clip list.
 std::filesystem::path Synth(const TempDir& dir, int clips) {

@@ -128,7 +128,7 @@ TEST(Slurm, StageGroupsOnTheirOwnResourcesEqualOneMachineAfterAGroupTaskIsResume
       "probe,filters_analyze,shot_boundary,interaction,out_of_frame,activity,camera_motion,"
       "bundle,recon,retarget_kinematic";
   const auto config = dir / "models.toml";
-  doasido::testing::WriteFile(config, "[bundle]\nserver = \"python3 " +
+  doasido::testing::WriteFile(config, "[bundle]\nserver = \"/usr/bin/python3 " +
                                           (doasido::testing::SourceDir() / "tools/bundle_server.py").string() +
                                           " --load-s 0.2\"\n");
   auto ingested = [&](const std::string& name) {

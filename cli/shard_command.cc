@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "cli/commands.h"
@@ -167,13 +168,21 @@ std::vector<pipeline::SlurmGroup> SubmitGroups(Database& db, const SlurmCliOptio
   return groups;
 }
 
+std::optional<pipeline::SlurmSubmission> StoredSubmission(Database& db) {
+  const auto stored = db.GetMeta(pipeline::kSlurmSubmitMetaKey);
+  if (!stored) return std::nullopt;  // submitted before stage groups existed
+  return Json::parse(*stored).get<pipeline::SlurmSubmission>();
+}
+
 // The groups the parent was submitted with (its meta), with the resources
-// given to `slurm resume` in place of theirs.
-std::vector<pipeline::SlurmGroup> ResumeGroups(Database& db, const SlurmCliOptions& o) {
-  const auto stored = db.GetMeta(pipeline::kSlurmGroupsMetaKey);
-  if (!stored) return SubmitGroups(db, o);  // submitted before stage groups existed
-  std::vector<pipeline::SlurmGroup> groups =
-      Json::parse(*stored).get<std::vector<pipeline::SlurmGroup>>();
+// given to `slurm resume` in place of theirs; the submission's --config and
+// --scratch unless given again.
+std::vector<pipeline::SlurmGroup> ResumeGroups(Database& db, SlurmCliOptions& o) {
+  const auto stored = StoredSubmission(db);
+  if (!stored) return SubmitGroups(db, o);
+  if (o.shard.db.config.empty()) o.shard.db.config = stored->config;
+  o.slurm.scratch = o.slurm.scratch || stored->scratch;
+  std::vector<pipeline::SlurmGroup> groups = stored->groups;
   const auto& d = o.slurm.defaults;
   for (auto& g : groups) {
     if (!d.partition.empty()) g.partition = d.partition;
@@ -329,7 +338,10 @@ void AddSlurm(CLI::App& app) {
       PrintFile(scripts.merge);
       return;
     }
-    db.SetMeta(pipeline::kSlurmGroupsMetaKey, Json(groups).dump());
+    const pipeline::SlurmSubmission submission{
+        groups, o->slurm.config.empty() ? "" : std::filesystem::absolute(o->slurm.config).string(),
+        o->slurm.scratch};
+    db.SetMeta(pipeline::kSlurmSubmitMetaKey, Json(submission).dump());
     Submit(db, fresh, scripts, groups, {{0, {}}});
   });
 
@@ -388,9 +400,7 @@ void PrintShardTable(Database& db) {
   const auto shards = db.ListShards();
   if (shards.empty()) return;
   std::vector<pipeline::SlurmGroup> groups;
-  if (const auto stored = db.GetMeta(pipeline::kSlurmGroupsMetaKey)) {
-    groups = Json::parse(*stored).get<std::vector<pipeline::SlurmGroup>>();
-  }
+  if (const auto stored = StoredSubmission(db)) groups = stored->groups;
   std::printf("\n%-10s %7s %9s %7s %7s %-16s %-10s %s\n", "shard", "clips", "finished", "failed",
               "open", "slurm", "merged", "database");
   for (const auto& p :

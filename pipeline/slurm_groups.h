@@ -47,7 +47,15 @@ void CheckSlurmGroups(const std::vector<SlurmGroup>& groups,
 // Index of the group that runs `stage`; -1 when none does.
 int GroupOfStage(const std::vector<SlurmGroup>& groups, const std::string& stage);
 
-// The parent database's meta key holding the submitted groups (JSON list).
-inline constexpr const char* kSlurmGroupsMetaKey = "slurm_groups";
+// What `slurm submit` keeps in the parent database's meta (JSON) for
+// `slurm resume` and `status`: the groups and the --config and --scratch
+// the tasks ran with.
+inline constexpr const char* kSlurmSubmitMetaKey = "slurm_submit";
+struct SlurmSubmission {
+  std::vector<SlurmGroup> groups;
+  std::string config;  // absolute; empty: none
+  bool scratch = false;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlurmSubmission, groups, config, scratch)
 
 }  // namespace doasido::pipeline

@@ -119,14 +119,13 @@ TEST(Slurm, StageGroupsOnTheirOwnResourcesEqualOneMachineAfterAGroupTaskIsResume
   ASSERT_TRUE(cluster.WaitIdle(60)) << cluster.Logs();
 
   const auto pool = dir / "pool";
-  ASSERT_EQ(RunDoasido({"synth", "--out", pool.string(), "--clips", "16", "--frames", "24",
+  ASSERT_EQ(RunDoasido({"synth", "--out", pool.string(), "--clips", "12", "--frames", "24",
                         "--width", "96", "--height", "72", "--mix", "clean=1", "--seed", "7",
                         "--no-annotations"})
                 .exit_code,
             0);
   const std::string pipeline =
-      "probe,filters_analyze,shot_boundary,interaction,out_of_frame,activity,camera_motion,"
-      "bundle,recon,retarget_kinematic";
+      "probe,filters_analyze,shot_boundary,out_of_frame,activity,bundle,recon,retarget_kinematic";
   const auto config = dir / "models.toml";
   doasido::testing::WriteFile(config, "[bundle]\nserver = \"/usr/bin/python3 " +
                                           (doasido::testing::SourceDir() / "tools/bundle_server.py").string() +
@@ -149,7 +148,7 @@ TEST(Slurm, StageGroupsOnTheirOwnResourcesEqualOneMachineAfterAGroupTaskIsResume
   const auto parent = ingested("parent");
   const auto submit = RunDoasido(
       {"slurm", "submit", "--db", parent.string(), "--shards", "4", "--config", config.string(),
-       "--time", "00:30:00", "--group", "probe..camera_motion name=filters", "--group",
+       "--time", "00:30:00", "--group", "probe..activity name=filters", "--group",
        "bundle name=gpu partition=gpu gpus=1", "--group", "recon..retarget_kinematic name=recon"});
   ASSERT_EQ(submit.exit_code, 0) << submit.err << cluster.Logs();
   std::smatch m;

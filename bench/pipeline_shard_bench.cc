@@ -15,8 +15,8 @@
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
 //    merged. Overhead = (shard + merge) / (sum of the shard runs).
 // 3. Through Slurm (as root, with Debian's slurm-wlm and munge; then again in
-//    three stage groups, the middle one on partition gpu with a GRES): the same
-//    clips in a fresh parent, `doasido slurm submit --shards 4
+//    three stage groups, the middle one, a light stage, on partition gpu with
+//    a GRES): the same clips in a fresh parent, `doasido slurm submit --shards 4
 //    --cpus-per-task 1` to a one-node cluster started on loopback
 //    (tests/slurm/loopback_cluster.h), timed from the submit command to the
 //    merge job's end by polling squeue every 0.2 s, against the one
@@ -178,9 +178,11 @@ double StageSeconds(const std::filesystem::path& db) {
 }
 
 // The same clips in three stage groups (pipeline/slurm_groups.h): the
-// pipeline's first two stages, the next two on partition gpu with the
-// node's GRES, the rest; timed from the submit command until the merge job
-// has left the queue, against the one run and the one-group submission.
+// pipeline's first three stages, the fourth alone on partition gpu with the
+// node's one GRES (so its tasks run one at a time: a light stage there, or
+// the GPU queue is what is measured), the rest; timed from the submit
+// command until the merge job has left the queue, against the one run and
+// the one-group submission.
 void ThroughSlurmInGroups(const std::filesystem::path& dir, const std::string& pool,
                           double one_run_s, double one_group_s) {
   const std::string bin = DOASIDO_BIN;
@@ -191,10 +193,9 @@ void ThroughSlurmInGroups(const std::filesystem::path& dir, const std::string& p
   const auto stages =
       doasido::testing::QueryRows(parent, "SELECT stage FROM pipeline ORDER BY position");
   if (stages.size() < 5) return;
-  const std::string groups = " --group '" + stages[0] + ".." + stages[1] + " name=first'" +
-                             " --group '" + stages[2] + ".." + stages[3] +
-                             " name=gpu partition=gpu gpus=1'" + " --group '" + stages[4] + ".." +
-                             stages.back() + " name=rest'";
+  const std::string groups = " --group '" + stages[0] + ".." + stages[2] + " name=first'" +
+                             " --group '" + stages[3] + " name=gpu partition=gpu gpus=1'" +
+                             " --group '" + stages[4] + ".." + stages.back() + " name=rest'";
   const auto t0 = Clock::now();
   const std::string out = doasido::testing::Shell(
       bin + " slurm submit --db " + parent + " --shards 4 --cpus-per-task 1 --time 02:00:00" +
@@ -212,12 +213,12 @@ void ThroughSlurmInGroups(const std::filesystem::path& dir, const std::string& p
   const double total = Since(t0);
   const std::string left = doasido::testing::QueryRows(
       parent, "SELECT COUNT(*) FROM stage_runs WHERE state <> 'done'")[0];
-  std::printf("through Slurm in 3 stage groups (%s..%s | %s..%s on partition gpu, gres gpu:1 |"
+  std::printf("through Slurm in 3 stage groups (%s..%s | %s on partition gpu, gres gpu:1 |"
               " %s..%s), 4 shards: %.1f s from submit to merged (submit %.2f s), ratio %.3f to"
               " the one run, %.3f to the one-group submission; stage runs not done: %s\n",
-              stages[0].c_str(), stages[1].c_str(), stages[2].c_str(), stages[3].c_str(),
-              stages[4].c_str(), stages.back().c_str(), total, submitted, total / one_run_s,
-              total / one_group_s, left.c_str());
+              stages[0].c_str(), stages[2].c_str(), stages[3].c_str(), stages[4].c_str(),
+              stages.back().c_str(), total, submitted, total / one_run_s, total / one_group_s,
+              left.c_str());
 }
 
 void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, double one_run_s,

@@ -14,8 +14,9 @@
 //    default pipeline with one `doasido run --jobs 2`, and the same clips
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
 //    merged. Overhead = (shard + merge) / (sum of the shard runs).
-// 3. Through Slurm (as root, with Debian's slurm-wlm and munge): the same
-//    clips in a fresh parent, `doasido slurm submit --shards 4
+// 3. Through Slurm (as root, with Debian's slurm-wlm and munge; then again in
+//    three stage groups, the middle one, a light stage, on partition gpu with
+//    a GRES): the same clips in a fresh parent, `doasido slurm submit --shards 4
 //    --cpus-per-task 1` to a one-node cluster started on loopback
 //    (tests/slurm/loopback_cluster.h), timed from the submit command to the
 //    merge job's end by polling squeue every 0.2 s, against the one
@@ -176,6 +177,50 @@ double StageSeconds(const std::filesystem::path& db) {
       db, "SELECT COALESCE(SUM(duration_s), 0) FROM stage_runs")[0]);
 }
 
+// The same clips in three stage groups (pipeline/slurm_groups.h): the
+// pipeline's first three stages, the fourth alone on partition gpu with the
+// node's one GRES (so its tasks run one at a time: a light stage there, or
+// the GPU queue is what is measured), the rest; timed from the submit
+// command until the merge job has left the queue, against the one run and
+// the one-group submission.
+void ThroughSlurmInGroups(const std::filesystem::path& dir, const std::string& pool,
+                          double one_run_s, double one_group_s) {
+  const std::string bin = DOASIDO_BIN;
+  const std::string parent = (dir / "slurm-groups/d.db").string();
+  std::filesystem::create_directories(std::filesystem::path(parent).parent_path());
+  Run(bin + " init --db " + parent);
+  Run(bin + " ingest --db " + parent + " " + pool + "/Annotations");
+  const auto stages =
+      doasido::testing::QueryRows(parent, "SELECT stage FROM pipeline ORDER BY position");
+  if (stages.size() < 5) return;
+  const std::string groups = " --group '" + stages[0] + ".." + stages[2] + " name=first'" +
+                             " --group '" + stages[3] + " name=gpu partition=gpu gpus=1'" +
+                             " --group '" + stages[4] + ".." + stages.back() + " name=rest'";
+  const auto t0 = Clock::now();
+  const std::string out = doasido::testing::Shell(
+      bin + " slurm submit --db " + parent + " --shards 4 --cpus-per-task 1 --time 02:00:00" +
+      groups);
+  std::smatch m;
+  if (!std::regex_search(out, m, std::regex("merge job (\\d+)"))) {
+    std::fprintf(stderr, "slurm submit: %s\n", out.c_str());
+    std::exit(1);
+  }
+  const double submitted = Since(t0);
+  const std::regex merge("(^|\n)" + m[1].str() + " ");
+  while (std::regex_search(doasido::testing::Shell("squeue -h -o '%i %T'"), merge)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  const double total = Since(t0);
+  const std::string left = doasido::testing::QueryRows(
+      parent, "SELECT COUNT(*) FROM stage_runs WHERE state <> 'done'")[0];
+  std::printf("through Slurm in 3 stage groups (%s..%s | %s on partition gpu, gres gpu:1 |"
+              " %s..%s), 4 shards: %.1f s from submit to merged (submit %.2f s), ratio %.3f to"
+              " the one run, %.3f to the one-group submission; stage runs not done: %s\n",
+              stages[0].c_str(), stages[2].c_str(), stages[3].c_str(), stages[4].c_str(),
+              stages.back().c_str(), total, submitted, total / one_run_s, total / one_group_s,
+              left.c_str());
+}
+
 void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, double one_run_s,
                   const std::filesystem::path& one_run_db) {
   const std::string bin = DOASIDO_BIN;
@@ -225,6 +270,7 @@ void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, dou
   }
   std::printf("  stage runs: one run %.1f s, the parent after the merge %.1f s\n",
               StageSeconds(one_run_db), StageSeconds(parent));
+  ThroughSlurmInGroups(dir, pool, one_run_s, p.merge_done);
 }
 
 // The synthetic clips, rendered once per size and kept between runs of the

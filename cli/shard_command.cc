@@ -2,6 +2,9 @@
 // machine (pipeline/shard.h, pipeline/slurm.h).
 #include <algorithm>
 #include <cstdio>
+#include <map>
+#include <optional>
+#include <set>
 
 #include "cli/commands.h"
 #include "cli/option_checks.h"
@@ -146,36 +149,114 @@ void AddMerge(CLI::App& app) {
 struct SlurmCliOptions {
   ShardCliOptions shard;
   pipeline::SlurmOptions slurm;
+  std::vector<std::string> groups;  // --group specs (submit)
   bool dry_run = false;
+  CLI::Option* cpus = nullptr;      // to tell a given --cpus-per-task from the default
 };
 
 void AddSlurmOptions(CLI::App& cmd, SlurmCliOptions& o) {
-  cmd.add_option("--partition", o.slurm.partition, "Slurm partition");
-  cmd.add_option("--cpus-per-task", o.slurm.cpus_per_task, "CPUs per task (= doasido run --jobs)")->check(FiniteRange(1, 1024))
-      ->capture_default_str()
-      ->check(CLI::Range(1, 4096));
-  cmd.add_option("--mem", o.slurm.mem, "Memory per task, e.g. 8G");
-  cmd.add_option("--time", o.slurm.time, "Time limit per task, e.g. 04:00:00");
+  cmd.add_option("--partition", o.slurm.defaults.partition, "Slurm partition");
+  o.cpus = cmd.add_option("--cpus-per-task", o.slurm.defaults.cpus_per_task,
+                          "CPUs per task (= doasido run --jobs)")
+               ->capture_default_str()
+               ->check(FiniteRange(1, 4096));
+  cmd.add_option("--mem", o.slurm.defaults.mem, "Memory per task, e.g. 8G");
+  cmd.add_option("--time", o.slurm.defaults.time, "Time limit per task, e.g. 04:00:00");
   cmd.add_option("--account", o.slurm.account, "Slurm account");
   cmd.add_flag("--scratch", o.slurm.scratch,
                "Run each shard on node-local disk and copy it back when the task ends");
   cmd.add_flag("--dry-run", o.dry_run, "Write and print the scripts; submit nothing");
 }
 
-// Submits the array (every task, or the listed ones) and a merge job after it.
+std::string Join(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string out;
+  for (const auto& p : parts) out += (out.empty() ? "" : separator) + p;
+  return out;
+}
+
+// The groups of a new submission: one of the whole pipeline without --group.
+std::vector<pipeline::SlurmGroup> SubmitGroups(Database& db, const SlurmCliOptions& o) {
+  pipeline::SlurmGroup defaults = o.slurm.defaults;
+  defaults.stages.clear();
+  if (o.groups.empty()) {
+    defaults.name = "all";
+    return {defaults};
+  }
+  std::vector<pipeline::SlurmGroup> groups;
+  for (const auto& spec : o.groups) {
+    groups.push_back(pipeline::ParseSlurmGroup(spec, db.Pipeline(), defaults,
+                                               static_cast<int>(groups.size()) + 1));
+  }
+  pipeline::CheckSlurmGroups(groups, db.Pipeline());
+  return groups;
+}
+
+std::optional<pipeline::SlurmSubmission> StoredSubmission(Database& db) {
+  const auto stored = db.GetMeta(pipeline::kSlurmSubmitMetaKey);
+  if (!stored) return std::nullopt;  // submitted before stage groups existed
+  return Json::parse(*stored).get<pipeline::SlurmSubmission>();
+}
+
+// The groups the parent was submitted with (its meta), with the resources
+// given to `slurm resume` in place of theirs; the submission's --config and
+// --scratch unless given again.
+std::vector<pipeline::SlurmGroup> ResumeGroups(Database& db, SlurmCliOptions& o) {
+  const auto stored = StoredSubmission(db);
+  if (!stored) return SubmitGroups(db, o);
+  if (o.shard.db.config.empty()) o.shard.db.config = stored->config;
+  o.slurm.scratch = o.slurm.scratch || stored->scratch;
+  std::vector<pipeline::SlurmGroup> groups = stored->groups;
+  const auto& d = o.slurm.defaults;
+  for (auto& g : groups) {
+    if (!d.partition.empty()) g.partition = d.partition;
+    if (!d.mem.empty()) g.mem = d.mem;
+    if (!d.time.empty()) g.time = d.time;
+    if (o.cpus && o.cpus->count() > 0) g.cpus_per_task = d.cpus_per_task;
+  }
+  return groups;
+}
+
+// Submits, per first group, the chain of group arrays from it to the last
+// over `tasks` (empty: all), each task after the same task of the group
+// before (aftercorr), then one merge job after every chain's last array.
 void Submit(Database& db, const std::vector<Database::ShardRow>& shards,
-            const pipeline::SlurmScripts& scripts, const std::vector<size_t>& tasks) {
-  std::string list;
-  for (size_t t : tasks) list += (list.empty() ? "" : ",") + std::to_string(t);
-  const std::string array = pipeline::Sbatch(scripts.array, list);
-  const std::string merge = pipeline::Sbatch(scripts.merge, "", array);
-  for (size_t i = 0; i < shards.size(); ++i) {
-    if (tasks.empty() || std::find(tasks.begin(), tasks.end(), i) != tasks.end()) {
-      db.SetShardJob(shards[i].name, array, static_cast<std::int64_t>(i));
+            const pipeline::SlurmScripts& scripts,
+            const std::vector<pipeline::SlurmGroup>& groups,
+            const std::map<int, std::vector<size_t>>& first_group_tasks) {
+  std::vector<std::string> last_arrays;
+  for (const auto& [first, tasks] : first_group_tasks) {
+    std::vector<std::string> task_ids;
+    for (size_t t : tasks) task_ids.push_back(std::to_string(t));
+    const std::string list = Join(task_ids, ",");
+    std::vector<std::string> chain;
+    for (size_t g = static_cast<size_t>(first); g < groups.size(); ++g) {
+      const std::string after = chain.empty() ? "" : "aftercorr:" + chain.back();
+      chain.push_back(pipeline::Sbatch(scripts.groups[g], list, after));
+      if (groups.size() > 1) {
+        std::printf("submitted group %s: array job %s (tasks %s)%s\n", groups[g].name.c_str(),
+                    chain.back().c_str(), list.empty() ? "all" : list.c_str(),
+                    after.empty() ? "" : (", each task after its own in " + after).c_str());
+      }
+    }
+    last_arrays.push_back(chain.back());
+    for (size_t i = 0; i < shards.size(); ++i) {
+      if (!tasks.empty() && std::find(tasks.begin(), tasks.end(), i) == tasks.end()) continue;
+      std::vector<std::string> jobs = pipeline::ShardJobs(shards[i]);
+      jobs.resize(groups.size());
+      for (size_t g = static_cast<size_t>(first); g < groups.size(); ++g) {
+        jobs[g] = chain[g - static_cast<size_t>(first)];
+      }
+      db.SetShardJob(shards[i].name, Join(jobs, ","), static_cast<std::int64_t>(i));
+    }
+    if (groups.size() == 1) {
+      std::printf("submitted array job %s (tasks %s)", chain.back().c_str(),
+                  list.empty() ? "all" : list.c_str());
     }
   }
-  std::printf("submitted array job %s (tasks %s) and merge job %s (afterany:%s)\n",
-              array.c_str(), list.empty() ? "all" : list.c_str(), merge.c_str(), array.c_str());
+  const std::string after = "afterany:" + Join(last_arrays, ":");
+  const std::string merge = pipeline::Sbatch(scripts.merge, "", after);
+  std::printf("%smerge job %s (%s)\n", groups.size() == 1 ? " and " : "submitted ",
+              merge.c_str(), after.c_str());
 }
 
 void PrintFile(const std::filesystem::path& path) {
@@ -183,48 +264,108 @@ void PrintFile(const std::filesystem::path& path) {
 }
 
 pipeline::SlurmScripts Scripts(Database& db, const std::vector<Database::ShardRow>& shards,
+                               const std::vector<pipeline::SlurmGroup>& groups,
                                SlurmCliOptions& o) {
   std::vector<std::filesystem::path> dbs;
   for (const auto& s : shards) dbs.push_back(s.path);
   o.slurm.doasido = pipeline::SelfExecutable();
   if (!o.shard.db.config.empty()) o.slurm.config = o.shard.db.config;
   const auto dir = shards.front().path.parent_path().parent_path();
-  return pipeline::WriteSlurmScripts(dir, db.path(), dbs, o.slurm);
+  return pipeline::WriteSlurmScripts(dir, db.path(), dbs, groups, o.slurm);
+}
+
+// Every array job of every shard, for squeue.
+std::vector<std::string> AllShardJobs(const std::vector<Database::ShardRow>& shards) {
+  std::set<std::string> jobs;
+  for (const auto& s : shards) {
+    for (const auto& j : pipeline::ShardJobs(s)) {
+      if (!j.empty()) jobs.insert(j);
+    }
+  }
+  return {jobs.begin(), jobs.end()};
+}
+
+// What `slurm resume` does for one shard: nothing (empty), or the tasks to
+// cancel first (stuck behind a task that failed) and the group to start at.
+struct ResumePlan {
+  bool resubmit = false;
+  int first_group = 0;
+  std::vector<std::string> cancel;
+};
+ResumePlan PlanResume(const pipeline::ShardProgress& p,
+                      const std::vector<pipeline::SlurmGroup>& groups,
+                      const std::map<std::string, pipeline::SlurmTask>& states) {
+  ResumePlan plan;
+  if (p.runs_open == 0) return plan;
+  // aftercorr: a task whose predecessor failed or was cancelled waits forever.
+  const bool stuck = p.slurm_group >= 0 && p.slurm_state == "PENDING" &&
+                     p.slurm_reason == "DependencyNeverSatisfied";
+  if (p.slurm_group >= 0 && !stuck) return plan;  // queued or running: leave it
+  plan.resubmit = true;
+  plan.first_group = static_cast<int>(groups.size()) - 1;
+  for (const auto& stage : p.open_stages) {
+    const int g = pipeline::GroupOfStage(groups, stage);
+    if (g >= 0) plan.first_group = std::min(plan.first_group, g);
+  }
+  const auto jobs = pipeline::ShardJobs(p.shard);
+  for (const auto& job : jobs) {
+    const std::string id = job + "_" + std::to_string(p.shard.slurm_task.value_or(0));
+    if (!job.empty() && states.count(id)) plan.cancel.push_back(id);
+  }
+  return plan;
 }
 
 void AddSlurm(CLI::App& app) {
-  auto* slurm = app.add_subcommand("slurm", "Run the queue as a Slurm job array and merge it back");
+  auto* slurm = app.add_subcommand("slurm", "Run the queue as Slurm job arrays and merge it back");
   slurm->require_subcommand(1);
 
   auto o = std::make_shared<SlurmCliOptions>();
   auto* submit = slurm->add_subcommand(
-      "submit", "Shard the unfinished clips, submit one array task per shard and a merge job");
+      "submit", "Shard the unfinished clips, submit one array task per shard (per stage group) "
+                "and a merge job");
   AddShardOptions(*submit, o->shard);
   AddSlurmOptions(*submit, *o);
+  submit->add_option(
+      "--group", o->groups,
+      "Stage group 'STAGES [key=value ...]', repeatable, in pipeline order: STAGES is FIRST..LAST, "
+      "a,b,c or one stage; keys name, partition, cpus, mem, time, gres, gpus (gpus=N means "
+      "gres=gpu:N); unset keys take --partition, --cpus-per-task, --mem, --time");
   submit->footer(
-      "Writes <out>/array.sbatch, <out>/merge.sbatch and <out>/shards.txt, submits both\n"
-      "with sbatch (the merge waits for the array: afterany) and prints their ids.\n"
+      "Writes <out>/shards.txt, a script per stage group (<out>/array.sbatch without\n"
+      "--group, else <out>/group-<n>-<name>.sbatch) and <out>/merge.sbatch, submits them\n"
+      "with sbatch and prints their ids. Each group is a job array over the same shards;\n"
+      "task i of a group starts once task i of the group before it has succeeded\n"
+      "(aftercorr), and the merge waits for the last group's array (afterany).\n"
       "Shard databases live on the shared filesystem but are only opened by one task\n"
       "at a time; with --scratch each task works on node-local disk. `doasido status`\n"
       "shows each shard's progress; `doasido slurm resume` resubmits unfinished shards.\n\n"
-      "Example:\n"
+      "Examples:\n"
       "  doasido slurm submit --db work/doasido.db --shards 64 --partition cpu \\\n"
       "      --cpus-per-task 8 --mem 16G --time 08:00:00 --scratch\n"
+      "  doasido slurm submit --db work/doasido.db --shards 64 --partition cpu --time 04:00:00 \\\n"
+      "      --group 'probe..camera_motion cpus=4' \\\n"
+      "      --group 'bundle name=gpu partition=gpu gpus=1 mem=32G' \\\n"
+      "      --group 'recon..retarget_kinematic name=recon cpus=8'\n"
       "  doasido slurm submit --db work/doasido.db --shards 4 --dry-run   # scripts only");
   submit->callback([o] {
     Database db(o->shard.db.db, Database::OpenMode::kExisting);
+    const auto groups = SubmitGroups(db, *o);  // checked before anything is sharded
     MakeShards(db, o->shard);
     std::vector<Database::ShardRow> fresh;
     for (const auto& row : db.ListShards()) {
       if (row.slurm_job.empty()) fresh.push_back(row);
     }
-    const auto scripts = Scripts(db, fresh, *o);
+    const auto scripts = Scripts(db, fresh, groups, *o);
     if (o->dry_run) {
-      PrintFile(scripts.array);
+      for (const auto& g : scripts.groups) PrintFile(g);
       PrintFile(scripts.merge);
       return;
     }
-    Submit(db, fresh, scripts, {});
+    const pipeline::SlurmSubmission submission{
+        groups, o->slurm.config.empty() ? "" : std::filesystem::absolute(o->slurm.config).string(),
+        o->slurm.scratch};
+    db.SetMeta(pipeline::kSlurmSubmitMetaKey, Json(submission).dump());
+    Submit(db, fresh, scripts, groups, {{0, {}}});
   });
 
   auto r = std::make_shared<SlurmCliOptions>();
@@ -234,32 +375,39 @@ void AddSlurm(CLI::App& app) {
   AddSlurmOptions(*resume, *r);
   resume->footer(
       "For a task that failed, hit its time limit or was preempted: its shard's queue\n"
-      "continues where it stopped (the killed worker's leases expire). Shards whose\n"
-      "task is still queued or running are left alone.\n\n"
+      "continues where it stopped (the killed worker's leases expire), from the first\n"
+      "stage group with open runs, each later group after it as at submit. A shard whose\n"
+      "task is queued or running is left alone; tasks of later groups that wait for a\n"
+      "failed one (DependencyNeverSatisfied) are cancelled and submitted again. The\n"
+      "groups keep their resources unless given here (--partition, --cpus-per-task,\n"
+      "--mem, --time then apply to every group).\n\n"
       "Example:\n  doasido slurm resume --db work/doasido.db --time 04:00:00");
   resume->callback([r] {
     Database db(r->shard.db.db, Database::OpenMode::kExisting);
     const auto shards = db.ListShards();
     if (shards.empty()) throw Error("no_shards", "this database has no shards", {.file = db.path().string()});
-    std::vector<std::string> jobs;
-    for (const auto& s : shards) {
-      if (!s.slurm_job.empty()) jobs.push_back(s.slurm_job);
-    }
-    const auto progress = pipeline::ReadShardProgress(db, pipeline::SlurmTaskStates(jobs));
-    std::vector<size_t> tasks;
+    const auto groups = ResumeGroups(db, *r);
+    const auto states = pipeline::SlurmTaskStates(AllShardJobs(shards));
+    const auto progress = pipeline::ReadShardProgress(db, states);
+    std::map<int, std::vector<size_t>> first_group_tasks;
+    std::vector<std::string> cancel;
     for (size_t i = 0; i < progress.size(); ++i) {
-      if (progress[i].runs_open > 0 && progress[i].slurm_state.empty()) tasks.push_back(i);
+      const ResumePlan plan = PlanResume(progress[i], groups, states);
+      if (!plan.resubmit) continue;
+      first_group_tasks[plan.first_group].push_back(i);
+      cancel.insert(cancel.end(), plan.cancel.begin(), plan.cancel.end());
+      std::printf("%s task %zu (%s) from group %s%s\n", r->dry_run ? "would resubmit" : "resubmitting",
+                  i, shards[i].name.c_str(), groups[static_cast<size_t>(plan.first_group)].name.c_str(),
+                  plan.cancel.empty() ? "" : (", cancelling " + Join(plan.cancel, " ")).c_str());
     }
-    if (tasks.empty()) {
+    if (first_group_tasks.empty()) {
       std::printf("every shard is finished or still queued: nothing to resume\n");
       return;
     }
-    const auto scripts = Scripts(db, shards, *r);
-    if (r->dry_run) {
-      for (size_t t : tasks) std::printf("would resubmit task %zu (%s)\n", t, shards[t].name.c_str());
-      return;
-    }
-    Submit(db, shards, scripts, tasks);
+    if (r->dry_run) return;
+    const auto scripts = Scripts(db, shards, groups, *r);
+    pipeline::Scancel(cancel);
+    Submit(db, shards, scripts, groups, first_group_tasks);
   });
 }
 
@@ -274,18 +422,23 @@ void AddShardCommands(CLI::App& app) {
 void PrintShardTable(Database& db) {
   const auto shards = db.ListShards();
   if (shards.empty()) return;
-  std::vector<std::string> jobs;
-  for (const auto& s : shards) {
-    if (!s.slurm_job.empty()) jobs.push_back(s.slurm_job);
-  }
-  std::printf("\n%-10s %7s %9s %7s %7s %-12s %-10s %s\n", "shard", "clips", "finished", "failed",
+  std::vector<pipeline::SlurmGroup> groups;
+  if (const auto stored = StoredSubmission(db)) groups = stored->groups;
+  std::printf("\n%-10s %7s %9s %7s %7s %-16s %-10s %s\n", "shard", "clips", "finished", "failed",
               "open", "slurm", "merged", "database");
-  for (const auto& p : pipeline::ReadShardProgress(db, pipeline::SlurmTaskStates(jobs))) {
+  for (const auto& p :
+       pipeline::ReadShardProgress(db, pipeline::SlurmTaskStates(AllShardJobs(shards)))) {
+    // With stage groups: the group of the shard's first task still queued.
+    const std::string group =
+        groups.size() > 1 && p.slurm_group >= 0 &&
+                p.slurm_group < static_cast<int>(groups.size())
+            ? groups[static_cast<size_t>(p.slurm_group)].name + ":"
+            : "";
     const std::string slurm =
         p.shard.slurm_job.empty() ? "-"
-        : p.slurm_state.empty()   ? p.shard.slurm_job + " ended"
-                                  : p.slurm_state;
-    std::printf("%-10s %7lld %9lld %7lld %7lld %-12s %-10s %s%s\n", p.shard.name.c_str(),
+        : p.slurm_state.empty()   ? pipeline::ShardJobs(p.shard).back() + " ended"
+                                  : group + p.slurm_state;
+    std::printf("%-10s %7lld %9lld %7lld %7lld %-16s %-10s %s%s\n", p.shard.name.c_str(),
                 static_cast<long long>(p.shard.clips), static_cast<long long>(p.clips_finished),
                 static_cast<long long>(p.clips_failed), static_cast<long long>(p.runs_open),
                 slurm.c_str(), p.merged ? "yes" : (p.shard.merged_at ? "partly" : "no"),

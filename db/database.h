@@ -266,7 +266,9 @@ class Database {
   // Any state -> pending with attempts reset, and the clip's later stages
   // dropped. Empty stage is not allowed.
   std::int64_t Reset(const std::string& stage, std::optional<ClipId> clip);
-  QueueSummary Summary();
+  // Runs by state; of `stages` only when given (a worker limited to some
+  // stages is done when they are).
+  QueueSummary Summary(const std::vector<std::string>& stages = {});
   std::vector<StageCount> Counts();
   std::vector<StageRunRow> ListRuns(const RunFilter& filter);
   // Number of 'done' events per clip and stage (an audit of exactly-once).

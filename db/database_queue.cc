@@ -410,12 +410,16 @@ std::int64_t Database::Reset(const std::string& stage, std::optional<ClipId> cli
   return n;
 }
 
-QueueSummary Database::Summary() {
+QueueSummary Database::Summary(const std::vector<std::string>& stages) {
   QueueSummary s;
-  auto& q = Prepare(
+  std::string sql =
       "SELECT state, COUNT(*), SUM(state = 'running' AND lease_expires < ?),"
-      " SUM(clip_id IN (SELECT clip_id FROM shard_clips)) FROM stage_runs GROUP BY state");
+      " SUM(clip_id IN (SELECT clip_id FROM shard_clips)) FROM stage_runs";
+  for (size_t i = 0; i < stages.size(); ++i) sql += i ? ",?" : " WHERE stage IN (?";
+  sql += stages.empty() ? " GROUP BY state" : ") GROUP BY state";
+  auto& q = Prepare(sql);
   q.Bind(1, Now());
+  for (size_t i = 0; i < stages.size(); ++i) q.Bind(static_cast<int>(i + 2), stages[i]);
   while (q.Step()) {
     const std::string state = q.Text(0);
     const std::int64_t sharded = q.Int(3);

@@ -8,6 +8,7 @@
 #include <iterator>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -221,14 +222,25 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
 
 namespace doasido::pipeline {
 
+std::vector<std::string> ShardJobs(const Database::ShardRow& row) {
+  std::vector<std::string> jobs;
+  std::istringstream parts(row.slurm_job);
+  for (std::string job; std::getline(parts, job, ',');) jobs.push_back(job);
+  return jobs;
+}
+
 std::vector<ShardProgress> ReadShardProgress(
-    Database& db, const std::map<std::string, std::string>& slurm_states) {
+    Database& db, const std::map<std::string, SlurmTask>& slurm_states) {
   std::vector<ShardProgress> out;
   for (const auto& row : db.ListShards()) {
     ShardProgress p{.shard = row};
-    if (!row.slurm_job.empty() && row.slurm_task) {
-      const auto it = slurm_states.find(row.slurm_job + "_" + std::to_string(*row.slurm_task));
-      if (it != slurm_states.end()) p.slurm_state = it->second;
+    const auto jobs = ShardJobs(row);
+    for (size_t g = 0; g < jobs.size() && row.slurm_task && p.slurm_group < 0; ++g) {
+      const auto it = slurm_states.find(jobs[g] + "_" + std::to_string(*row.slurm_task));
+      if (it == slurm_states.end()) continue;
+      p.slurm_group = static_cast<int>(g);
+      p.slurm_state = it->second.state;
+      p.slurm_reason = it->second.reason;
     }
     p.file_found = std::filesystem::is_regular_file(row.path);
     if (p.file_found) {
@@ -238,7 +250,10 @@ std::vector<ShardProgress> ReadShardProgress(
         auto& [open, failed] = clips[r.clip_id];
         open = open || r.state == "pending" || r.state == "running";
         failed = failed || r.state == "failed";
-        if (r.state == "pending" || r.state == "running") ++p.runs_open;
+        if (r.state == "pending" || r.state == "running") {
+          ++p.runs_open;
+          p.open_stages.insert(r.stage);
+        }
       }
       for (const auto& [id, c] : clips) {
         if (!c.first) ++p.clips_finished;

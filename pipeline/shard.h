@@ -13,12 +13,14 @@
 
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/config.h"
 #include "db/database.h"
+#include "pipeline/slurm.h"
 
 namespace doasido::pipeline {
 
@@ -68,11 +70,21 @@ struct ShardProgress {
   std::int64_t clips_finished = 0;  // every run of the clip done or failed in the shard
   std::int64_t clips_failed = 0;    // of those, with a failed run
   std::int64_t runs_open = 0;       // pending or running in the shard
-  std::string slurm_state;          // PENDING, RUNNING, ... from squeue; empty when not queued
+  std::set<std::string> open_stages;  // stages with a pending or running run there
+  // The shard's first task (in group order) that Slurm still lists: its
+  // group's index (-1: none listed), state (PENDING, RUNNING, ...) and
+  // squeue reason.
+  int slurm_group = -1;
+  std::string slurm_state;
+  std::string slurm_reason;
   bool merged = false;              // merged since its last change
 };
 // `slurm_states` from SlurmTaskStates (may be empty).
 std::vector<ShardProgress> ReadShardProgress(Database& db,
-                                             const std::map<std::string, std::string>& slurm_states);
+                                             const std::map<std::string, SlurmTask>& slurm_states);
+
+// The array job ids of a shard row, one per stage group, first to last
+// (the shards table's slurm_job holds them comma-separated).
+std::vector<std::string> ShardJobs(const Database::ShardRow& row);
 
 }  // namespace doasido::pipeline

@@ -42,39 +42,37 @@ void WriteFile(const std::filesystem::path& path, const std::string& text, bool 
   }
 }
 
-std::string Directives(const SlurmOptions& o) {
+std::string Directives(const SlurmGroup& g, const std::string& account) {
   std::ostringstream s;
-  if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
-  if (!o.account.empty()) s << "#SBATCH --account=" << o.account << "\n";
-  if (!o.mem.empty()) s << "#SBATCH --mem=" << o.mem << "\n";
-  if (!o.time.empty()) s << "#SBATCH --time=" << o.time << "\n";
+  if (!g.partition.empty()) s << "#SBATCH --partition=" << g.partition << "\n";
+  if (!account.empty()) s << "#SBATCH --account=" << account << "\n";
+  if (!g.mem.empty()) s << "#SBATCH --mem=" << g.mem << "\n";
+  if (!g.time.empty()) s << "#SBATCH --time=" << g.time << "\n";
+  if (!g.gres.empty()) s << "#SBATCH --gres=" << g.gres << "\n";
   return s.str();
 }
 
-}  // namespace
-
-SlurmScripts WriteSlurmScripts(const std::filesystem::path& out, const std::filesystem::path& parent,
-                               const std::vector<std::filesystem::path>& shard_dbs,
-                               const SlurmOptions& o) {
-  if (shard_dbs.empty()) throw Error("slurm", "no shards to submit", {.file = out.string()});
-  std::filesystem::create_directories(out / "logs");
-  SlurmScripts paths{out / "array.sbatch", out / "merge.sbatch", out / "shards.txt"};
-  std::string list;
-  for (const auto& db : shard_dbs) list += std::filesystem::absolute(db).string() + "\n";
-  WriteFile(paths.shards, list, false);
-
+// The array script of one group: task i runs the group's stages on shard i.
+std::string GroupScript(const std::filesystem::path& out, const SlurmScripts& paths,
+                        const SlurmGroup& g, size_t shards, const SlurmOptions& o) {
   const std::string doasido = Quote(std::filesystem::absolute(o.doasido).string());
   const std::string config =
       o.config.empty() ? "" : " --config " + Quote(std::filesystem::absolute(o.config).string());
+  std::string stages;
+  for (const auto& s : g.stages) stages += (stages.empty() ? "" : ",") + s;
+  const bool whole = g.stages.empty();
   std::ostringstream array;
   array << "#!/bin/bash\n"
-        << "# One doasido shard per array task (doasido slurm submit). Edit freely;\n"
+        << "# One doasido shard per array task (doasido slurm submit)"
+        << (whole ? "" : ", stages " + stages + " (group " + g.name + ")") << ". Edit freely;\n"
         << "# `doasido slurm resume` resubmits the tasks whose shard is unfinished.\n"
-        << "#SBATCH --job-name=doasido-shards\n"
-        << "#SBATCH --array=0-" << shard_dbs.size() - 1 << "\n"
-        << "#SBATCH --cpus-per-task=" << o.cpus_per_task << "\n"
-        << "#SBATCH --output=" << (out / "logs" / "shard-%a.out").string() << "\n"
-        << Directives(o) << "set -euo pipefail\n"
+        << "#SBATCH --job-name=doasido-" << (whole ? std::string("shards") : g.name) << "\n"
+        << "#SBATCH --array=0-" << shards - 1 << "\n"
+        << "#SBATCH --cpus-per-task=" << g.cpus_per_task << "\n"
+        << "#SBATCH --output="
+        << (out / "logs" / ((whole ? std::string("shard") : g.name + "-shard") + "-%a.out")).string()
+        << "\n"
+        << Directives(g, o.account) << "set -euo pipefail\n"
         << "SHARD_DB=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" " << Quote(paths.shards.string())
         << ")\n"
         << "JOBS=${SLURM_CPUS_PER_TASK:-1}\n";
@@ -91,16 +89,41 @@ SlurmScripts WriteSlurmScripts(const std::filesystem::path& out, const std::file
   }
   array << "# One task at a time works on a shard: runs a killed task held go back to the queue.\n"
         << doasido << " queue release --db \"$RUN_DB\"\n"
-        << doasido << " run --db \"$RUN_DB\" --jobs \"$JOBS\"" << config << "\n";
-  WriteFile(paths.array, array.str(), true);
+        << doasido << " run --db \"$RUN_DB\" --jobs \"$JOBS\"" << config
+        << (whole ? "" : " --stages " + stages) << "\n";
+  return array.str();
+}
 
+}  // namespace
+
+SlurmScripts WriteSlurmScripts(const std::filesystem::path& out, const std::filesystem::path& parent,
+                               const std::vector<std::filesystem::path>& shard_dbs,
+                               const std::vector<SlurmGroup>& groups, const SlurmOptions& o) {
+  if (shard_dbs.empty()) throw Error("slurm", "no shards to submit", {.file = out.string()});
+  if (groups.empty()) throw Error("slurm", "no stage groups to submit", {.file = out.string()});
+  std::filesystem::create_directories(out / "logs");
+  SlurmScripts paths{{}, out / "merge.sbatch", out / "shards.txt"};
+  std::string list;
+  for (const auto& db : shard_dbs) list += std::filesystem::absolute(db).string() + "\n";
+  WriteFile(paths.shards, list, false);
+  for (size_t i = 0; i < groups.size(); ++i) {
+    const bool whole = groups.size() == 1 && groups[i].stages.empty();
+    paths.groups.push_back(whole ? out / "array.sbatch"
+                                 : out / ("group-" + std::to_string(i + 1) + "-" +
+                                          groups[i].name + ".sbatch"));
+    WriteFile(paths.groups.back(), GroupScript(out, paths, groups[i], shard_dbs.size(), o), true);
+  }
+
+  const std::string doasido = Quote(std::filesystem::absolute(o.doasido).string());
+  SlurmGroup merge_resources = o.defaults;
+  merge_resources.gres.clear();  // folding rows needs no GPU
   std::ostringstream merge;
   merge << "#!/bin/bash\n"
-        << "# Folds every shard back into the parent once the array has ended.\n"
+        << "# Folds every shard back into the parent once the last array has ended.\n"
         << "#SBATCH --job-name=doasido-merge\n"
         << "#SBATCH --cpus-per-task=1\n"
         << "#SBATCH --output=" << (out / "logs" / "merge.out").string() << "\n"
-        << Directives(o) << "set -euo pipefail\n"
+        << Directives(merge_resources, o.account) << "set -euo pipefail\n"
         << "mapfile -t SHARDS < " << Quote(paths.shards.string()) << "\n"
         << doasido << " merge --db " << Quote(std::filesystem::absolute(parent).string())
         << " \"${SHARDS[@]}\"\n";
@@ -109,10 +132,10 @@ SlurmScripts WriteSlurmScripts(const std::filesystem::path& out, const std::file
 }
 
 std::string Sbatch(const std::filesystem::path& script, const std::string& array,
-                   const std::string& after) {
+                   const std::string& dependency) {
   std::string command = "sbatch --parsable";
   if (!array.empty()) command += " --array=" + array;
-  if (!after.empty()) command += " --dependency=afterany:" + after;
+  if (!dependency.empty()) command += " --dependency=" + Quote(dependency);
   command += " " + Quote(script.string());
   std::string output;
   const int status = Capture(command, output);
@@ -125,16 +148,39 @@ std::string Sbatch(const std::filesystem::path& script, const std::string& array
   return output.substr(0, output.find(';'));
 }
 
-std::map<std::string, std::string> SlurmTaskStates(const std::vector<std::string>& jobs) {
-  std::map<std::string, std::string> states;
+void Scancel(const std::vector<std::string>& ids) {
+  if (ids.empty()) return;
+  std::string command = "scancel";
+  for (const auto& id : ids) command += " " + Quote(id);
+  std::string output;
+  if (Capture(command, output) != 0) {
+    throw Error("slurm", "scancel failed: " + output);
+  }
+}
+
+std::map<std::string, SlurmTask> SlurmTaskStates(const std::vector<std::string>& jobs) {
+  std::map<std::string, SlurmTask> states;
   if (jobs.empty()) return states;
   std::string list;
   for (const auto& j : jobs) list += (list.empty() ? "" : ",") + j;
   std::string output;
-  if (Capture("squeue -h -r -o '%i %T' -j " + Quote(list), output) != 0) return states;
+  if (Capture("squeue -h -r -o '%i %T %r' -j " + Quote(list), output) != 0) {
+    // squeue refuses the whole list when one job has left the controller.
+    if (jobs.size() == 1) return states;
+    for (const auto& j : jobs) states.merge(SlurmTaskStates({j}));
+    return states;
+  }
   std::istringstream lines(output);
-  std::string id, state;
-  while (lines >> id >> state) states[id] = state;
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string id;
+    SlurmTask task;
+    if (words >> id >> task.state) {
+      words >> task.reason;
+      states[id] = task;
+    }
+  }
   return states;
 }
 

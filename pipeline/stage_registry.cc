@@ -90,8 +90,8 @@ const std::vector<StageEntry>& StageTable() {
           true, kMinute, true),
       Entry<recon::BundleStage, recon::BundleStageConfig>(
           recon::kBundleStageName,
-          "runs the model command that writes the clip bundle (or checks the bundle the list "
-          "names)",
+          "runs the model command (per clip, or a server started once per worker) that writes "
+          "the clip bundle (or checks the bundle the list names)",
           false, 2 * kHour),
       Entry<recon::TrackStage, recon::TrackStageConfig>(
           recon::kTrackStageName,

@@ -267,7 +267,7 @@ int RunWorkers(const WorkerOptions& options) {
         children.erase(pid);
         const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == kTimedOutExitCode;
         if ((WIFSIGNALED(status) || timed_out) && !g_stop) {
-          const auto s = db.Summary();
+          const auto s = db.Summary(options.stages);
           const std::string why = timed_out ? std::string("ended after a stage timeout")
                                             : "died from signal " + std::to_string(WTERMSIG(status));
           spdlog::warn("worker {} {}; {}", pid, why,

@@ -11,6 +11,15 @@
 //     value single-quoted. The command must write the clip bundle into
 //     {output} and exit 0. Its stdout and stderr go to
 //     {output}/command.log (ignored by the bundle reader).
+//   - Server mode (`server` instead of `command`): the worker starts that
+//     command once and sends it one request line per clip carrying the same
+//     values (recon/model_server.h has the protocol); its stderr goes to
+//     <database folder>/logs/bundle-server-<worker pid>.log and the part
+//     written while a clip was served to {output}/command.log. A server that
+//     dies, hangs past timeout_s or breaks the protocol is killed with its
+//     group and the clip fails (bundle_command_failed / bundle_timeout, with
+//     the log's tail); the next clip starts a fresh server. An "error"
+//     reply fails the clip, permanently when the reply says so.
 //   - Errors (clip named): bundle_command_failed (non-zero exit or signal;
 //     the message holds the last log lines), bundle_timeout (killed with its
 //     whole process group after timeout_s), bad_bundle (ReadBundle's
@@ -21,21 +30,25 @@
 // Measurements: source ("list" or "command"), seconds, frames, parts found.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "core/config.h"
 #include "db/stage.h"
 #include "recon/bundle_location.h"
+#include "recon/model_server.h"
 
 namespace doasido::recon {
 
 struct BundleStageConfig {
   std::string command;       // empty: only clips whose list names a bundle pass
+  std::string server;        // a model server (at most one of command and server)
   double timeout_s = 3600;   // wall clock per clip
+  double server_start_timeout_s = 1800;  // a server's load, until its ready line
   int log_tail_lines = 20;   // lines of output quoted in a failure
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BundleStageConfig, command, timeout_s,
-                                                log_tail_lines)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BundleStageConfig, command, server, timeout_s,
+                                                server_start_timeout_s, log_tail_lines)
 void CheckConfig(const BundleStageConfig& c, const std::string& section);
 
 // Error codes of the stage.
@@ -47,11 +60,18 @@ class BundleStage : public Stage {
  public:
   explicit BundleStage(BundleStageConfig config = {});
   std::string Name() const override { return kBundleStageName; }
-  Json Params() const override { return config_; }
+  // The config; the server keys only in server mode, so that configs
+  // written before server mode keep their parameter hash.
+  Json Params() const override;
   StageResult Run(const ClipContext& context) override;
 
  private:
+  // Writes the bundle into `dir` with the command, or the server.
+  void RunCommand(const ClipContext& context, const std::filesystem::path& dir);
+  void RunServer(const ClipContext& context, const std::filesystem::path& dir);
+
   BundleStageConfig config_;
+  std::unique_ptr<ModelServer> server_;  // started on the first clip
 };
 
 }  // namespace doasido::recon

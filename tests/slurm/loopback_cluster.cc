@@ -68,6 +68,7 @@ LoopbackSlurm::LoopbackSlurm(const std::filesystem::path& dir) : dir_(dir) {
   conf = Replace(conf, "@SLURMD_PORT@", std::to_string(FreePort()));
   conf = Replace(conf, "@CPUS@", std::to_string(std::thread::hardware_concurrency()));
   std::ofstream(dir / "slurm.conf") << conf;
+  std::ofstream(dir / "gres.conf") << "NodeName=localhost Name=gpu File=/dev/null\n";
   setenv("SLURM_CONF", (dir / "slurm.conf").c_str(), 1);
   {
     std::ofstream key(dir / "munge.key", std::ios::binary);

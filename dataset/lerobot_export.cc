@@ -269,7 +269,8 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
       {"data/file_index", "BIGINT"},        {"dataset_from_index", "BIGINT"},
       {"dataset_to_index", "BIGINT"},       {"meta/episodes/chunk_index", "BIGINT"},
       {"meta/episodes/file_index", "BIGINT"}, {"doasido/episode_id", "VARCHAR"},
-      {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"}};
+      {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"},
+      {kHandOnlyColumn, "BOOLEAN"}};
   const std::string video_prefix = std::string("videos/") + kSourceVideoFeature + "/";
   if (options.videos) {
     for (const char* c : {"chunk_index", "file_index"}) episode_columns.push_back({video_prefix + c, "BIGINT"});
@@ -300,7 +301,8 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
                   {"meta/episodes/file_index", 0},
                   {"doasido/episode_id", l.episode->id},
                   {"doasido/clip_id", l.episode->clip_id},
-                  {"doasido/split", l.episode->split}};
+                  {"doasido/split", l.episode->split},
+                  {kHandOnlyColumn, l.episode->hand_only}};
       if (options.videos) {
         row[video_prefix + "chunk_index"] = 0;
         row[video_prefix + "file_index"] = 0;

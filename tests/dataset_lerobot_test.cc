@@ -12,36 +12,17 @@
 #include "dataset/lerobot_export.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
+#include "tests/parquet_read.h"
 #include "tests/test_util.h"
 
 namespace doasido::dataset {
 namespace {
 
 namespace fs = std::filesystem;
+using doasido::testing::ReadParquet;
 using doasido::testing::ShellOk;
 using doasido::testing::TempDir;
 using doasido::testing::WriteFile;
-
-fs::path NpmDir() {
-  if (const char* dir = std::getenv("DOASIDO_NPM_DIR")) return dir;
-  return fs::path(std::getenv("HOME")) / ".cache/doasido/npm";
-}
-
-// Every row and the row-group sizes of a Parquet file, through hyparquet.
-Json ReadParquet(const fs::path& dir, const fs::path& file) {
-  WriteFile(dir / "read.mjs", R"JS(
-import { pathToFileURL } from 'node:url';
-const hp = await import(pathToFileURL(process.argv[2] + '/node_modules/hyparquet/src/node.js'));
-const file = await hp.asyncBufferFromFile(process.argv[3]);
-const meta = await hp.parquetMetadataAsync(file);
-const rows = await hp.parquetReadObjects({ file });
-const big = (k, v) => typeof v === 'bigint' ? Number(v) : v;
-const kv = Object.fromEntries((meta.key_value_metadata || []).map(e => [e.key, e.value]));
-process.stdout.write(JSON.stringify({ rows, kv, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
-)JS");
-  return Json::parse(ShellOk("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
-                         file.string()));
-}
 
 float F(double v) { return static_cast<float>(v); }
 

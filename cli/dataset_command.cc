@@ -33,6 +33,7 @@ struct Options {
   std::string out;
   bool json = false;
   bool no_videos = false;
+  double fps = 0;
 };
 
 void AddRootOptions(CLI::App& cmd, Options& o) {
@@ -178,7 +179,7 @@ void Export(const Options& o) {
   if (o.format == "robomimic") {
     s = ExportRobomimic(dir, o.out);
   } else if (o.format == "lerobot") {
-    s = ExportLeRobot(dir, o.out, {.videos = !o.no_videos});
+    s = ExportLeRobot(dir, o.out, {.videos = !o.no_videos, .fps = o.fps});
   } else {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
   }
@@ -260,6 +261,10 @@ void AddDatasetCommand(CLI::App& app) {
       ->required();
   exp->add_flag("--no-videos", o->no_videos,
                 "lerobot: leave out the source video feature (no decoding or encoding)");
+  exp->add_option("--fps", o->fps,
+                  "lerobot: resample every episode (and its video) to this rate; needed when "
+                  "the clips' cameras ran at different rates (e.g. 25 and 30 fps)")
+      ->check(CLI::Range(1.0, 1000.0));
   exp->callback([o] { Export(*o); });
 }
 

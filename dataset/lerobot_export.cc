@@ -11,6 +11,7 @@
 #include "dataset/feature_stats.h"
 #include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
+#include "dataset/resample.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
 #include "video/frame_count.h"
@@ -31,6 +32,9 @@ struct LoadedEpisode {
   std::int64_t task_index = 0;
   std::int64_t from = 0;  // global index of its first frame
   Rows state, action, object_pose;
+  // Per exported frame, the source frame (offset in the span) it shows:
+  // 0, 1, 2, ... unless the trajectory was resampled to the export's fps.
+  std::vector<std::int64_t> source_frames;
 };
 
 Json Feature(const char* dtype, std::vector<int> shape, const Json& names) {
@@ -51,19 +55,26 @@ std::vector<const Episode*> ExportOrder(const Manifest& m) {
   return out;
 }
 
-void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* first) {
+void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* first, double fps) {
   const Episode& e = *l.episode;
   const fs::path path = version_dir / kEpisodesFolder / e.id / kTrajectoryFile;
   l.trajectory = retarget::ReadTrajectoryJson(path);
-  const retarget::HandTrajectory& t = l.trajectory;
   auto mixed = [&](const std::string& field, const std::string& why) {
     throw Error("mixed_trajectories", why + " (LeRobot wants one robot and rate per dataset)",
                 {.clip = e.external_id, .file = path.string(), .field = field});
   };
-  if (t.qpos.empty()) mixed("qpos", "the trajectory has no frames");
+  if (l.trajectory.qpos.empty()) mixed("qpos", "the trajectory has no frames");
+  const std::vector<double> positions =
+      ResamplePositions(l.trajectory.qpos.size(), l.trajectory.fps, fps > 0 ? fps : l.trajectory.fps);
+  for (double p : positions) l.source_frames.push_back(std::lround(p));
+  if (fps > 0) l.trajectory = ResampleTrajectory(l.trajectory, fps);
+  const retarget::HandTrajectory& t = l.trajectory;
   if (first) {
     const retarget::HandTrajectory& f = first->trajectory;
-    if (t.fps != f.fps) mixed("fps", "fps " + std::to_string(t.fps) + " differs from the first episode's");
+    if (t.fps != f.fps) {
+      mixed("fps", "fps " + std::to_string(t.fps) + " differs from the first episode's " +
+                       std::to_string(f.fps) + "; --fps resamples every episode to one rate");
+    }
     if (t.qpos_names != f.qpos_names) mixed("qpos_names", "joints differ from the first episode's");
   }
   for (const auto& q : t.qpos) l.state.emplace_back(q.data(), q.data() + q.size());
@@ -91,13 +102,17 @@ Json WriteVideo(const std::vector<LoadedEpisode>& episodes, double fps, const fs
     options.analysis_size = 0;
     options.skip_loop_filter = false;
     options.first_frame = e.start_frame.value_or(0);
-    options.last_frame = options.first_frame + static_cast<std::int64_t>(l.trajectory.qpos.size()) - 1;
+    options.last_frame = options.first_frame + l.source_frames.back();
     options.clip = e.external_id;
     VideoDecoder decoder(e.video, options);
     AnalysisFrame frame;
     cv::Mat last;
-    for (size_t f = 0; f < l.trajectory.qpos.size(); ++f) {
-      if (decoder.Next(&frame)) last = frame.bgr;
+    std::int64_t decoded = -1;  // offset in the span of `last`
+    for (const std::int64_t wanted : l.source_frames) {
+      while (decoded < wanted && decoder.Next(&frame)) {
+        last = frame.bgr;
+        ++decoded;
+      }
       if (last.empty()) {
         throw Error(kVideoTruncated, "no frame in the episode's span",
                     {.clip = e.external_id, .file = e.video});
@@ -159,7 +174,7 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
   for (const Episode* e : ExportOrder(m)) {
     LoadedEpisode l;
     l.episode = e;
-    Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front());
+    Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front(), options.fps);
     if (!task_index.count(e->task)) {
       task_index[e->task] = static_cast<std::int64_t>(tasks.size());
       tasks.push_back(e->task);

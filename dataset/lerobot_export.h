@@ -36,13 +36,16 @@ inline constexpr const char* kHandOnlyColumn = "doasido/hand_only";  // episodes
 
 struct LeRobotOptions {
   bool videos = true;  // encode the source spans (needs the source videos)
+  // > 0: every episode resampled to this rate (dataset/resample.h), its
+  // video frames picked to match; 0: episodes must share the first one's.
+  double fps = 0;
 };
 
 // Writes the export into `out_dir`, which must not exist or be empty.
 // Throws Error("output_exists"), Error("mixed_trajectories") naming the
-// episode whose fps or joints differ from the first one's, Error("io"),
-// Error("parquet"), Error("video_encode"), and the decoder's errors naming
-// the clip's video.
+// episode whose fps (without options.fps) or joints differ from the first
+// one's, Error("io"), Error("parquet"), Error("video_encode"), and the
+// decoder's errors naming the clip's video.
 ExportSummary ExportLeRobot(const std::filesystem::path& version_dir,
                             const std::filesystem::path& out_dir, const LeRobotOptions& options);
 

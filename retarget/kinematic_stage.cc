@@ -16,6 +16,7 @@
 #include "recon/gravity.h"
 #include "recon/recon_stage.h"
 #include "recon/reconstruction.h"
+#include "retarget/dynamic_stage.h"
 #include "retarget/embodiment.h"
 
 namespace doasido::retarget {
@@ -178,6 +179,12 @@ StageResult KinematicStage::Run(const ClipContext& context) {
   if (!in.has_right_hand && !in.has_left_hand) {
     result.verdict = Verdict::kReject;
     result.reason = kReasonNoHand;
+    return result;
+  }
+  if (!in.has_right_hand && !in.object_world.empty()) {
+    // A mirrored hand would no longer hold the (unmirrored) object.
+    result.verdict = Verdict::kReject;
+    result.reason = kReasonNoRightHand;
     return result;
   }
   // trajectory.json: the right hand, else the left one mirrored, on `hand`;

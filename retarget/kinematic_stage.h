@@ -11,8 +11,9 @@
 // camera's -y) with the floor z = 0 touching the object's lowest point in
 // the first frame (or 5 cm below the lowest hand keypoint without object).
 //
-// Hands: trajectory.json is the right hand on `hand`; a clip whose only hand
-// is the left has it mirrored (x -> -x in the world frame) onto `hand`, so
+// Hands: trajectory.json is the right hand on `hand`; a hand-only clip whose
+// only hand is the left has it mirrored (x -> -x in the world frame) onto
+// `hand` (with an object it is rejected "no_right_hand"), so
 // that every episode of a dataset has one robot (measurement
 // retargeted_hand "right" or "left_mirrored"). When both hands are seen and
 // `left_hand` is set, the left hand is also retargeted onto `left_hand`
@@ -24,6 +25,7 @@
 // with floating wrist + scene).
 // Verdict: pass, or flag ("kinematic_error") when the mean fingertip error
 // exceeds flag_fingertip_error; reject ("no_hand") without any hand.
+// With an object, the object's poses go with the right hand's trajectory.
 #pragma once
 
 #include <string>
@@ -40,7 +42,7 @@ namespace doasido::retarget {
 inline constexpr const char* kKinematicStageName = "retarget_kinematic";
 inline constexpr const char* kLeftTrajectoryFile = "trajectory_left.json";
 inline constexpr const char* kReasonNoHand = "no_hand";
-inline constexpr const char* kMeasureRetargetedHand = "retarget_hand";
+inline constexpr const char* kMeasureRetargetedHand = "retargeted_hand";
 inline constexpr const char* kHandRight = "right";
 inline constexpr const char* kHandLeftMirrored = "left_mirrored";
 

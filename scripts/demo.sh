@@ -32,7 +32,8 @@ echo
 if VERSION=$($DOASIDO dataset create --db "$DB" --root "$WORK/datasets" --name demo \
                --select success --no-thumbnails | tail -1); then
   rm -rf "$WORK/lerobot/$(basename "$VERSION")"
-  $DOASIDO dataset export "$VERSION" --format lerobot --out "$WORK/lerobot/$(basename "$VERSION")"
+  # The cameras ran at 25, 29.97 and 30 fps: one rate for the export.
+  $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --out "$WORK/lerobot/$(basename "$VERSION")"
 else
   echo "No dataset version: no clip's trajectory succeeded."
 fi

@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -167,24 +168,33 @@ TEST_F(HandOnlyChain, PositivesBecomeHandOnlyEpisodesOfALeRobotExport) {
   EXPECT_EQ(manifest["episodes"][0]["hand_only"], true);
 
   const fs::path out = *dir_ / "lerobot";
+  // The cameras ran at 29.97, 30 and 25 fps: one LeRobot rate needs --fps.
+  const auto refused = RunDoasido({"dataset", "export", "--root", root.string(), "--name", "hands", "v1",
+                                   "--format", "lerobot", "--out", (*dir_ / "refused").string()});
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("--fps"), std::string::npos) << refused.err;
   const auto exported = RunDoasido({"dataset", "export", "--root", root.string(), "--name", "hands", "v1",
-                                    "--format", "lerobot", "--out", out.string()});
+                                    "--format", "lerobot", "--out", out.string(), "--fps", "30"});
   ASSERT_EQ(exported.exit_code, 0) << exported.out << exported.err;
+  // Frames at 30 fps covering each span: k / 30 s up to the span's last frame.
+  int total = 0;
+  for (const auto& e : m.episodes) total += static_cast<int>(std::floor((kFrames - 1) * 30.0 / e.fps + 1e-9)) + 1;
   const Json info = Json::parse(testing::ReadFile(out / "meta/info.json"));
   EXPECT_EQ(info["total_episodes"], 5);
-  EXPECT_EQ(info["total_frames"], 5 * kFrames);
+  EXPECT_EQ(info["fps"], 30.0);
+  EXPECT_EQ(info["total_frames"], total);
   EXPECT_FALSE(info["features"].contains(dataset::kObjectPoseFeature)) << "object features must be absent";
-  const Json table = testing::ReadParquet(*dir_, out / "meta/episodes/chunk-000/file-000.parquet");
+  const Json table = testing::ReadParquet(dir_->path(), out / "meta/episodes/chunk-000/file-000.parquet");
   ASSERT_EQ(table["rows"].size(), 5u);
   for (const Json& row : table["rows"]) EXPECT_EQ(row[dataset::kHandOnlyColumn], true) << row.dump().substr(0, 300);
-  const Json data = testing::ReadParquet(*dir_, out / "data/chunk-000/file-000.parquet");
-  ASSERT_EQ(data["rows"].size(), static_cast<size_t>(5 * kFrames));
+  const Json data = testing::ReadParquet(dir_->path(), out / "data/chunk-000/file-000.parquet");
+  ASSERT_EQ(data["rows"].size(), static_cast<size_t>(total));
   EXPECT_FALSE(data["rows"][0].contains(dataset::kObjectPoseFeature));
   EXPECT_EQ(data["rows"][0][dataset::kStateFeature].size(), info["features"][dataset::kStateFeature]["shape"][0]);
   const Json probe = Json::parse(testing::ShellOk(
       "ffprobe -v error -count_frames -show_entries stream=nb_read_frames,codec_name -of json " +
       (out / "videos" / dataset::kSourceVideoFeature / "chunk-000/file-000.mp4").string()));
-  EXPECT_EQ(probe["streams"][0]["nb_read_frames"], std::to_string(5 * kFrames));
+  EXPECT_EQ(probe["streams"][0]["nb_read_frames"], std::to_string(total));
 }
 
 TEST_F(HandOnlyChain, VerifyReplaysAHandOnlyTrajectoryBesideItsVideo) {

@@ -184,13 +184,18 @@ double LowestJoint(const Reconstruction& rec) {
   return lowest;
 }
 
+// recon on `hands` written as the hands stage's bundle.
+StageResult ReconHands(const TempDir& root, const ClipBundle& hands, bool intrinsics_assumed) {
+  WriteHandsStageBundle(hands, HandsDir(root), intrinsics_assumed);
+  return ReconStage().Run(Context(root, kReconStageName));
+}
+
 TEST(HandOnlyRecon, HandsAloneWithTheBundlesGravity) {
   TempDir root;
   const ClipBundle hands = Hands();
   ASSERT_FALSE(hands.gravity_up.empty());
-  WriteHandsStageBundle(hands, HandsDir(root), true);
+  const StageResult r = ReconHands(root, hands, true);
   const ClipContext c = Context(root, kReconStageName);
-  const StageResult r = ReconStage().Run(c);
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
   EXPECT_EQ(r.measurements[kMeasureObject], kObjectNone);
   EXPECT_EQ(r.measurements[kMeasureGravitySource], kGravityFromBundle);
@@ -212,9 +217,8 @@ TEST(HandOnlyRecon, WithoutGravityCameraUpIsAssumedAndRecorded) {
   TempDir root;
   ClipBundle hands = Hands();
   hands.gravity_up.clear();
-  WriteHandsStageBundle(hands, HandsDir(root), false);
+  const StageResult r = ReconHands(root, hands, false);
   const ClipContext c = Context(root, kReconStageName);
-  const StageResult r = ReconStage().Run(c);
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
   EXPECT_EQ(r.measurements[kMeasureGravitySource], kGravityFromCamera);
   EXPECT_EQ(r.measurements[kMeasureGravityAssumed], true);
@@ -229,8 +233,7 @@ TEST(HandOnlyRecon, NoFrameWithAHandIsRejected) {
   for (auto* h : {&hands.hand_left, &hands.hand_right}) {
     if (*h) std::fill((*h)->valid.begin(), (*h)->valid.end(), false);
   }
-  WriteHandsStageBundle(hands, HandsDir(root), false);
-  const StageResult r = ReconStage().Run(Context(root, kReconStageName));
+  const StageResult r = ReconHands(root, hands, false);
   EXPECT_EQ(r.verdict, Verdict::kReject);
   EXPECT_EQ(r.reason, kReasonNoHands);
 }

@@ -1,5 +1,6 @@
 // `doasido status --clips`: one line per clip saying where it stopped in the
-// pipeline and why, the table the demo ends with.
+// pipeline and why (a reject, a failure, a flag waiting for review, or still
+// queued), the table the demo ends with.
 #include <cstdio>
 #include <map>
 
@@ -28,22 +29,25 @@ void PrintClipTable(Database& db) {
   }
   std::printf("%-6s %-24s %-20s %-8s %s\n", "clip", "id", "stopped at", "outcome", "why");
   for (const auto& [clip, by_stage] : runs) {
-    std::string stage = "(not started)", outcome, why;
+    std::string stage = "(not started)", outcome, why, flagged;
+    bool stopped = false;
     for (const std::string& name : pipeline) {
       const auto it = by_stage.find(name);
       if (it == by_stage.end()) break;
       const StageRunRow& r = it->second;
       stage = name;
-      if (r.state != RunState::kDone) {
-        outcome = ToString(r.state);
-        why = r.error;
-        break;
-      }
-      outcome = r.verdict;
-      why = r.reason;
-      if (r.verdict == "reject") break;
+      outcome = r.state == RunState::kDone ? r.verdict : ToString(r.state);
+      why = r.state == RunState::kDone ? r.reason : r.error;
+      stopped = r.state != RunState::kDone || r.verdict == "reject";
+      if (stopped) break;
+      if (r.verdict == "flag" && flagged.empty()) flagged = name + ": " + r.reason;
     }
-    if (stage == pipeline.back() && outcome != "reject" && why.empty()) why = "every stage ran";
+    if (!stopped && stage == pipeline.back()) {
+      if (why.empty()) why = "went through every stage";
+    } else if (!stopped && !flagged.empty()) {
+      outcome = "flag";
+      why = flagged + " (waits for a person: doasido review serve)";
+    }
     std::printf("%-6lld %-24s %-20s %-8s %s\n", static_cast<long long>(clip),
                 Short(names[clip], 24).c_str(), stage.c_str(), outcome.c_str(), Short(why, 70).c_str());
   }

@@ -30,6 +30,9 @@ Json LoadConfig(const DbOptions& options);
 
 // The stage x state x verdict table of `doasido status`.
 void PrintStatusTable(Database& db);
+// One line per clip: the stage where it stopped (a reject, a failure, or
+// still queued; the last stage when it went through), outcome and reason.
+void PrintClipTable(Database& db);
 
 void AddInitCommand(CLI::App& app);
 void AddIngestCommand(CLI::App& app);

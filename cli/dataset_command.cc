@@ -37,6 +37,7 @@ struct Options {
   bool json = false;
   bool no_videos = false;
   bool no_verify = false;
+  double fps = 0;
 };
 
 void AddRootOptions(CLI::App& cmd, Options& o) {
@@ -244,7 +245,7 @@ void Export(const Options& o) {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
   }
   WriteWhole(o.out, lerobot, "meta/doasido_manifest.json", [&](const fs::path& temp) {
-    s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos}) : ExportRobomimic(dir, temp);
+    s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos, .fps = o.fps}) : ExportRobomimic(dir, temp);
   }, &removed);
   for (const fs::path& p : removed) {
     std::fprintf(stderr, "removed %s (left by a killed export)\n", p.c_str());
@@ -335,6 +336,10 @@ void AddDatasetCommand(CLI::App& app) {
                 "Export without first checking every file against the manifest (says so)");
   exp->add_flag("--no-videos", o->no_videos,
                 "lerobot: leave out the source video feature (no decoding or encoding)");
+  exp->add_option("--fps", o->fps,
+                  "lerobot: resample every episode (and its video) to this rate; needed when "
+                  "the clips' cameras ran at different rates (e.g. 25 and 30 fps)")
+      ->check(CLI::Range(1.0, 1000.0));
   exp->callback([o] { Export(*o); });
 }
 

@@ -24,7 +24,9 @@ void AddInitCommand(CLI::App& app) {
               entry.summary + " [limit " + limit_text + "]";
   }
   cmd->add_option("--pipeline", opt->pipeline,
-                  "Ordered stages every clip goes through (default: every stage marked default)")
+                  "Ordered stages every clip goes through (default: every stage marked default; "
+                  "the word `default` in the list stands for those, e.g. "
+                  "default,bundle,recon,retarget_kinematic)")
       ->delimiter(',');
   cmd->footer("Stages:" + stages +
               "\n\nEach stage run has a wall-clock limit; a run past it fails as stage_timeout "
@@ -35,13 +37,21 @@ void AddInitCommand(CLI::App& app) {
               "  [timeouts]\n  probe = 30      # seconds\n  bundle = 14400\n"
               "  no_progress = 600"
               "\n\nExample:\n  doasido init --db work/doasido.db\n"
-              "  doasido init --db work/queue-test.db --pipeline noop");
+              "  doasido init --db work/queue-test.db --pipeline noop\n"
+              "  doasido init --db work/doasido.db --pipeline default,bundle,recon,retarget_kinematic");
   cmd->callback([opt] {
     LoadConfig(opt->db);  // a bad --config is refused before the database is touched
     std::filesystem::create_directories(
         std::filesystem::absolute(opt->db.db).parent_path());
     Database db(opt->db.db);
-    auto pipeline = opt->pipeline.empty() ? pipeline::DefaultPipeline() : opt->pipeline;
+    std::vector<std::string> pipeline;
+    for (const auto& name : opt->pipeline.empty() ? std::vector<std::string>{"default"} : opt->pipeline) {
+      if (name != "default") {
+        pipeline.push_back(name);
+        continue;
+      }
+      for (const auto& stage : pipeline::DefaultPipeline()) pipeline.push_back(stage);
+    }
     for (const auto& name : pipeline) pipeline::MakeStage(name, Json::object());  // known names
     if (opt->pipeline.empty() && !db.Pipeline().empty()) {
       pipeline = db.Pipeline();  // re-running init keeps an existing pipeline

@@ -55,16 +55,20 @@ void AddStatusCommand(CLI::App& app) {
   struct Options {
     DbOptions db;
     bool json = false;
+    bool clips = false;
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("status", "Show how many clips are in each stage, state and "
                                            "verdict");
   AddDbOptions(*cmd, opt->db);
   cmd->add_flag("--json", opt->json, "Counts per stage x state x verdict x reason as JSON");
+  cmd->add_flag("--clips", opt->clips, "One line per clip: where it stopped in the pipeline and why");
   cmd->footer("Example:\n  doasido status --db work/doasido.db\n"
+              "  doasido status --db work/doasido.db --clips\n"
               "  doasido status --db work/doasido.db --json | jq '.counts'");
   cmd->callback([opt] {
     Database db(opt->db.db, Database::OpenMode::kExisting);
+    if (opt->clips) return PrintClipTable(db);
     if (!opt->json) return PrintStatusTable(db);
     Json counts = Json::array();
     for (const auto& c : db.Counts()) {

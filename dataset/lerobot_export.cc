@@ -12,6 +12,7 @@
 #include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
 #include "dataset/trajectory_uniformity.h"
+#include "dataset/resample.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
 #include "video/frame_count.h"
@@ -32,6 +33,9 @@ struct LoadedEpisode {
   std::int64_t task_index = 0;
   std::int64_t from = 0;  // global index of its first frame
   Rows state, action, object_pose;
+  // Per exported frame, the source frame (offset in the span) it shows:
+  // 0, 1, 2, ... unless the trajectory was resampled to the export's fps.
+  std::vector<std::int64_t> source_frames;
 };
 
 Json Feature(const char* dtype, std::vector<int> shape, const Json& names) {
@@ -52,18 +56,23 @@ std::vector<const Episode*> ExportOrder(const Manifest& m) {
   return out;
 }
 
-void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* first) {
+void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* first, double fps) {
   const Episode& e = *l.episode;
   const fs::path path = version_dir / kEpisodesFolder / e.id / kTrajectoryFile;
   l.trajectory = retarget::ReadTrajectoryJson(path);
-  const retarget::HandTrajectory& t = l.trajectory;
   auto mixed = [&](const std::string& field, const std::string& why) {
     throw Error(kMixedTrajectories, why + " (LeRobot wants one robot and rate per dataset)",
                 {.clip = e.external_id, .file = path.string(), .field = field});
   };
-  if (t.qpos.empty()) mixed("qpos", "the trajectory has no frames");
+  if (l.trajectory.qpos.empty()) mixed("qpos", "the trajectory has no frames");
+  const std::vector<double> positions =
+      ResamplePositions(l.trajectory.qpos.size(), l.trajectory.fps, fps > 0 ? fps : l.trajectory.fps);
+  for (double p : positions) l.source_frames.push_back(std::lround(p));
+  if (fps > 0) l.trajectory = ResampleTrajectory(l.trajectory, fps);
+  const retarget::HandTrajectory& t = l.trajectory;
   if (first) {
-    const Mismatch m = TrajectoryMismatch(t, first->trajectory);
+    const Mismatch m = TrajectoryMismatch(t, first->trajectory, /*object_poses_may_differ=*/true);
+    if (m.field == "fps") mixed(m.field, m.why + "; --fps resamples every episode to one rate");
     if (!m.field.empty()) mixed(m.field, m.why);
   }
   for (const auto& q : t.qpos) l.state.emplace_back(q.data(), q.data() + q.size());
@@ -91,13 +100,17 @@ Json WriteVideo(const std::vector<LoadedEpisode>& episodes, double fps, const fs
     options.analysis_size = 0;
     options.skip_loop_filter = false;
     options.first_frame = e.start_frame.value_or(0);
-    options.last_frame = options.first_frame + static_cast<std::int64_t>(l.trajectory.qpos.size()) - 1;
+    options.last_frame = options.first_frame + l.source_frames.back();
     options.clip = e.external_id;
     VideoDecoder decoder(e.video, options);
     AnalysisFrame frame;
     cv::Mat last;
-    for (size_t f = 0; f < l.trajectory.qpos.size(); ++f) {
-      if (decoder.Next(&frame)) last = frame.bgr;
+    std::int64_t decoded = -1;  // offset in the span of `last`
+    for (const std::int64_t wanted : l.source_frames) {
+      while (decoded < wanted && decoder.Next(&frame)) {
+        last = frame.bgr;
+        ++decoded;
+      }
       if (last.empty()) {
         throw Error(kVideoTruncated, "no frame in the episode's span",
                     {.clip = e.external_id, .file = e.video});
@@ -159,7 +172,7 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
   for (const Episode* e : ExportOrder(m)) {
     LoadedEpisode l;
     l.episode = e;
-    Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front());
+    Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front(), options.fps);
     if (!task_index.count(e->task)) {
       task_index[e->task] = static_cast<std::int64_t>(tasks.size());
       tasks.push_back(e->task);
@@ -269,7 +282,8 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
       {"data/file_index", "BIGINT"},        {"dataset_from_index", "BIGINT"},
       {"dataset_to_index", "BIGINT"},       {"meta/episodes/chunk_index", "BIGINT"},
       {"meta/episodes/file_index", "BIGINT"}, {"doasido/episode_id", "VARCHAR"},
-      {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"}};
+      {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"},
+      {kHandOnlyColumn, "BOOLEAN"}};
   const std::string video_prefix = std::string("videos/") + kSourceVideoFeature + "/";
   if (options.videos) {
     for (const char* c : {"chunk_index", "file_index"}) episode_columns.push_back({video_prefix + c, "BIGINT"});
@@ -300,7 +314,8 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
                   {"meta/episodes/file_index", 0},
                   {"doasido/episode_id", l.episode->id},
                   {"doasido/clip_id", l.episode->clip_id},
-                  {"doasido/split", l.episode->split}};
+                  {"doasido/split", l.episode->split},
+                  {kHandOnlyColumn, l.episode->hand_only}};
       if (options.videos) {
         row[video_prefix + "chunk_index"] = 0;
         row[video_prefix + "file_index"] = 0;

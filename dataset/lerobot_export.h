@@ -14,8 +14,9 @@
 // Frame features: observation.state (the robot's joint positions), action
 // (the actuator targets when every trajectory has them, else the next
 // frame's joint positions), observation.object_pose (tx, ty, tz, qw, qx, qy,
-// qz, when every trajectory has object poses); float32, as LeRobot stores
-// them. Episodes are ordered by split so that each split is one index range
+// qz, when every trajectory has object poses: absent, not zero-filled, as
+// soon as one episode is hand-only); float32, as LeRobot stores them. The
+// episodes table marks hand-only episodes in its doasido/hand_only column. Episodes are ordered by split so that each split is one index range
 // in info.json's "splits". Everything goes into one data file and one video
 // file (no rollover at data_files_size_in_mb / video_files_size_in_mb).
 #pragma once
@@ -31,16 +32,20 @@ inline constexpr const char* kStateFeature = "observation.state";
 inline constexpr const char* kActionFeature = "action";
 inline constexpr const char* kObjectPoseFeature = "observation.object_pose";
 inline constexpr const char* kSourceVideoFeature = "observation.images.source";
+inline constexpr const char* kHandOnlyColumn = "doasido/hand_only";  // episodes table, BOOLEAN
 
 struct LeRobotOptions {
   bool videos = true;  // encode the source spans (needs the source videos)
+  // > 0: every episode resampled to this rate (dataset/resample.h), its
+  // video frames picked to match; 0: episodes must share the first one's.
+  double fps = 0;
 };
 
 // Writes the export into `out_dir`, which must not exist or be empty.
 // Throws Error("output_exists"), Error("mixed_trajectories") naming the
-// episode whose fps or joints differ from the first one's, Error("io"),
-// Error("parquet"), Error("video_encode"), and the decoder's errors naming
-// the clip's video.
+// episode whose fps (without options.fps) or joints differ from the first
+// one's, Error("io"), Error("parquet"), Error("video_encode"), and the
+// decoder's errors naming the clip's video.
 ExportSummary ExportLeRobot(const std::filesystem::path& version_dir,
                             const std::filesystem::path& out_dir, const LeRobotOptions& options);
 

@@ -123,6 +123,7 @@ void WriteDemo(const Writer& w, hid_t data, const Episode& e, const retarget::Ha
   Handle demo = w.Group(data, "demo_" + std::to_string(e.index));
   w.Attr(demo.get(), "num_samples", static_cast<std::int64_t>(n));
   w.Attr(demo.get(), "clip_id", e.clip_id);
+  w.Attr(demo.get(), "hand_only", static_cast<std::int64_t>(e.hand_only));
   w.Strings(demo.get(), "episode_id", {e.id}, true);
   const std::map<std::string, Rows> obs = Observations(t);
   Rows actions;

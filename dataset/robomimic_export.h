@@ -1,7 +1,8 @@
 // Export of a version as one robomimic HDF5 file (libhdf5), the layout
 // robomimic's SequenceDataset reads (REFERENCE §6):
 //   data                 attrs total (samples), env_args (JSON)
-//   data/demo_<i>        attrs num_samples, episode_id, clip_id
+//   data/demo_<i>        attrs num_samples, episode_id, clip_id, hand_only (1:
+//                        no object: no object obs, states are the joints alone)
 //     actions (N,A)      the actuator targets (ctrl) when the trajectory has
 //                        them, else the next frame's joint positions
 //     states (N,S)       joint positions, then the object pose when present

@@ -3,7 +3,7 @@
 namespace doasido::dataset {
 
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
-                            const retarget::HandTrajectory& first) {
+                            const retarget::HandTrajectory& first, bool object_poses_may_differ) {
   if (t.embodiment != first.embodiment) {
     return {"embodiment", "robot " + t.embodiment + " differs from the first episode's (" +
                               first.embodiment + ")"};
@@ -16,7 +16,7 @@ Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
   if (t.ctrl_names != first.ctrl_names || t.ctrl.empty() != first.ctrl.empty()) {
     return {"ctrl_names", "actuators differ from the first episode's"};
   }
-  if (t.object_poses.empty() != first.object_poses.empty()) {
+  if (!object_poses_may_differ && t.object_poses.empty() != first.object_poses.empty()) {
     return {"object_poses", "object poses are present in one episode and not the other"};
   }
   if (t.reference_keypoints.empty() != first.reference_keypoints.empty()) {

@@ -14,12 +14,15 @@ inline constexpr const char* kMixedTrajectories = "mixed_trajectories";
 
 // The field in which `t` differs from `first` ("embodiment", "fps",
 // "qpos_names", "ctrl_names", "object_poses", "reference_keypoints") with a
-// sentence saying how, or {"", ""} when they agree.
+// sentence saying how, or {"", ""} when they agree. With
+// `object_poses_may_differ` (the LeRobot export, which leaves the object
+// feature out when any episode is hand-only) object poses are not compared.
 struct Mismatch {
   std::string field;
   std::string why;
 };
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
-                            const retarget::HandTrajectory& first);
+                            const retarget::HandTrajectory& first,
+                            bool object_poses_may_differ = false);
 
 }  // namespace doasido::dataset

@@ -71,6 +71,7 @@ Json ToJson(const Episode& e) {
           {"frames", e.frames},
           {"fps", e.fps},
           {"embodiment", e.embodiment},
+          {"hand_only", e.hand_only},
           {"stages", stages},
           {"upstream", e.upstream},
           {"verification", verification},
@@ -99,6 +100,7 @@ Episode EpisodeFromJson(const Json& j, const std::string& where) {
   e.frames = Get<std::int64_t>(j, "frames", where);
   e.fps = Get<double>(j, "fps", where);
   e.embodiment = Get<std::string>(j, "embodiment", where);
+  e.hand_only = j.contains("hand_only") && Get<bool>(j, "hand_only", where);  // absent in older manifests
   const Json stages = Get<Json>(j, "stages", where);
   for (size_t i = 0; i < stages.size(); ++i) {
     e.stages.push_back(StageFromJson(stages[i], where + ".stages[" + std::to_string(i) + "]"));

@@ -85,6 +85,9 @@ struct Episode {
   std::int64_t frames = 0;       // trajectory length
   double fps = 0;
   std::string embodiment;
+  // The trajectory has no object (a hand-only clip: the hands alone were
+  // reconstructed and retargeted); exports leave object features out.
+  bool hand_only = false;
   std::vector<StageProvenance> stages;  // pipeline order
   // The upstream runs the trajectory run consumed, as it recorded them
   // (Database::UpstreamInputs); null when it recorded none.

@@ -107,6 +107,7 @@ void WriteEpisode(Database& db, Episode& e, const fs::path& episode_dir) {
     e.frames = static_cast<std::int64_t>(t.qpos.size());
     e.fps = t.fps;
     e.embodiment = t.embodiment;
+    e.hand_only = t.object_poses.empty();
   } catch (const Error& err) {
     throw Error(err.code(), err.message(),
                 {.clip = clip, .file = (trajectory_dir / kTrajectoryFile).string(),

@@ -45,6 +45,16 @@ void CopyLogSince(const std::filesystem::path& log, std::uintmax_t from,
   std::ofstream(to, std::ios::binary) << in.rdbuf();
 }
 
+// A model that wrote nothing has no output for this clip (the hands
+// stage's bundle may stand in); one that wrote files but no meta.json wrote
+// a broken bundle.
+void CheckModelOutput(const std::filesystem::path& dir, const std::string& clip) {
+  if (std::filesystem::is_regular_file(dir / "meta.json")) return;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().filename() != "command.log") ReadClipBundle(dir, clip);
+  }
+}
+
 }  // namespace
 
 void CheckConfig(const BundleStageConfig& c, const std::string& section) {
@@ -146,36 +156,36 @@ StageResult BundleStage::Run(const ClipContext& context) {
   const std::string clip = ClipName(context);
   StageResult result;
   const auto start = std::chrono::steady_clock::now();
-  std::filesystem::path dir;
-  if (ListNamesBundle(context)) {
-    dir = BundleDir(context);
-    result.measurements["source"] = "list";
-  } else {
-    dir = context.artifact_dir;
-    if (config_.command.empty() && config_.server.empty()) {
-      throw PermanentError(kErrorNoBundle,
-                           "the list names no bundle and bundle.command is empty",
-                           {.clip = clip, .field = "bundle.command"});
-    }
+  // A model writes into this run's own folder; with none configured the
+  // folder stays empty, so an earlier configuration's output cannot stand
+  // in for the hands stage's bundle.
+  std::filesystem::path model_output;
+  const bool server = !config_.server.empty();
+  if (!ListNamesBundle(context) && (server || !config_.command.empty())) {
+    model_output = context.artifact_dir;
     std::error_code ec;
-    std::filesystem::remove_all(dir, ec);
-    std::filesystem::create_directories(dir);
-    if (config_.server.empty()) {
-      RunCommand(context, dir);
-      result.measurements["source"] = "command";
+    std::filesystem::remove_all(model_output, ec);
+    std::filesystem::create_directories(model_output);
+    if (server) {
+      RunServer(context, model_output);
     } else {
-      RunServer(context, dir);
-      result.measurements["source"] = "server";
+      RunCommand(context, model_output);
     }
+    CheckModelOutput(model_output, clip);
   }
-  const ClipBundle bundle = ReadClipBundle(dir, clip);
-  result.measurements["bundle"] = dir.string();
+  const ResolvedBundle resolved = LoadClipBundle(context, model_output);
+  const ClipBundle& bundle = resolved.bundle;
+  result.measurements["source"] =
+      server && resolved.source == kBundleFromCommand ? std::string("server") : resolved.source;
+  result.measurements["hands_source"] = resolved.hands_source;
+  result.measurements["producers"] = bundle.producers;
+  result.measurements["bundle"] = resolved.dir.string();
   result.measurements["frames"] = bundle.frames;
   result.measurements["parts"] = bundle.present;
   result.measurements["seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  spdlog::info("{} {}: {} frames from {}", kBundleStageName, clip, bundle.frames,
-               result.measurements["source"].get<std::string>());
+  spdlog::info("{} {}: {} frames from {} (hands: {})", kBundleStageName, clip, bundle.frames,
+               resolved.source, resolved.hands_source);
   return result;
 }
 

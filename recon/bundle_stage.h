@@ -23,11 +23,18 @@
 //   - Errors (clip named): bundle_command_failed (non-zero exit or signal;
 //     the message holds the last log lines), bundle_timeout (killed with its
 //     whole process group after timeout_s), bad_bundle (ReadBundle's
-//     complaint naming file and field), no_bundle (no command configured and
-//     no bundle named). bad_bundle and no_bundle are PermanentErrors (the
-//     worker does not retry them); a failed or timed-out command may be
-//     transient (a busy GPU) and is retried.
-// Measurements: source ("list" or "command"), seconds, frames, parts found.
+//     complaint naming file and field), no_bundle (no command configured,
+//     no bundle named and no hands found by the hands stage). bad_bundle
+//     and no_bundle are PermanentErrors (the worker does not retry them); a
+//     failed or timed-out command may be transient (a busy GPU) and is
+//     retried.
+//   - Neither list bundle nor command output (a command that exits 0 and
+//     writes nothing has no output for the clip): the hands stage's hand-only bundle
+//     (<artifacts>/<clip>/hands/) is the clip's bundle. A list or command
+//     bundle without hands gets the hands stage's hands
+//     (bundle_location.h LoadClipBundle, which every later stage uses).
+// Measurements: source ("list", "command" or "hands"), hands_source
+// ("bundle", "hands" or "none"), producers, seconds, frames, parts found.
 #pragma once
 
 #include <memory>
@@ -54,7 +61,6 @@ void CheckConfig(const BundleStageConfig& c, const std::string& section);
 // Error codes of the stage.
 inline constexpr const char* kErrorBundleCommandFailed = "bundle_command_failed";
 inline constexpr const char* kErrorBundleTimeout = "bundle_timeout";
-inline constexpr const char* kErrorNoBundle = "no_bundle";
 
 class BundleStage : public Stage {
  public:

@@ -55,8 +55,10 @@ ReconStage::ReconStage(ReconStageConfig config) : config_(std::move(config)) {
 
 StageResult ReconStage::Run(const ClipContext& context) {
   const std::string clip = ClipName(context);
-  const std::filesystem::path dir = BundleDir(context);
-  const ClipBundle bundle = ReadClipBundle(dir, clip);
+  const ResolvedBundle resolved = LoadClipBundle(context);
+  const ClipBundle& bundle = resolved.bundle;
+  const std::filesystem::path& dir = resolved.dir;
+  if (IsHandOnly(bundle)) return RunHandOnly(context, resolved);
   std::vector<Pose> poses;
   std::vector<bool> valid;
   std::string pose_source = "bundle";
@@ -101,6 +103,36 @@ StageResult ReconStage::Run(const ClipContext& context) {
   spdlog::info("{} {}: {}/{} frames aligned, scale {}, gravity {}", kReconStageName, clip,
                out.alignment.aligned_frames, bundle.frames,
                result.measurements[kMeasureScaleMedian].dump(), out.gravity.source);
+  return result;
+}
+
+StageResult ReconStage::RunHandOnly(const ClipContext& context, const ResolvedBundle& resolved) const {
+  ReconOutput out = ReconstructHandOnly(resolved.bundle, config_);
+  StageResult result;
+  result.measurements = out.measurements;
+  result.measurements["bundle"] = resolved.dir.string();
+  result.measurements[kMeasureBundleSource] = resolved.source;
+  if (resolved.hands_meta.contains(kMeasureIntrinsicsAssumed)) {
+    result.measurements[kMeasureIntrinsicsAssumed] = resolved.hands_meta[kMeasureIntrinsicsAssumed];
+  }
+  if (result.measurements[kMeasureRightFrames] == 0 && result.measurements[kMeasureLeftFrames] == 0) {
+    result.verdict = Verdict::kReject;
+    result.reason = kReasonNoHands;
+    return result;
+  }
+  out.reconstruction.info["bundle"] = resolved.dir.string();
+  out.reconstruction.info["bundle_source"] = resolved.source;
+  out.reconstruction.info[kMeasureIntrinsicsAssumed] =
+      result.measurements.value(kMeasureIntrinsicsAssumed, Json(nullptr));
+  std::filesystem::create_directories(context.artifact_dir);
+  std::filesystem::remove(context.artifact_dir / kReconstructionMesh);  // an earlier run's object
+  WriteReconstruction(out.reconstruction, context.artifact_dir);
+  result.artifacts.emplace_back("reconstruction", kReconstructionNpz);
+  result.artifacts.emplace_back("reconstruction_info", kReconstructionJson);
+  spdlog::info("{} {}: hand-only, {} right / {} left frames, gravity {}{}", kReconStageName,
+               ClipName(context), result.measurements[kMeasureRightFrames].get<int>(),
+               result.measurements[kMeasureLeftFrames].get<int>(), out.gravity.source,
+               result.measurements[kMeasureGravityAssumed].get<bool>() ? " (assumed)" : "");
   return result;
 }
 

@@ -15,8 +15,11 @@
 // Output in artifact_dir: reconstruction.npz, object.obj, reconstruction.json
 // (gravity source and inlier share, per-frame scales and how each frame was
 // filled, skipped frames with reasons, object pose source).
-// Measurements (keys below) and verdict: reject kReasonNoObject (no mesh,
-// no poses or no object mask), kReasonTooFewAlignedFrames (aligned share of
+// A hand-only bundle (IsHandOnly: hands, no object part) is reconstructed
+// without object (ReconstructHandOnly; no object.obj), passed, or rejected
+// kReasonNoHands when no frame holds a hand.
+// Measurements (keys below) and verdict: reject kReasonNoObject (an object
+// part without mesh, poses or object mask, or neither object nor hands), kReasonTooFewAlignedFrames (aligned share of
 // the frames with a pose below min_aligned_fraction, or fewer than
 // min_aligned_frames); flag kReasonScaleInconsistent when the robust spread
 // of log s over aligned frames exceeds max_scale_spread.
@@ -30,6 +33,7 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "recon/bundle.h"
+#include "recon/bundle_location.h"
 #include "recon/gravity.h"
 #include "recon/hand_object_alignment.h"
 #include "recon/reconstruction.h"
@@ -41,6 +45,7 @@ inline constexpr const char* kReconStageName = "recon";
 
 // Reason codes.
 inline constexpr const char* kReasonNoObject = "no_object";
+inline constexpr const char* kReasonNoHands = "no_hands";  // hand-only bundle, no valid frame
 inline constexpr const char* kReasonTooFewAlignedFrames = "too_few_aligned_frames";
 inline constexpr const char* kReasonScaleInconsistent = "scale_inconsistent";
 
@@ -57,6 +62,18 @@ inline constexpr const char* kMeasurePoseJitter = "pose_jitter_m";  // median |a
 inline constexpr const char* kMeasureGravitySource = "gravity_source";
 inline constexpr const char* kMeasureGravityInlierShare = "gravity_inlier_share";
 inline constexpr const char* kMeasurePoseSource = "object_pose_source";  // "track" or "bundle"
+// Hand-only reconstructions (no object part in the bundle).
+inline constexpr const char* kMeasureObject = "object";              // kObjectNone when hand-only
+inline constexpr const char* kObjectNone = "none";
+inline constexpr const char* kMeasureGravityAssumed = "gravity_assumed";  // camera-up taken as up
+inline constexpr const char* kMeasureIntrinsicsAssumed = "intrinsics_assumed";  // the hands stage's
+inline constexpr const char* kMeasureRightFrames = "right_frames";    // frames the hand is seen
+inline constexpr const char* kMeasureLeftFrames = "left_frames";
+inline constexpr const char* kMeasureWristJumpMax = "wrist_jump_max_m";  // largest frame-to-frame step
+inline constexpr const char* kMeasureBundleSource = "bundle_source";  // bundle_location.h kBundleFrom*
+// How far below the hands' lowest joint a hand-only clip's floor lies, m
+// (recon and retarget_kinematic's bundle fallback agree on it).
+inline constexpr double kHandOnlyFloorMargin = 0.05;
 
 
 struct ReconStageConfig {
@@ -86,6 +103,17 @@ struct ReconOutput {
 ReconOutput Reconstruct(const ClipBundle& bundle, const std::vector<Pose>& poses,
                         const std::vector<bool>& pose_valid, const ReconStageConfig& config);
 
+// A bundle with a hand and no object part at all (mesh, poses, candidates,
+// masks): the hands stage's bundle, or a model command's without an object.
+bool IsHandOnly(const ClipBundle& bundle);
+
+// The hands alone: gravity from the bundle (gravity.npz, else the support
+// plane of a point map), else camera-up recorded as assumed; the floor
+// z = 0 kHandOnlyFloorMargin below the lowest joint of either hand; no
+// object (object_valid all false, no mesh). Measurements kMeasureObject,
+// kMeasureGravity*, kMeasureRight/LeftFrames, kMeasureWristJumpMax.
+ReconOutput ReconstructHandOnly(const ClipBundle& bundle, const ReconStageConfig& config);
+
 // Reads a tracker's object_poses.npz (format in the file comment). Throws
 // Error("bad_track") naming the file and field.
 void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<Pose>& poses,
@@ -100,6 +128,7 @@ class ReconStage : public Stage {
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 
  private:
+  StageResult RunHandOnly(const ClipContext& context, const ResolvedBundle& resolved) const;
   ReconStageConfig config_;
 };
 

@@ -90,10 +90,17 @@ TrackStage::TrackStage(TrackStageConfig config) : config_(std::move(config)) {
 
 StageResult TrackStage::Run(const ClipContext& context) {
   const std::string clip = ClipName(context);
-  const std::filesystem::path dir = BundleDir(context);
-  const ClipBundle b = ReadClipBundle(dir, clip);
+  const ResolvedBundle resolved = LoadClipBundle(context);
+  const ClipBundle& b = resolved.bundle;
+  const std::filesystem::path& dir = resolved.dir;
   StageResult result;
   result.measurements["bundle"] = dir.string();
+  if (!b.object_mesh && b.candidates.empty() && b.object_poses.empty() && b.mask_object.empty()) {
+    // A hand-only bundle: nothing to track; recon reconstructs the hands.
+    result.measurements[kMeasureTrackSource] = kTrackSourceNoObject;
+    spdlog::info("{} {}: no object in the bundle; passed without tracking", kTrackStageName, clip);
+    return result;
+  }
   std::filesystem::create_directories(context.artifact_dir);
   std::unique_ptr<VelocityField> model;
   if (!config_.server.empty()) {

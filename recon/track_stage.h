@@ -11,7 +11,9 @@
 //                drew per frame, taken as the model: a Gaussian mixture with
 //                one mode per sample (kde_sigma wide, the pose block only).
 // A bundle with neither is passed on untouched, saying so (measurement
-// track_source "none"); recon then uses the bundle's own poses.
+// track_source "none"); recon then uses the bundle's own poses. A bundle
+// without any object part (a hand-only bundle, e.g. the hands stage's) is
+// passed at once, even with a server configured (track_source "no_object").
 // Pose guidance: adaptive (recon/adaptive_guidance.h) from the bundle's
 // point tracks (guidance_source "tracks"), else from OpenCV's Lucas-Kanade
 // on the clip's video ("lucas_kanade", recon/lucas_kanade_follower.h),
@@ -39,7 +41,8 @@ inline constexpr const char* kTrackStageName = "track";
 inline constexpr const char* kTrackPosesFile = "object_poses.npz";
 
 // Measurement keys and values.
-inline constexpr const char* kMeasureTrackSource = "track_source";  // server / candidates / none
+inline constexpr const char* kMeasureTrackSource = "track_source";  // server / candidates / none / no_object
+inline constexpr const char* kTrackSourceNoObject = "no_object";
 inline constexpr const char* kMeasureGuidanceSource = "guidance_source";  // tracks / lucas_kanade / fixed
 inline constexpr const char* kMeasureTrackedFrames = "tracked_frames";
 inline constexpr const char* kMeasureMeanPoseGuidance = "mean_pose_guidance";

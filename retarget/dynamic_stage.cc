@@ -35,7 +35,8 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   for (bool v : r.right_valid) hands += v;
   if (hands == 0 || r.object_mesh.empty()) {
     result.verdict = Verdict::kReject;
-    result.reason = hands == 0 ? kReasonNoRightHand : kReasonNoObject;
+    // A hand-only reconstruction says no_object whichever hands it has.
+    result.reason = r.object_mesh.empty() ? kReasonNoObject : kReasonNoRightHand;
     return result;
   }
   const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;

@@ -10,11 +10,13 @@
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "core/file_text.h"
+#include "core/permanent_error.h"
 #include "recon/bundle.h"
 #include "recon/bundle_location.h"
 #include "recon/gravity.h"
 #include "recon/recon_stage.h"
 #include "recon/reconstruction.h"
+#include "retarget/dynamic_stage.h"
 #include "retarget/embodiment.h"
 
 namespace doasido::retarget {
@@ -26,11 +28,16 @@ struct StageInput {
   std::string source;  // folder read
   std::vector<Keypoints21> human;
   std::vector<bool> valid;
+  std::vector<Keypoints21> left;        // the left hand the same way; empty without one
+  std::vector<bool> left_valid;
   std::vector<Pose> object_world;
   std::optional<TriMesh> object_mesh;
   double fps = 30;
   bool has_right_hand = false;
+  bool has_left_hand = false;
 };
+
+bool Any(const std::vector<bool>& v) { return std::any_of(v.begin(), v.end(), [](bool b) { return b; }); }
 
 // From the recon stage's artifact: already metric and gravity-aligned.
 StageInput FromReconstruction(const std::filesystem::path& dir) {
@@ -40,7 +47,10 @@ StageInput FromReconstruction(const std::filesystem::path& dir) {
   in.fps = r.fps;
   in.valid = r.right_valid;
   for (const auto& j : r.right_joints) in.human.push_back(j);
-  in.has_right_hand = std::any_of(r.right_valid.begin(), r.right_valid.end(), [](bool v) { return v; });
+  in.has_right_hand = Any(r.right_valid);
+  in.left_valid = r.left_valid;
+  for (const auto& j : r.left_joints) in.left.push_back(j);
+  in.has_left_hand = Any(r.left_valid);
   if (!r.object_mesh.empty()) in.object_mesh = LoadMesh(r.object_mesh);
   const bool any_object = std::any_of(r.object_valid.begin(), r.object_valid.end(), [](bool v) { return v; });
   if (any_object) {
@@ -65,10 +75,6 @@ StageInput FromBundle(const recon::ClipBundle& bundle, const std::filesystem::pa
   in.source = dir.string();
   in.fps = bundle.fps > 0 ? bundle.fps : 30.0;
   in.object_mesh = bundle.object_mesh;
-  if (!bundle.hand_right || bundle.hand_right->joints.empty()) return in;
-  in.has_right_hand = true;
-  const recon::HandTrack& hand = *bundle.hand_right;
-  const size_t frames = hand.joints.size();
   Vec3 up(0, -1, 0);
   if (!bundle.gravity_up.empty()) {
     Vec3 sum = Vec3::Zero();
@@ -76,12 +82,20 @@ StageInput FromBundle(const recon::ClipBundle& bundle, const std::filesystem::pa
     if (sum.norm() > 1e-9) up = sum.normalized();
   }
   const Mat3 r = recon::UpToZ(up);
-  in.human.resize(frames);
-  in.valid.resize(frames);
-  for (size_t t = 0; t < frames; ++t) {
-    in.valid[t] = t < hand.valid.size() ? static_cast<bool>(hand.valid[t]) : true;
-    in.human[t] = (hand.joints[t] * r.transpose()).eval();
-  }
+  const auto take = [&](const std::optional<recon::HandTrack>& hand, std::vector<Keypoints21>& human,
+                        std::vector<bool>& valid) {
+    if (!hand || hand->joints.empty()) return false;
+    const size_t frames = hand->joints.size();
+    human.resize(frames);
+    valid.resize(frames);
+    for (size_t t = 0; t < frames; ++t) {
+      valid[t] = t < hand->valid.size() ? static_cast<bool>(hand->valid[t]) : true;
+      human[t] = (hand->joints[t] * r.transpose()).eval();
+    }
+    return true;
+  };
+  in.has_right_hand = take(bundle.hand_right, in.human, in.valid) && Any(in.valid);
+  in.has_left_hand = take(bundle.hand_left, in.left, in.left_valid) && Any(in.left_valid);
   for (const Pose& p : bundle.object_poses) in.object_world.push_back({Quat(r) * p.q, r * p.t});
   double floor_z = 1e30;
   if (bundle.object_mesh && !in.object_world.empty()) {
@@ -89,12 +103,16 @@ StageInput FromBundle(const recon::ClipBundle& bundle, const std::filesystem::pa
       floor_z = std::min(floor_z, (in.object_world[0] * Vec3(bundle.object_mesh->vertices.row(v).transpose())).z());
     }
   } else {
-    for (size_t t = 0; t < frames; ++t) {
-      if (in.valid[t]) floor_z = std::min(floor_z, in.human[t].col(2).minCoeff() - 0.05);
+    for (const auto* hand : {&in.human, &in.left}) {
+      const auto& valid = hand == &in.human ? in.valid : in.left_valid;
+      for (size_t t = 0; t < hand->size(); ++t) {
+        if (valid[t]) floor_z = std::min(floor_z, (*hand)[t].col(2).minCoeff() - recon::kHandOnlyFloorMargin);
+      }
     }
   }
   if (floor_z > 1e29) floor_z = 0;
   for (auto& k : in.human) k.col(2).array() -= floor_z;
+  for (auto& k : in.left) k.col(2).array() -= floor_z;
   for (auto& p : in.object_world) p.t.z() -= floor_z;
   return in;
 }
@@ -106,8 +124,12 @@ StageInput LoadInput(const ClipContext& context, const std::string& clip) {
     if (std::filesystem::is_regular_file(recon_dir / recon::kReconstructionNpz)) {
       return FromReconstruction(recon_dir);
     }
-    const std::filesystem::path dir = recon::BundleDir(context);
-    return FromBundle(recon::ReadBundle(dir), dir);
+    const recon::ResolvedBundle resolved = recon::LoadClipBundle(context);
+    return FromBundle(resolved.bundle, resolved.dir);
+  } catch (const PermanentError& e) {
+    ErrorSite site = e.site();
+    site.clip = clip;
+    throw PermanentError(e.code(), e.message(), site);
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = clip;
@@ -122,44 +144,75 @@ std::string DefaultRobotsDir() {
   return std::filesystem::exists(p) ? std::filesystem::weakly_canonical(p).string() : std::string();
 }
 
+namespace {
+
+// The left hand reflected through the world's x = 0 plane: a right hand
+// moving as the left did in a mirror, for the right robot hand.
+std::vector<Keypoints21> Mirrored(std::vector<Keypoints21> left) {
+  for (Keypoints21& k : left) k.col(0) *= -1;
+  return left;
+}
+
+}  // namespace
+
+HandTrajectory KinematicStage::RetargetHand(const std::string& hand, const std::string& robots,
+                                            const std::vector<Keypoints21>& human,
+                                            const std::vector<bool>& valid, double fps,
+                                            const SceneFiles& scene, size_t* compat_changes) const {
+  const HandModel model = BuildHandModel(FindEmbodiment(hand, robots), scene.xml, scene.dir);
+  if (compat_changes) *compat_changes += model.changes.size();
+  if (!scene.xml.empty() && !scene.robot_scene.empty()) {
+    std::ofstream out(scene.robot_scene);
+    out << model.xml;
+  }
+  KinematicRetargeter solver(model, config_.kinematic);
+  return solver.Solve(human, valid, fps);
+}
+
 StageResult KinematicStage::Run(const ClipContext& context) {
   const std::string clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                             : context.clip.external_id;
   const StageInput in = LoadInput(context, clip);
   StageResult result;
-  if (!in.has_right_hand) {
+  Json& m = result.measurements;
+  m["bundle"] = in.source;
+  if (!in.has_right_hand && !in.has_left_hand) {
     result.verdict = Verdict::kReject;
-    result.reason = "no_right_hand";
-    result.measurements["bundle"] = in.source;
+    result.reason = kReasonNoHand;
     return result;
   }
-  const std::vector<Keypoints21>& human = in.human;
-  const std::vector<bool>& valid = in.valid;
+  if (!in.has_right_hand && !in.object_world.empty()) {
+    // A mirrored hand would no longer hold the (unmirrored) object.
+    result.verdict = Verdict::kReject;
+    result.reason = kReasonNoRightHand;
+    return result;
+  }
+  // trajectory.json: the right hand, else the left one mirrored, on `hand`;
+  // one robot for every episode of a dataset.
+  const std::vector<Keypoints21> human = in.has_right_hand ? in.human : Mirrored(in.left);
+  const std::vector<bool>& valid = in.has_right_hand ? in.valid : in.left_valid;
   const std::vector<Pose>& object_world = in.object_world;
   const size_t frames = human.size();
 
   const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;
   std::filesystem::create_directories(context.artifact_dir);
-  std::string scene_xml;
-  std::filesystem::path scene_dir;
+  SceneFiles scene;
   if (in.object_mesh && !object_world.empty()) {
-    scene_dir = context.artifact_dir / "scene";
+    scene.dir = context.artifact_dir / "scene";
     SceneConfig scene_config = config_.scene;
     scene_config.place_on_floor = false;  // the floor is already under the object
-    const ObjectScene scene = BuildObjectScene(*in.object_mesh, object_world[0], scene_config, scene_dir);
-    scene_xml = TryReadFile(scene.xml_path).value_or("");
-    result.measurements["object_mass"] = scene.mass;
-    result.measurements["object_hulls"] = scene.hull_files.size();
+    const ObjectScene built = BuildObjectScene(*in.object_mesh, object_world[0], scene_config, scene.dir);
+    scene.xml = TryReadFile(built.xml_path).value_or("");
+    m["object_mass"] = built.mass;
+    m["object_hulls"] = built.hull_files.size();
     result.artifacts.emplace_back("scene", "scene/scene.xml");
   }
-  const HandModel model = BuildHandModel(FindEmbodiment(config_.hand, robots), scene_xml, scene_dir);
-  if (!scene_xml.empty()) {
-    std::ofstream out(context.artifact_dir / "robot_scene.xml");
-    out << model.xml;
+  if (!scene.xml.empty()) {
+    scene.robot_scene = context.artifact_dir / "robot_scene.xml";
     result.artifacts.emplace_back("robot_scene", "robot_scene.xml");
   }
-  KinematicRetargeter solver(model, config_.kinematic);
-  HandTrajectory trajectory = solver.Solve(human, valid, in.fps);
+  size_t changes = 0;
+  HandTrajectory trajectory = RetargetHand(config_.hand, robots, human, valid, in.fps, scene, &changes);
   trajectory.object_poses = object_world;
   WriteTrajectoryJson(trajectory, context.artifact_dir / "trajectory.json");
   WriteTrajectoryCsv(trajectory, context.artifact_dir / "trajectory.csv");
@@ -167,21 +220,36 @@ StageResult KinematicStage::Run(const ClipContext& context) {
   result.artifacts.emplace_back("trajectory_csv", "trajectory.csv");
 
   const FingertipErrorStats error = SummarizeFingertipError(trajectory.fingertip_error);
-  Json& m = result.measurements;
-  m["bundle"] = in.source;
+  m[kMeasureRetargetedHand] = in.has_right_hand ? kHandRight : kHandLeftMirrored;
   m["embodiment"] = trajectory.embodiment;
   m["frames"] = frames;
   m["valid_frames"] = error.frames;
   m["scale"] = trajectory.scale;
   m["fingertip_error_mean"] = error.mean;
   m["fingertip_error_p95"] = error.p95;
-  m["compat_changes"] = model.changes.size();
+  if (in.has_right_hand && in.has_left_hand && !config_.left_hand.empty()) {
+    // The second hand onto its own robot hand, in the same scene.
+    SceneFiles left_scene = scene;
+    left_scene.robot_scene.clear();
+    HandTrajectory left = RetargetHand(config_.left_hand, robots, in.left, in.left_valid, in.fps,
+                                       left_scene, &changes);
+    left.object_poses = object_world;
+    WriteTrajectoryJson(left, context.artifact_dir / kLeftTrajectoryFile);
+    result.artifacts.emplace_back("trajectory_left", kLeftTrajectoryFile);
+    const FingertipErrorStats left_error = SummarizeFingertipError(left.fingertip_error);
+    m["left_embodiment"] = left.embodiment;
+    m["left_valid_frames"] = left_error.frames;
+    m["left_fingertip_error_mean"] = left_error.mean;
+    m["left_fingertip_error_p95"] = left_error.p95;
+  }
+  m["compat_changes"] = changes;
   if (auto redecided = Redecide(m)) {
     result.verdict = redecided->verdict;
     result.reason = redecided->reason;
   }
-  spdlog::info("{} {}: {} frames, scale {:.3f}, fingertip error {:.1f} mm", kKinematicStageName, clip,
-               frames, trajectory.scale, 1000 * m["fingertip_error_mean"].get<double>());
+  spdlog::info("{} {}: {} frames ({} hand), scale {:.3f}, fingertip error {:.1f} mm", kKinematicStageName,
+               clip, frames, m[kMeasureRetargetedHand].get<std::string>(), trajectory.scale,
+               1000 * m["fingertip_error_mean"].get<double>());
   return result;
 }
 

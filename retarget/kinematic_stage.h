@@ -3,20 +3,29 @@
 // scene the dynamics-aware optimiser starts from (seed section 3.2).
 //
 // Input: the `recon` stage's artifact <artifacts>/<clip>/recon/
-// (recon/reconstruction.h: metric, gravity-aligned right hand and object;
-// frames without an object pose hold the previous one) when it exists, else
-// the clip bundle (recon/bundle_location.h BundleDir) as before: hands.npz
-// right hand, object/poses.npz, object/mesh.obj, gravity.npz, meta.json fps,
+// (recon/reconstruction.h: metric, gravity-aligned hands and object, or the
+// hands alone; frames without an object pose hold the previous one) when it
+// exists, else the clip bundle (recon/bundle_location.h LoadClipBundle):
+// hands.npz, object/poses.npz, object/mesh.obj, gravity.npz, meta.json fps,
 // put in a world frame whose +z is up (mean of gravity.npz, else the
 // camera's -y) with the floor z = 0 touching the object's lowest point in
 // the first frame (or 5 cm below the lowest hand keypoint without object).
 //
+// Hands: trajectory.json is the right hand on `hand`; a hand-only clip whose
+// only hand is the left has it mirrored (x -> -x in the world frame) onto
+// `hand` (with an object it is rejected "no_right_hand"), so
+// that every episode of a dataset has one robot (measurement
+// retargeted_hand "right" or "left_mirrored"). When both hands are seen and
+// `left_hand` is set, the left hand is also retargeted onto `left_hand`
+// into trajectory_left.json (measurements left_*).
 // Output in artifact_dir: trajectory.json and trajectory.csv
 // (kinematic_retarget.h HandTrajectory: robot qpos per frame, object poses
-// in the world frame), and with an object scene/scene.xml + hull OBJs
-// (scene_builder.h) and robot_scene.xml (hand with floating wrist + scene).
+// in the world frame, none for a hand-only clip), and with an object
+// scene/scene.xml + hull OBJs (scene_builder.h) and robot_scene.xml (hand
+// with floating wrist + scene).
 // Verdict: pass, or flag ("kinematic_error") when the mean fingertip error
-// exceeds flag_fingertip_error; reject ("no_right_hand") without a right hand.
+// exceeds flag_fingertip_error; reject ("no_hand") without any hand.
+// With an object, the object's poses go with the right hand's trajectory.
 #pragma once
 
 #include <string>
@@ -31,15 +40,21 @@ namespace doasido::retarget {
 
 // The stage's name: its queue name, its config section and its artifact folder.
 inline constexpr const char* kKinematicStageName = "retarget_kinematic";
+inline constexpr const char* kLeftTrajectoryFile = "trajectory_left.json";
+inline constexpr const char* kReasonNoHand = "no_hand";
+inline constexpr const char* kMeasureRetargetedHand = "retargeted_hand";
+inline constexpr const char* kHandRight = "right";
+inline constexpr const char* kHandLeftMirrored = "left_mirrored";
 
 struct KinematicStageConfig {
   std::string hand = "sharpa_right";  // embodiment name or description path
+  std::string left_hand = "sharpa_left";  // the left hand's robot; "" = right hand only
   std::string robots_dir;             // folder of descriptions; "" = DefaultRobotsDir()
   double flag_fingertip_error = 0.02; // m, mean over frames
   KinematicConfig kinematic;
   SceneConfig scene;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, robots_dir,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, left_hand, robots_dir,
                                                 flag_fingertip_error, kinematic, scene)
 // Also checks the nested kinematic and scene tables (retarget/config_checks.h).
 void CheckConfig(const KinematicStageConfig& c, const std::string& section);
@@ -58,6 +73,14 @@ class KinematicStage : public Stage {
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 
  private:
+  struct SceneFiles {
+    std::string xml;                    // object scene MJCF, "" without object
+    std::filesystem::path dir;          // its folder
+    std::filesystem::path robot_scene;  // where to write hand + scene ("" = not written)
+  };
+  HandTrajectory RetargetHand(const std::string& hand, const std::string& robots,
+                              const std::vector<Keypoints21>& human, const std::vector<bool>& valid,
+                              double fps, const SceneFiles& scene, size_t* compat_changes) const;
   KinematicStageConfig config_;
 };
 

@@ -1,7 +1,14 @@
 #!/usr/bin/env bash
-# Installs what is needed, builds, and runs the main job on the embedded
-# default: a SQLite database in work/, fed with the bundled demo list (real
-# sample videos from ../shared/data) and freshly generated synthetic clips.
+# Installs what is needed, builds, and runs the whole chain on the bundled
+# real sample videos (examples/demo_clips.csv, from ../shared/data) and
+# freshly generated synthetic clips: filters -> hands -> bundle -> recon ->
+# retarget_kinematic -> a dataset version of the clips that succeeded ->
+# its LeRobot export; then prints where each clip stopped and why.
+# Real videos have no object model here: their bundle is the hands stage's
+# hand-only bundle (real hand motion, retargeted onto the robot hand). The
+# synthetic clips have exact ground truth: a stand-in for a model command
+# (tools/ground_truth_bundle.sh) hands their bundles, objects included, to
+# the bundle stage.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -9,14 +16,33 @@ BUILD_TARGETS=doasido bash scripts/build.sh
 WORK=${WORK:-work}
 mkdir -p "$WORK"
 DOASIDO=build/bin/doasido
+DB="$WORK/doasido.db"
 # Synthetic clips with exact ground truth and a known defect mix (100DOH-style
 # VOC annotations with hand and object boxes), next to the real samples.
 $DOASIDO synth --out "$WORK/synth" --clips 8 --seed 1 --frames 60 \
   --mix clean=0.25,cut=0.125,fade=0.125,pan=0.125,out_of_frame=0.125,no_contact=0.125,static=0.125
-$DOASIDO init --db "$WORK/doasido.db"
-$DOASIDO run --db "$WORK/doasido.db" --jobs 2 examples/demo_clips.csv "$WORK/synth"
-$DOASIDO report --db "$WORK/doasido.db" --out "$WORK/report"
+cat > "$WORK/demo.toml" <<TOML
+[bundle]
+command = "sh '$PWD/tools/ground_truth_bundle.sh' {video} {output}"
+TOML
+$DOASIDO init --db "$DB" --pipeline default,bundle,recon,retarget_kinematic
+$DOASIDO run --db "$DB" --jobs 2 --config "$WORK/demo.toml" examples/demo_clips.csv "$WORK/synth"
+$DOASIDO report --db "$DB" --out "$WORK/report"
 echo
-echo "Database: $WORK/doasido.db   (try: $DOASIDO status --db $WORK/doasido.db)"
+if VERSION=$($DOASIDO dataset create --db "$DB" --root "$WORK/datasets" --name demo \
+               --select success --no-thumbnails | tail -1); then
+  rm -rf "$WORK/lerobot/$(basename "$VERSION")"
+  # The cameras ran at 25, 29.97 and 30 fps: one rate for the export.
+  $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --out "$WORK/lerobot/$(basename "$VERSION")"
+else
+  echo "No dataset version: no clip's trajectory succeeded."
+fi
+echo
+echo "Where each clip stopped:"
+$DOASIDO status --db "$DB" --clips
+echo
+echo "Database: $DB   (try: $DOASIDO status --db $DB)"
 echo "Report:   $WORK/report/report.html"
-echo "Review the flagged clips: $DOASIDO review serve --db $WORK/doasido.db"
+[ -n "${VERSION:-}" ] && echo "Dataset:  $VERSION   LeRobot export: $WORK/lerobot/$(basename "$VERSION")"
+echo "Review the flagged clips: $DOASIDO review serve --db $DB"
+echo "Check the robot trajectories beside their videos: $DOASIDO review serve --db $DB  (then /verify)"

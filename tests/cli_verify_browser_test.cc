@@ -37,6 +37,9 @@ using testing::ChromeDriver;
 using testing::RunDoasido;
 using testing::TempDir;
 using testing::WebDriverSession;
+using testing::SnapshotView;
+using testing::ChangedPixels;
+using testing::kWebGlFlags;
 
 // A 30-frame trajectory: the wrist sweeps 0.2 m along x while the fingers
 // close, above a mug when `mug` is set (scene written as the stage would).
@@ -96,33 +99,6 @@ Json CanvasStats(WebDriverSession& session) {
     return {differ, sum, w: c.width, h: c.height, pixels: c.width * c.height};
   )js");
 }
-
-// Pixels that differ between two renders of the view.
-// Keeps the view's pixels in window[var] for ChangedPixels.
-void SnapshotView(WebDriverSession& session, const std::string& var) {
-  session.Execute(R"js(
-    const v = document.getElementById('view');
-    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
-    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
-    window[arguments[0]] = g.getImageData(0, 0, c.width, c.height).data;
-  )js", Json::array({var}));
-}
-
-int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
-  return session.Execute(R"js(
-    const v = document.getElementById('view');
-    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
-    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
-    const d = g.getImageData(0, 0, c.width, c.height).data, b = window[arguments[0]];
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) if (d[i] !== b[i] || d[i + 1] !== b[i + 1] || d[i + 2] !== b[i + 2]) ++n;
-    return n;
-  )js", Json::array({before_var})).get<int>();
-}
-
-// Chromium flags for WebGL through SwiftShader.
-const std::vector<std::string> kWebGlFlags = {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-                                              "--ignore-gpu-blocklist"};
 
 // Opens the verification page and waits for its queue; returns its length.
 int OpenVerifyQueue(WebDriverSession& session, const review::ReviewServer& server) {

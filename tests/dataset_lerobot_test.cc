@@ -10,38 +10,20 @@
 #include <gtest/gtest.h>
 
 #include "dataset/lerobot_export.h"
+#include "dataset/resample.h"
 #include "dataset/version.h"
 #include "retarget/kinematic_retarget.h"
+#include "tests/parquet_read.h"
 #include "tests/test_util.h"
 
 namespace doasido::dataset {
 namespace {
 
 namespace fs = std::filesystem;
+using doasido::testing::ReadParquet;
 using doasido::testing::ShellOk;
 using doasido::testing::TempDir;
 using doasido::testing::WriteFile;
-
-fs::path NpmDir() {
-  if (const char* dir = std::getenv("DOASIDO_NPM_DIR")) return dir;
-  return fs::path(std::getenv("HOME")) / ".cache/doasido/npm";
-}
-
-// Every row and the row-group sizes of a Parquet file, through hyparquet.
-Json ReadParquet(const fs::path& dir, const fs::path& file) {
-  WriteFile(dir / "read.mjs", R"JS(
-import { pathToFileURL } from 'node:url';
-const hp = await import(pathToFileURL(process.argv[2] + '/node_modules/hyparquet/src/node.js'));
-const file = await hp.asyncBufferFromFile(process.argv[3]);
-const meta = await hp.parquetMetadataAsync(file);
-const rows = await hp.parquetReadObjects({ file });
-const big = (k, v) => typeof v === 'bigint' ? Number(v) : v;
-const kv = Object.fromEntries((meta.key_value_metadata || []).map(e => [e.key, e.value]));
-process.stdout.write(JSON.stringify({ rows, kv, groups: meta.row_groups.map(g => Number(g.num_rows)) }, big));
-)JS");
-  return Json::parse(ShellOk("node " + (dir / "read.mjs").string() + " " + NpmDir().string() + " " +
-                         file.string()));
-}
 
 float F(double v) { return static_cast<float>(v); }
 
@@ -211,6 +193,44 @@ TEST(LeRobotExport, RefusesNonEmptyOutputAndMixedRates) {
     EXPECT_EQ(e.site().field, "fps");
     EXPECT_EQ(e.site().clip, "c1");
   }
+}
+
+// A joint moving at a constant rate lands exactly on the line at the new
+// rate's times; a frame is valid when both neighbours are.
+TEST(LeRobotExport, ResamplingKeepsALinearMotionOnItsLine) {
+  retarget::HandTrajectory t;
+  t.fps = 25;
+  for (int f = 0; f < 11; ++f) {
+    t.qpos.push_back(Eigen::VectorXd::Constant(2, 0.1 * f));
+    t.valid.push_back(f != 4);
+    t.fingertip_error.push_back(f);
+  }
+  const retarget::HandTrajectory r = ResampleTrajectory(t, 30);
+  EXPECT_EQ(r.fps, 30);
+  ASSERT_EQ(r.qpos.size(), 13u);  // 0 .. 12 / 30 s within the 10 / 25 s of the source
+  for (size_t k = 0; k < r.qpos.size(); ++k) {
+    const double source = k * 25.0 / 30.0;
+    EXPECT_NEAR(r.qpos[k][1], 0.1 * source, 1e-12) << k;
+    EXPECT_EQ(r.valid[k], std::floor(source) != 4 && std::floor(source) + 1 != 4) << k;
+  }
+}
+
+TEST(LeRobotExport, EpisodesOfDifferentRatesExportAtOneRate) {
+  TempDir dir;
+  MakeVersion(dir.path());
+  retarget::HandTrajectory t = retarget::ReadTrajectoryJson(dir / "v1/episodes/clip-000002/trajectory.json");
+  t.fps = 25;
+  retarget::WriteTrajectoryJson(t, dir / "v1/episodes/clip-000002/trajectory.json");
+  const ExportSummary s = ExportLeRobot(dir / "v1", dir / "out", {.videos = true, .fps = 30});
+  std::ifstream info_file(dir / "out/meta/info.json");
+  const Json info = Json::parse(info_file);
+  EXPECT_EQ(info["fps"], 30.0);
+  const int resampled = static_cast<int>(std::floor((t.qpos.size() - 1) * 30.0 / 25.0 + 1e-9)) + 1;
+  EXPECT_EQ(s.frames, 45 - static_cast<int>(t.qpos.size()) + resampled);
+  const Json probe = Json::parse(ShellOk(
+      "ffprobe -v error -count_frames -show_entries stream=nb_read_frames -of json " +
+      (dir / "out/videos/observation.images.source/chunk-000/file-000.mp4").string()));
+  EXPECT_EQ(probe["streams"][0]["nb_read_frames"], std::to_string(s.frames));
 }
 
 }  // namespace

@@ -226,4 +226,31 @@ class WebDriverSession {
   std::string id_;
 };
 
+// Helpers for pages with a WebGL canvas #view (the /verify page).
+// Keeps the view's pixels in window[var] for ChangedPixels.
+inline void SnapshotView(WebDriverSession& session, const std::string& var) {
+  session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    window[arguments[0]] = g.getImageData(0, 0, c.width, c.height).data;
+  )js", Json::array({var}));
+}
+
+inline int ChangedPixels(WebDriverSession& session, const std::string& before_var) {
+  return session.Execute(R"js(
+    const v = document.getElementById('view');
+    const c = document.createElement('canvas'); c.width = v.width; c.height = v.height;
+    const g = c.getContext('2d'); g.drawImage(v, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data, b = window[arguments[0]];
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] !== b[i] || d[i + 1] !== b[i + 1] || d[i + 2] !== b[i + 2]) ++n;
+    return n;
+  )js", Json::array({before_var})).get<int>();
+}
+
+// Chromium flags for WebGL through SwiftShader.
+inline const std::vector<std::string> kWebGlFlags = {"--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+                                              "--ignore-gpu-blocklist"};
+
 }  // namespace doasido::testing

@@ -9,7 +9,10 @@ HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& i
   HandsResult out;
   out.intrinsics = intrinsics;
   const double fps = detected.fps > 0 ? detected.fps : 30.0;
-  for (const Track& track : BuildTracks(detected.frames, config.tracker, &out.tracking)) {
+  // A still image (or a clip shorter than the minimum track) keeps what it saw.
+  TrackerConfig tracker = config.tracker;
+  tracker.min_track_frames = std::min<int>(tracker.min_track_frames, static_cast<int>(detected.frames.size()));
+  for (const Track& track : BuildTracks(detected.frames, tracker, &out.tracking)) {
     FittedTrack fit = FitTrack(track, intrinsics.K, fps, config.fit);
     out.fit_seconds += fit.seconds;
     if (!fit.joints.empty()) out.tracks.push_back(std::move(fit));

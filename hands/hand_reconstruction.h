@@ -21,7 +21,8 @@ struct HandsResult {
 };
 
 // `fps` <= 0 (an image) is taken as 30 (the acceleration term needs a rate;
-// a one-frame track has none).
+// a one-frame track has none). Tracks shorter than the tracker's minimum
+// are kept when the input itself is that short (an image: one frame).
 HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& intrinsics,
                              const HandsConfig& config);
 

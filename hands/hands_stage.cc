@@ -68,6 +68,13 @@ Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
 
 StageResult HandsStage::Run(const ClipContext& context) {
   const std::string clip = recon::ClipName(context);
+  if (recon::ListNamesBundle(context) && std::filesystem::exists(recon::BundleDir(context) / "hands.npz")) {
+    // The list's bundle wins and already has hands: nothing to fill in.
+    StageResult skipped;
+    skipped.measurements = {{"skipped", "the bundle the list names has hands"},
+                            {"bundle", recon::BundleDir(context).string()}};
+    return skipped;
+  }
   if (context.video.info) {
     // Refuse bad intrinsics before minutes of detection.
     ClipIntrinsics(context, context.video.info->width, context.video.info->height,

@@ -16,6 +16,10 @@
 // else the list's fx/fy/cx/cy or fov columns, else `default_fov_deg`,
 // recorded as assumed (meta.json "intrinsics_assumed").
 //
+// A clip whose list names a bundle that has hands (hands.npz) is passed at
+// once, measurement "skipped": that bundle wins (the `bundle` stage uses
+// this stage's hands only where the bundle has none).
+//
 // Verdicts: pass; reject `no_hands` when no track survives (the bundle is
 // still written, every frame invalid). Errors (clip named): the decoder's
 // (video_open_failed, video_truncated: permanent), bad_intrinsics

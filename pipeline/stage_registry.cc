@@ -10,6 +10,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "hands/hands_stage.h"
 #include "ingest/download_stage.h"
 #include "video/probe.h"
 #include "pipeline/noop_stage.h"
@@ -82,6 +83,11 @@ const std::vector<StageEntry>& StageTable() {
       Entry<CameraMotionStage, CameraMotionConfig>(
           kCameraMotionStageName, "rejects (or flags) clips whose camera pans, shakes or zooms",
           true, kMinute, true),
+      Entry<hands::HandsStage, hands::HandsConfig>(
+          hands::kHandsStageName,
+          "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
+          "fit: the hand part of a clip bundle",
+          true, kHour),
       Entry<recon::BundleStage, recon::BundleStageConfig>(
           recon::kBundleStageName,
           "runs the model command that writes the clip bundle (or checks the bundle the list "

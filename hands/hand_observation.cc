@@ -11,8 +11,12 @@ HandObservation FromLandmarked(const filters::LandmarkedHand& hand, double scale
                                int height) {
   HandObservation o;
   o.score = hand.score;
-  // MediaPipe's handedness assumes a mirrored (selfie) image.
-  o.p_right = 1.0 - hand.right;
+  // filters/hand_landmarker.h says the model's `right` is for a mirrored
+  // image, but on camera footage it names the hand as it is: the right
+  // hands of retarget/human_hand_video.mp4 (dex-retargeting's, palm to the
+  // camera) and of videos/02_cups.mp4 (a person facing the camera, the hand
+  // at the image's left) both score right > 0.5 (docs/hands.md).
+  o.p_right = hand.right;
   const double reach = 0.1 * std::max(width, height);
   for (int j = 0; j < kJoints; ++j) {
     o.uv[j] = Eigen::Vector2d(hand.keypoints[j].x, hand.keypoints[j].y) * scale;

@@ -22,7 +22,7 @@ const char* SideName(Side side);  // "left" | "right"
 
 struct HandObservation {
   double score = 0;    // the landmark model's hand presence, 0..1
-  double p_right = 0;  // probability of a right hand in camera (not mirrored) footage
+  double p_right = 0;  // probability of a right hand as the camera sees it (not mirrored)
   std::array<Eigen::Vector2d, kJoints> uv;          // pixels
   std::array<double, kJoints> confidence{};         // 0..1 per keypoint
   std::array<Eigen::Vector3d, kJoints> world;       // metres, the model's hand-centred frame

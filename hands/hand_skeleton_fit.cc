@@ -36,15 +36,6 @@ struct Bone {
   }
 };
 
-struct Prior {
-  double value, w;
-  template <typename T>
-  bool operator()(const T* x, T* r) const {
-    r[0] = T(w) * (x[0] - T(value));
-    return true;
-  }
-};
-
 struct Shape {
   Vec3 offset;  // the model's joint - wrist, camera axes
   double w;
@@ -162,13 +153,12 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
   }
   const size_t n = out.joints.size();
   // Bone lengths start at the models' median lengths.
-  std::array<double, kJoints> prior{};
   for (int j = 1; j < kJoints; ++j) {
     std::vector<double> lengths;
     for (const auto& o : track.frames) {
       if (o) lengths.push_back((o->world[j] - o->world[kParent[j]]).norm());
     }
-    prior[j] = out.bone_length[j] = Median(lengths);
+    out.bone_length[j] = Median(lengths);
   }
   ceres::Problem problem;
   const double sigma_px = c.reprojection_sigma * ImageSize(track);
@@ -180,11 +170,10 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
                                &out.bone_length[j]);
     }
   }
-  for (int j = 1; j < kJoints; ++j) {
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<Prior, 1, 1>(new Prior{prior[j], 1.0 / c.bone_prior_sigma_m}),
-        nullptr, &out.bone_length[j]);
-  }
+  // The models' median lengths are the only metric cue: every other
+  // residual is smaller for a smaller, nearer hand (same projection, less
+  // motion), so lengths left free shrink the hand. They are held.
+  for (int j = 1; j < kJoints; ++j) problem.SetParameterBlockConstant(&out.bone_length[j]);
   const double accel_w = 1.0 / (c.acceleration_sigma_ms2 / (fps * fps));
   for (size_t f = 1; f + 1 < n; ++f) {
     for (int j = 0; j < kJoints; ++j) {

@@ -1,17 +1,17 @@
 // One Ceres problem per track: the hand's 21 joints in the camera frame on
 // every frame of the track, with bone lengths constant over the clip.
 //
-// Unknowns: each joint's position per frame (metres, camera frame) and the
-// 20 bone lengths of the track. Residuals, each divided by its sigma
+// Unknowns: each joint's position per frame (metres, camera frame). The 20
+// bone lengths are the track's constants: the models' median lengths over
+// its frames (the only metric cue; left free, every residual below prefers
+// a smaller, nearer hand: same projection, less motion, and the fitted hands
+// of real clips shrank to half size). Residuals, each divided by its sigma
 // (FitConfig):
 //   - reprojection of every observed keypoint against the models' 2D
 //     keypoint, times sqrt(confidence), under a Huber loss (a keypoint the
 //     models misplace is outvoted, not obeyed); the sigma is a fraction of
 //     the hand's size in the image, so it means the same at any resolution;
 //   - each bone's length against the track's constant length;
-//   - the constant lengths against the models' median lengths (a weak
-//     prior: reprojection alone cannot tell a big far hand from a small
-//     near one, the models' metric landmarks can);
 //   - on observed frames, the wrist-relative joints against the model's 3D
 //     landmarks turned into the camera by the frame's PnP pose (the depth
 //     of the fingers that one view does not show);

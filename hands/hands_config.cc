@@ -17,7 +17,6 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);
   RequireInRange(f, "huber", c.fit.huber, 0.1, 100);
   RequireInRange(f, "bone_sigma_m", c.fit.bone_sigma_m, 1e-5, 1);
-  RequireInRange(f, "bone_prior_sigma_m", c.fit.bone_prior_sigma_m, 1e-5, 1);
   RequireInRange(f, "shape_sigma_m", c.fit.shape_sigma_m, 1e-5, 1);
   RequireInRange(f, "acceleration_sigma_ms2", c.fit.acceleration_sigma_ms2, 1e-3, 1e4);
   RequireInRange(f, "max_iterations", c.fit.max_iterations, 1, 10000);

@@ -34,13 +34,12 @@ struct FitConfig {
   double reprojection_sigma = 0.03;  // keypoint noise, fraction of the hand's size in the image
   double huber = 2.0;                // robust loss: quadratic up to this many sigmas
   double bone_sigma_m = 0.002;       // a bone's length against the track's constant length
-  double bone_prior_sigma_m = 0.01;  // constant lengths against the models' median lengths
   double shape_sigma_m = 0.01;       // wrist-relative joints against the model's 3D landmarks
   double acceleration_sigma_ms2 = 6;  // joint acceleration, m/s^2
   int max_iterations = 50;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber,
-                                                bone_sigma_m, bone_prior_sigma_m, shape_sigma_m,
+                                                bone_sigma_m, shape_sigma_m,
                                                 acceleration_sigma_ms2, max_iterations)
 
 // The [hands] section.

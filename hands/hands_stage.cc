@@ -3,6 +3,8 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "core/error_codes.h"
+#include "core/permanent_error.h"
 #include "filters/kept_shot.h"
 #include "filters/shot_boundary.h"
 #include "hands/hand_bundle_writer.h"
@@ -87,14 +89,19 @@ StageResult HandsStage::Run(const ClipContext& context) {
   DetectedFrames detected;
   try {
     detected = DetectVideo(context.video.path, KeptSpan(context, clip), config_.max_side, *landmarker_);
-  } catch (const Error& e) {
-    // A detector that failed is started afresh on the next attempt.
-    if (e.code() == "hand_detector_failed") landmarker_.reset();
+  } catch (const PermanentError&) {
     throw;
+  } catch (const Error& e) {
+    // A detector that failed is started afresh on the next attempt; the
+    // long-lived detector names the clip it started on, so name this one.
+    if (e.code() == "hand_detector_failed") landmarker_.reset();
+    ErrorSite site = e.site();
+    site.clip = clip;
+    throw Error(e.code(), e.message(), site);
   }
   if (detected.frames.empty()) {
-    throw Error("video_truncated", "the kept span holds no frame",
-                {.clip = clip, .file = context.video.path});
+    throw PermanentError(kVideoTruncated, "the kept span holds no frame",
+                         {.clip = clip, .file = context.video.path});
   }
   const Intrinsics intrinsics =
       ClipIntrinsics(context, detected.width, detected.height, config_.default_fov_deg);

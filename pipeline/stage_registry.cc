@@ -87,7 +87,9 @@ const std::vector<StageEntry>& StageTable() {
           hands::kHandsStageName,
           "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
           "fit: the hand part of a clip bundle",
-          true, kHour),
+          // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
+          // and suites run the default list on hundreds of synthetic clips.
+          false, kHour),
       Entry<recon::BundleStage, recon::BundleStageConfig>(
           recon::kBundleStageName,
           "runs the model command that writes the clip bundle (or checks the bundle the list "

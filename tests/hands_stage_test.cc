@@ -30,7 +30,7 @@ class HandsStageTest : public ::testing::Test {
     c.clip.external_id = "clip7";
     c.clip.start_frame = first;
     c.clip.end_frame = last;
-    c.video.path = (testing::SharedData() / "videos" / video).string();
+    c.video.path = (testing::SharedData() / video).string();
     c.artifact_dir = tmp_ / "artifacts" / "7" / kHandsStageName;
     fs::create_directories(c.artifact_dir);
     return c;
@@ -42,7 +42,7 @@ TEST_F(HandsStageTest, WritesABundleThatReconReadsOnAShortRealClip) {
   HandsStage stage;
   // eyeliner.avi: one hand holding a pencil, 320 x 240; the kept span is
   // the shot-boundary trim (frames 3..10) inside the clip's 0..11.
-  ClipContext c = Context("eyeliner.avi", 0, 11);
+  ClipContext c = Context("videos/eyeliner.avi", 0, 11);
   c.measurements["shot_boundary"] = {
       {"summary", {{"boundaries", {3}}, {"trim", {{"start_frame", 3}, {"end_frame", 10}}}}}};
   const StageResult r = stage.Run(c);
@@ -85,9 +85,19 @@ TEST_F(HandsStageTest, WritesABundleThatReconReadsOnAShortRealClip) {
   }
 }
 
+TEST_F(HandsStageTest, ARightHandIsRight) {
+  // dex-retargeting's example video: one right hand, palm to the camera
+  // (its pipeline and its keypoint file call it right; so does a look).
+  HandsStage stage;
+  ClipContext c = Context("retarget/human_hand_video.mp4", 100, 107);
+  const StageResult r = stage.Run(c);
+  EXPECT_EQ(r.measurements.at("sides").at("right").at("frames"), 8) << r.measurements.dump();
+  EXPECT_EQ(r.measurements.at("sides").at("left").at("frames"), 0) << r.measurements.dump();
+}
+
 TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {
   HandsStage stage;
-  ClipContext c = Context("eyeliner.avi", 0, 3);
+  ClipContext c = Context("videos/eyeliner.avi", 0, 3);
   c.clip.metadata = {{"fov", "50"}};
   const StageResult r = stage.Run(c);
   EXPECT_EQ(r.measurements.at("intrinsics_source"), "list");
@@ -109,7 +119,7 @@ TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {
 
 TEST_F(HandsStageTest, MissingOrCorruptVideoIsANamedError) {
   HandsStage stage;
-  ClipContext c = Context("eyeliner.avi", 0, 3);
+  ClipContext c = Context("videos/eyeliner.avi", 0, 3);
   c.video.path = (tmp_ / "gone.mp4").string();
   try {
     stage.Run(c);

@@ -47,11 +47,13 @@ inline std::vector<hands::Joints> ReadDexKeypoints(const std::string& path) {
 }
 
 // `frames` frames from CSV row `first_row`, pixel noise `px` (sigma),
-// 3D landmark noise `world_m` (sigma), p_right of every observation.
+// 3D landmark noise `world_m` (sigma), p_right of every observation, focal
+// length `fx` (640 x 480 pixels; 500 is a 65 degree field of view).
 inline SyntheticHand MakeSyntheticHand(const std::vector<hands::Joints>& rows, int frames, int first_row,
-                                       double px, double world_m, double p_right, unsigned seed) {
+                                       double px, double world_m, double p_right, unsigned seed,
+                                       double fx = 500) {
   SyntheticHand h;
-  h.K << 500, 0, 319.5, 0, 500, 239.5, 0, 0, 1;
+  h.K << fx, 0, 319.5, 0, fx, 239.5, 0, 0, 1;
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0, 1);
   const Mat3 model_frame = Eigen::AngleAxisd(0.7, Vec3(0.3, -0.5, 0.8).normalized()).toRotationMatrix();

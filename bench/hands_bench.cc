@@ -129,12 +129,20 @@ void Real(std::int64_t frames) {
                          "laptop_trackpad.mp4"};
   std::printf("%-20s %6s %6s %8s %8s %9s %28s %28s %8s %s\n", "clip", "frames", "hand%", "det cpu/s",
               "fit cpu/s", "total/s", "right palm cm med [min,max]", "left palm cm med [min,max]",
-              "jump cm", "still: jitter px/f^2 models -> fit (frames)");
+              "jump cm", "still: jitter px/f^2 models -> fit (frames); model's own palm cm");
   for (const char* clip : clips) {
     const Run r = RunVideo(kData + "/videos/" + clip, frames);
     const double video_s = r.detected.frames.size() / r.detected.fps;
     int with_hand = 0;
     for (const auto& f : r.detected.frames) with_hand += f.empty() ? 0 : 1;
+    std::vector<double> model_palms;  // the landmark model's own 3D, observed frames
+    for (const FittedTrack& t : r.result.tracks) {
+      for (const auto& o : t.observations) {
+        if (o) model_palms.push_back(100 * PalmWidth(o->world));
+      }
+    }
+    std::sort(model_palms.begin(), model_palms.end());
+    const double model_palm = model_palms.empty() ? 0.0 : model_palms[model_palms.size() / 2];
     std::string palms[2];
     double jump = 0;
     Jitter jitter;
@@ -155,11 +163,11 @@ void Real(std::int64_t frames) {
       }
       palms[side == Side::kRight ? 0 : 1] = buf;
     }
-    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d)\n", clip,
+    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f\n", clip,
                 r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(), r.detect_cpu / video_s,
                 r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s, palms[0].c_str(), palms[1].c_str(),
                 jump, jitter.frames ? jitter.raw / jitter.frames : 0.0, jitter.frames ? jitter.fit / jitter.frames : 0.0,
-                jitter.frames);
+                jitter.frames, model_palm);
     std::fflush(stdout);
   }
 }

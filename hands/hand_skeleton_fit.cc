@@ -22,16 +22,16 @@ struct Reprojection {
   }
 };
 
-struct Bone {
-  double w;
+struct Link {
+  double w, length;
   template <typename T>
-  bool operator()(const T* child, const T* parent, const T* length, T* r) const {
-    const T dx = child[0] - parent[0], dy = child[1] - parent[1], dz = child[2] - parent[2];
+  bool operator()(const T* a, const T* b, T* r) const {
+    const T dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
     const T squared = dx * dx + dy * dy + dz * dz;
     // The gradient of a norm at zero is undefined; joints never coincide in a fit
     // that starts from a hand, but guard the derivative anyway.
     const T norm = squared > T(1e-12) ? sqrt(squared) : T(1e-6);
-    r[0] = T(w) * (norm - length[0]);
+    r[0] = T(w) * (norm - T(length));
     return true;
   }
 };
@@ -140,6 +140,13 @@ double ReprojectionRms(const Track& track, const FittedTrack& fit, const Mat3& K
 
 }  // namespace
 
+std::vector<std::pair<int, int>> SkeletonLinks() {
+  std::vector<std::pair<int, int>> links;
+  for (int j = 1; j < kJoints; ++j) links.emplace_back(j, kParent[j]);
+  links.emplace_back(17, 5);  // across the palm
+  return links;
+}
+
 FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitConfig& c) {
   const auto start = std::chrono::steady_clock::now();
   FittedTrack out;
@@ -152,28 +159,26 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
     return out;
   }
   const size_t n = out.joints.size();
-  // Bone lengths start at the models' median lengths.
-  for (int j = 1; j < kJoints; ++j) {
+  const std::vector<std::pair<int, int>> links = SkeletonLinks();
+  out.link_length.clear();
+  for (const auto& [a, b] : links) {
     std::vector<double> lengths;
     for (const auto& o : track.frames) {
-      if (o) lengths.push_back((o->world[j] - o->world[kParent[j]]).norm());
+      if (o) lengths.push_back((o->world[a] - o->world[b]).norm());
     }
-    out.bone_length[j] = Median(lengths);
+    out.link_length.push_back(Median(lengths));
   }
   ceres::Problem problem;
   const double sigma_px = c.reprojection_sigma * ImageSize(track);
   for (size_t f = 0; f < n; ++f) {
     if (poses[f]) AddFrameResiduals(problem, *track.frames[f], *poses[f], K, sigma_px, c, out.joints[f]);
-    for (int j = 1; j < kJoints; ++j) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Bone, 1, 3, 3, 1>(new Bone{1.0 / c.bone_sigma_m}),
-                               nullptr, out.joints[f][j].data(), out.joints[f][kParent[j]].data(),
-                               &out.bone_length[j]);
+    for (size_t k = 0; k < links.size(); ++k) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Link, 1, 3, 3>(
+                                   new Link{1.0 / c.bone_sigma_m, out.link_length[k]}),
+                               nullptr, out.joints[f][links[k].first].data(),
+                               out.joints[f][links[k].second].data());
     }
   }
-  // The models' median lengths are the only metric cue: every other
-  // residual is smaller for a smaller, nearer hand (same projection, less
-  // motion), so lengths left free shrink the hand. They are held.
-  for (int j = 1; j < kJoints; ++j) problem.SetParameterBlockConstant(&out.bone_length[j]);
   const double accel_w = 1.0 / (c.acceleration_sigma_ms2 / (fps * fps));
   for (size_t f = 1; f + 1 < n; ++f) {
     for (int j = 0; j < kJoints; ++j) {

@@ -6,6 +6,7 @@
 
 #include <ceres/ceres.h>
 
+#include "core/stage_progress.h"
 #include "hands/hand_pnp.h"
 
 namespace doasido::hands {
@@ -52,6 +53,16 @@ struct Acceleration {
   bool operator()(const T* a, const T* b, const T* c, T* r) const {
     for (int i = 0; i < 3; ++i) r[i] = T(w) * (a[i] - T(2) * b[i] + c[i]);
     return true;
+  }
+};
+
+// A long clip's solve takes minutes: each iteration is a sign of life for
+// the worker's watch (core/stage_progress.h).
+class ReportProgress : public ceres::IterationCallback {
+ public:
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    ReportStageProgress();
+    return ceres::SOLVER_CONTINUE;
   }
 };
 
@@ -192,6 +203,8 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   options.max_num_iterations = c.max_iterations;
   options.num_threads = 1;
+  ReportProgress progress;
+  options.callbacks.push_back(&progress);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   out.iterations = static_cast<int>(summary.iterations.size());

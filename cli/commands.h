@@ -46,6 +46,8 @@ void AddRethresholdCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddReviewCommand(CLI::App& app);
 void AddHandCommand(CLI::App& app);
+// doasido hands: the hands stage on files (cli/hands_command.cc).
+void AddHandsCommand(CLI::App& app);
 void AddDeployCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 // shard, merge and slurm (cli/shard_command.cc).

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
   const auto commands = {AddInitCommand, AddIngestCommand, AddStatusCommand,
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
-                         AddReportCommand, AddReviewCommand, AddHandCommand,
+                         AddReportCommand, AddReviewCommand, AddHandCommand, AddHandsCommand,
                          AddDeployCommand, AddDatasetCommand,
                          AddShardCommands};
   for (auto add : commands) add(app);

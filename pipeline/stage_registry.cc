@@ -11,6 +11,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "hands/hands_stage.h"
 #include "ingest/download_stage.h"
 #include "video/probe.h"
 #include "pipeline/noop_stage.h"
@@ -88,6 +89,13 @@ const std::vector<StageEntry>& StageTable() {
       Entry<CameraMotionStage, CameraMotionConfig>(
           kCameraMotionStageName, "rejects (or flags) clips whose camera pans, shakes or zooms",
           true, kMinute, true),
+      Entry<hands::HandsStage, hands::HandsConfig>(
+          hands::kHandsStageName,
+          "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
+          "fit: the hand part of a clip bundle",
+          // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
+          // and suites run the default list on hundreds of synthetic clips.
+          false, kHour),
       Entry<recon::BundleStage, recon::BundleStageConfig>(
           recon::kBundleStageName,
           "runs the model command (per clip, or a server started once per worker) that writes "

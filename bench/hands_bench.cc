@@ -1,0 +1,350 @@
+// The hands stage measured (docs/hands.md quotes the figures):
+//   hands_bench real [frames]  the bundled positive clips: fitted palm width
+//                              (adult hands: 7-10 cm), the largest wrist
+//                              jump between frames, frames with a hand, and
+//                              CPU seconds per second of video for detection
+//                              (the models' process included) and the fit.
+//   hands_bench dex [frames]   retarget/human_hand_video.mp4 against the
+//                              keypoints dex-retargeting's example pipeline
+//                              made of it (a peer's output, not ground
+//                              truth): wrist-centred joint distance after the
+//                              best rotation, and after rotation and scale.
+//   hands_bench synth [clips]  rendered clips with exact hands: camera-frame
+//                              MPJPE and wrist error after the fit, with the
+//                              true K and with the default field of view.
+// [frames] limits each video to its first frames (default: all).
+#include <dirent.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "core/log.h"
+#include "hands/hand_detection.h"
+#include "hands/hand_reconstruction.h"
+#include "synth/generator.h"
+#include "tests/synthetic_hand_track.h"
+
+using namespace doasido;
+using namespace doasido::hands;
+
+namespace {
+
+const std::string kData = DOASIDO_SHARED_DATA;
+
+// CPU seconds of this process and of its live children (the models' Node
+// process), from /proc: children still running are not in RUSAGE_CHILDREN.
+double CpuSeconds() {
+  rusage self{};
+  getrusage(RUSAGE_SELF, &self);
+  double s = self.ru_utime.tv_sec + self.ru_utime.tv_usec * 1e-6 + self.ru_stime.tv_sec +
+             self.ru_stime.tv_usec * 1e-6;
+  const long tick = sysconf(_SC_CLK_TCK);
+  DIR* proc = opendir("/proc");
+  while (dirent* e = proc ? readdir(proc) : nullptr) {
+    if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
+    std::ifstream in(std::string("/proc/") + e->d_name + "/stat");
+    std::string stat;
+    std::getline(in, stat);
+    const size_t close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 2));
+    std::string state;
+    long ppid = 0;
+    rest >> state >> ppid;
+    if (ppid != getpid()) continue;
+    std::string skip;
+    for (int i = 0; i < 9; ++i) rest >> skip;  // fields 6..14 up to utime
+    long utime = 0, stime = 0;
+    rest >> utime >> stime;
+    s += static_cast<double>(utime + stime) / tick;
+  }
+  if (proc) closedir(proc);
+  return s;
+}
+
+filters::HandLandmarker& Landmarker() {
+  static filters::HandLandmarker landmarker;
+  return landmarker;
+}
+
+struct Run {
+  DetectedFrames detected;
+  HandsResult result;
+  double detect_cpu = 0, fit_cpu = 0;
+};
+
+Run RunVideo(const std::string& path, std::int64_t frames, const Intrinsics* given = nullptr) {
+  Run r;
+  DecoderOptions span{.last_frame = frames > 0 ? frames - 1 : -1, .clip = path};
+  const double c0 = CpuSeconds();
+  r.detected = DetectVideo(path, span, HandsConfig{}.max_side, Landmarker());
+  const double c1 = CpuSeconds();
+  const Intrinsics in = given ? *given
+                              : Intrinsics{.K = KFromFov(r.detected.width, r.detected.height, HandsConfig{}.default_fov_deg),
+                                           .assumed = true,
+                                           .source = kIntrinsicsFromDefault};
+  r.result = ReconstructHands(r.detected, in, HandsConfig{});
+  r.detect_cpu = c1 - c0;
+  r.fit_cpu = CpuSeconds() - c1;
+  return r;
+}
+
+// Jitter where the hand is still (fitted wrist slower than 5 cm/s): mean
+// keypoint acceleration in px/frame^2 of the models' keypoints and of the
+// fitted joints' projection, over frames whose neighbours are observed too.
+struct Jitter {
+  double raw = 0, fit = 0;
+  int frames = 0;
+};
+
+void AddJitter(const FittedTrack& t, const Mat3& K, double fps, Jitter& j) {
+  const Camera cam = Camera::FromK(K, 0, 0);
+  for (size_t f = 1; f + 1 < t.joints.size(); ++f) {
+    if (!t.observations[f - 1] || !t.observations[f] || !t.observations[f + 1]) continue;
+    if ((t.joints[f + 1][0] - t.joints[f - 1][0]).norm() * fps / 2 > 0.05) continue;
+    double raw = 0, fit = 0;
+    for (int k = 0; k < kJoints; ++k) {
+      raw += (t.observations[f + 1]->uv[k] - 2 * t.observations[f]->uv[k] + t.observations[f - 1]->uv[k]).norm();
+      fit += (cam.Project(t.joints[f + 1][k]) - 2 * cam.Project(t.joints[f][k]) + cam.Project(t.joints[f - 1][k])).norm();
+    }
+    j.raw += raw / kJoints;
+    j.fit += fit / kJoints;
+    ++j.frames;
+  }
+}
+
+void Real(std::int64_t frames) {
+  const char* clips[] = {"02_cups.mp4", "03_blocks.mp4", "bass_guitar.mp4", "eyeliner.avi",
+                         "laptop_trackpad.mp4"};
+  std::printf("%-20s %6s %6s %8s %8s %9s %28s %28s %8s %s\n", "clip", "frames", "hand%", "det cpu/s",
+              "fit cpu/s", "total/s", "right palm cm med [min,max]", "left palm cm med [min,max]",
+              "jump cm", "still: jitter px/f^2 models -> fit (frames); model's own palm cm");
+  for (const char* clip : clips) {
+    const Run r = RunVideo(kData + "/videos/" + clip, frames);
+    const double video_s = r.detected.frames.size() / r.detected.fps;
+    int with_hand = 0;
+    for (const auto& f : r.detected.frames) with_hand += f.empty() ? 0 : 1;
+    std::vector<double> model_palms;  // the landmark model's own 3D, observed frames
+    for (const FittedTrack& t : r.result.tracks) {
+      for (const auto& o : t.observations) {
+        if (o) model_palms.push_back(100 * PalmWidth(o->world));
+      }
+    }
+    std::sort(model_palms.begin(), model_palms.end());
+    const double model_palm = model_palms.empty() ? 0.0 : model_palms[model_palms.size() / 2];
+    std::string palms[2];
+    double jump = 0;
+    Jitter jitter;
+    for (const FittedTrack& t : r.result.tracks) AddJitter(t, r.result.intrinsics.K, r.detected.fps, jitter);
+    for (Side side : {Side::kRight, Side::kLeft}) {
+      std::vector<double> w;
+      for (const FittedTrack& t : r.result.tracks) {
+        if (t.side != side) continue;
+        for (size_t f = 0; f < t.joints.size(); ++f) {
+          w.push_back(100 * PalmWidth(t.joints[f]));
+          if (f > 0) jump = std::max(jump, 100 * (t.joints[f][0] - t.joints[f - 1][0]).norm());
+        }
+      }
+      char buf[64] = "-";
+      if (!w.empty()) {
+        std::sort(w.begin(), w.end());
+        std::snprintf(buf, sizeof buf, "%.1f [%.1f, %.1f] n=%zu", w[w.size() / 2], w.front(), w.back(), w.size());
+      }
+      palms[side == Side::kRight ? 0 : 1] = buf;
+    }
+    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f\n", clip,
+                r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(), r.detect_cpu / video_s,
+                r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s, palms[0].c_str(), palms[1].c_str(),
+                jump, jitter.frames ? jitter.raw / jitter.frames : 0.0, jitter.frames ? jitter.fit / jitter.frames : 0.0,
+                jitter.frames, model_palm);
+    std::fflush(stdout);
+  }
+}
+
+// Mean distance between wrist-centred joint sets after the best rotation
+// (and scale, when `scale`) of `a` onto `b` (Umeyama).
+double AlignedError(const Joints& a, const Joints& b, bool scale) {
+  Eigen::Matrix<double, 3, kJoints> A, B;
+  for (int j = 0; j < kJoints; ++j) {
+    A.col(j) = a[j] - a[0];
+    B.col(j) = b[j] - b[0];
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(A, B, scale);
+  const Eigen::Matrix<double, 3, kJoints> C =
+      (T.topLeftCorner<3, 3>() * A).colwise() + T.topRightCorner<3, 1>();
+  return (C - B).colwise().norm().mean();
+}
+
+void Dex(std::int64_t frames) {
+  const auto dex = testing::ReadDexKeypoints(kData + "/retarget/human_hand_keypoints_right.csv");
+  const Run r = RunVideo(kData + "/retarget/human_hand_video.mp4", frames);
+  double fit_r = 0, fit_rs = 0, pnp_r = 0, model_r = 0;
+  int n = 0, swaps = 0;
+  for (const FittedTrack& t : r.result.tracks) {
+    if (t.side != Side::kRight) ++swaps;
+    for (size_t f = 0; f < t.joints.size(); ++f) {
+      const size_t frame = t.first_frame + f;
+      if (frame >= dex.size() || !t.has_pnp[f]) continue;
+      fit_r += AlignedError(t.joints[f], dex[frame], false);
+      fit_rs += AlignedError(t.joints[f], dex[frame], true);
+      pnp_r += AlignedError(t.pnp_joints[f], dex[frame], false);
+      model_r += AlignedError(t.observations[f]->world, dex[frame], false);
+      ++n;
+    }
+  }
+  std::printf("human_hand_video.mp4: %zu frames, %d compared, %zu tracks (%d not right)\n",
+              r.detected.frames.size(), n, r.result.tracks.size(), swaps);
+  std::printf("mean joint distance to dex-retargeting's keypoints, wrist-centred:\n");
+  std::printf("  landmark model's 3D, best rotation      %.2f cm\n", 100 * model_r / n);
+  std::printf("  PnP (before the fit), best rotation      %.2f cm\n", 100 * pnp_r / n);
+  std::printf("  fitted skeleton, best rotation           %.2f cm\n", 100 * fit_r / n);
+  std::printf("  fitted skeleton, best rotation and scale %.2f cm\n", 100 * fit_rs / n);
+}
+
+// Error of a fitted track against the nearer rendered hand, frame by frame:
+// sums of MPJPE and wrist error; frames where that hand is the other side
+// count as side errors.
+struct SynthError {
+  double mpjpe = 0, root = 0;
+  int frames = 0, other_side = 0;
+};
+
+void Score(const FittedTrack& t, const recon::ClipBundle& b, SynthError& e) {
+  for (size_t f = 0; f < t.joints.size(); ++f) {
+    const size_t g = t.first_frame + f;
+    double best = 1e9, root = 0;
+    bool same_side = true;
+    for (Side side : {Side::kRight, Side::kLeft}) {
+      const auto& hand = side == Side::kRight ? b.hand_right : b.hand_left;
+      if (!hand || !hand->valid[g]) continue;
+      double sum = 0;
+      for (int j = 0; j < kJoints; ++j) sum += (t.joints[f][j] - hand->joints[g].row(j).transpose()).norm();
+      if (sum / kJoints < best) {
+        best = sum / kJoints;
+        root = (t.joints[f][0] - hand->joints[g].row(0).transpose()).norm();
+        same_side = side == t.side;
+      }
+    }
+    if (best > 1e8) continue;
+    e.mpjpe += best;
+    e.root += root;
+    ++e.frames;
+    if (!same_side) ++e.other_side;
+  }
+}
+
+void PrintError(const char* name, const SynthError& e) {
+  std::printf("  %-28s MPJPE %.2f cm, wrist %.2f cm over %d frames; %d on the other side\n", name,
+              e.frames ? 100 * e.mpjpe / e.frames : 0.0, e.frames ? 100 * e.root / e.frames : 0.0, e.frames,
+              e.other_side);
+}
+
+// Rendered clips (synth/): the models on the synthetic world's hands.
+void SynthRendered(int clips) {
+  synth::SynthConfig cfg;
+  cfg.frames = 48;
+  cfg.seed = 11;
+  SynthError errors[2];
+  int truth_hand_frames = 0;
+  for (int i = 0; i < clips; ++i) {
+    const synth::RenderedClip clip = synth::RenderClip(cfg, i, synth::DefectKind::kClean);
+    const recon::ClipBundle& b = clip.bundle;
+    DetectedFrames d;
+    d.width = b.width;
+    d.height = b.height;
+    d.fps = b.fps;
+    Landmarker().Reset();
+    for (const cv::Mat& bgr : clip.bgr) {
+      FrameObservations hands;
+      for (const auto& h : Landmarker().Detect(bgr)) hands.push_back(FromLandmarked(h, 1.0, d.width, d.height));
+      d.frames.push_back(hands);
+    }
+    for (const auto* hand : {&b.hand_right, &b.hand_left}) {
+      if (*hand) truth_hand_frames += static_cast<int>(std::count((*hand)->valid.begin(), (*hand)->valid.end(), true));
+    }
+    const Intrinsics variants[2] = {
+        {.K = b.KAt(0), .assumed = false, .source = "truth"},
+        {.K = KFromFov(b.width, b.height, HandsConfig{}.default_fov_deg), .assumed = true,
+         .source = kIntrinsicsFromDefault}};
+    for (int v = 0; v < 2; ++v) {
+      for (const FittedTrack& t : ReconstructHands(d, variants[v], HandsConfig{}).tracks) Score(t, b, errors[v]);
+    }
+  }
+  std::printf("rendered clips: %d clips, %d hand-frames in the truth\n", clips, truth_hand_frames);
+  PrintError("true K", errors[0]);
+  PrintError("default fov", errors[1]);
+}
+
+// Synthetic tracks (tests/synthetic_hand_track.h): a real hand's motion
+// seen through cameras of three focal lengths, keypoints with 1.5 px noise,
+// 3D landmarks with 3 mm noise; fitted with the true K and the default fov.
+void SynthTracks() {
+  const auto rows = testing::ReadDexKeypoints(kData + "/retarget/human_hand_keypoints_right.csv");
+  std::printf("synthetic tracks: 8 x 90 frames per camera, 1.5 px and 3 mm noise\n");
+  for (double fx : {400.0, 500.0, 700.0}) {
+    SynthError errors[3];
+    for (int k = 0; k < 8; ++k) {
+      const auto h = testing::MakeSyntheticHand(rows, 90, 60 * k, 1.5, 0.003, 0.9, 100 + k, fx);
+      std::vector<FrameObservations> frames;
+      for (const auto& o : h.seen) frames.push_back({o});
+      const auto tracks = BuildTracks(frames, TrackerConfig{});
+      const Mat3 Ks[2] = {h.K, KFromFov(h.width, h.height, HandsConfig{}.default_fov_deg)};
+      for (int v = 0; v < 2; ++v) {
+        for (const Track& tr : tracks) {
+          const FittedTrack fit = FitTrack(tr, Ks[v], h.fps, FitConfig{});
+          for (size_t f = 0; f < fit.joints.size(); ++f) {
+            for (int pnp = 0; pnp < (v == 0 ? 2 : 1); ++pnp) {
+              SynthError& e = errors[pnp ? 2 : v];
+              const Joints& x = pnp ? fit.pnp_joints[f] : fit.joints[f];
+              double sum = 0;
+              for (int j = 0; j < kJoints; ++j) sum += (x[j] - h.truth[fit.first_frame + f][j]).norm();
+              e.mpjpe += sum / kJoints;
+              e.root += (x[0] - h.truth[fit.first_frame + f][0]).norm();
+              ++e.frames;
+            }
+          }
+        }
+      }
+    }
+    char name[3][64];
+    const double fov = 2 * std::atan(320 / fx) * 180 / M_PI;
+    std::snprintf(name[0], 64, "fx %.0f (%.0f deg), true K", fx, fov);
+    std::snprintf(name[1], 64, "fx %.0f, default 65 deg", fx);
+    std::snprintf(name[2], 64, "fx %.0f, true K, PnP only", fx);
+    PrintError(name[2], errors[2]);
+    PrintError(name[0], errors[0]);
+    PrintError(name[1], errors[1]);
+  }
+}
+
+void Synth(int clips) {
+  SynthTracks();
+  SynthRendered(clips);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  InitLogging("warn");
+  const std::string mode = argc > 1 ? argv[1] : "real";
+  const long arg = argc > 2 ? std::atol(argv[2]) : 0;
+  if (mode == "real") Real(arg);
+  else if (mode == "dex") Dex(arg);
+  else if (mode == "synth") Synth(arg > 0 ? static_cast<int>(arg) : 4);
+  else {
+    std::fprintf(stderr, "usage: hands_bench real|dex|synth [frames|clips]\n");
+    return 2;
+  }
+  return 0;
+}

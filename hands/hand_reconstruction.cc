@@ -1,0 +1,63 @@
+#include "hands/hand_reconstruction.h"
+
+#include <algorithm>
+
+namespace doasido::hands {
+
+HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& intrinsics,
+                             const HandsConfig& config) {
+  HandsResult out;
+  out.intrinsics = intrinsics;
+  const double fps = detected.fps > 0 ? detected.fps : 30.0;
+  // A still image (or a clip shorter than the minimum track) keeps what it saw.
+  TrackerConfig tracker = config.tracker;
+  tracker.min_track_frames = std::min<int>(tracker.min_track_frames, static_cast<int>(detected.frames.size()));
+  for (const Track& track : BuildTracks(detected.frames, tracker, &out.tracking)) {
+    FittedTrack fit = FitTrack(track, intrinsics.K, fps, config.fit);
+    out.fit_seconds += fit.seconds;
+    if (!fit.joints.empty()) out.tracks.push_back(std::move(fit));
+  }
+  return out;
+}
+
+Json Summarize(const DetectedFrames& detected, const HandsResult& result) {
+  Json sides = Json::object();
+  double max_jump = 0, reprojection = 0;
+  int fitted_frames = 0;
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    int valid = 0, filled = 0, tracks = 0;
+    std::vector<double> palms;
+    for (const FittedTrack& t : result.tracks) {
+      if (t.side != side) continue;
+      ++tracks;
+      for (size_t f = 0; f < t.joints.size(); ++f) {
+        ++valid;
+        filled += t.filled[f] ? 1 : 0;
+        palms.push_back(PalmWidth(t.joints[f]));
+        if (f > 0) max_jump = std::max(max_jump, (t.joints[f][0] - t.joints[f - 1][0]).norm());
+      }
+      reprojection += t.reprojection_rms_px * static_cast<double>(t.joints.size());
+      fitted_frames += static_cast<int>(t.joints.size());
+    }
+    Json s = {{"frames", valid}, {"filled_frames", filled}, {"tracks", tracks}};
+    if (!palms.empty()) {
+      std::nth_element(palms.begin(), palms.begin() + palms.size() / 2, palms.end());
+      s["palm_width_m"] = palms[palms.size() / 2];
+    }
+    sides[SideName(side)] = s;
+  }
+  return {{"frames", detected.frames.size()},
+          {"detections", result.tracking.detections},
+          {"dropped_tracks", result.tracking.dropped_tracks},
+          {"side_changes", result.tracking.side_changes},
+          {"sides", sides},
+          {"max_root_jump_m", max_jump},
+          {"reprojection_rms_px", fitted_frames ? reprojection / fitted_frames : 0.0},
+          {"intrinsics_source", result.intrinsics.source},
+          {"intrinsics_assumed", result.intrinsics.assumed},
+          {"detect_seconds", detected.seconds},
+          {"model_seconds", detected.model_seconds},
+          {"fit_seconds", result.fit_seconds}};
+}
+
+}  // namespace doasido::hands

@@ -1,0 +1,150 @@
+#include "hands/hand_tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace doasido::hands {
+namespace {
+
+Eigen::Vector2d Centre(const HandObservation& o) {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& p : o.uv) c += p;
+  return c / kJoints;
+}
+
+// The hand's size in the image: the diagonal of its keypoints' box.
+double Size(const HandObservation& o) {
+  Eigen::Vector2d lo = o.uv[0], hi = o.uv[0];
+  for (const auto& p : o.uv) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return std::max(1.0, (hi - lo).norm());
+}
+
+const HandObservation& LastSeen(const Track& t) { return *t.frames.back(); }
+
+// Links detections to the open tracks of frame `f`, nearest pair first.
+void LinkFrame(const FrameObservations& hands, int f, const TrackerConfig& config,
+               std::vector<Track>& open, std::vector<Track>& closed) {
+  // Close tracks unseen for too long.
+  for (auto it = open.begin(); it != open.end();) {
+    if (f - it->last_frame() > config.max_gap_frames + 1) {
+      closed.push_back(std::move(*it));
+      it = open.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  struct Pair {
+    double cost;
+    size_t track, hand;
+  };
+  std::vector<Pair> pairs;
+  for (size_t t = 0; t < open.size(); ++t) {
+    const HandObservation& last = LastSeen(open[t]);
+    for (size_t h = 0; h < hands.size(); ++h) {
+      const double jump = (Centre(hands[h]) - Centre(last)).norm() / Size(last);
+      if (jump < config.max_jump) pairs.push_back({jump, t, h});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.cost < b.cost; });
+  std::vector<bool> track_used(open.size(), false), hand_used(hands.size(), false);
+  for (const Pair& p : pairs) {
+    if (track_used[p.track] || hand_used[p.hand]) continue;
+    track_used[p.track] = hand_used[p.hand] = true;
+    Track& t = open[p.track];
+    t.frames.resize(static_cast<size_t>(f - t.first_frame), std::nullopt);
+    t.frames.push_back(hands[p.hand]);
+  }
+  for (size_t h = 0; h < hands.size(); ++h) {
+    if (hand_used[h]) continue;
+    Track t;
+    t.first_frame = f;
+    t.frames.push_back(hands[h]);
+    open.push_back(std::move(t));
+  }
+}
+
+double Vote(const Track& t) {
+  double sum = 0, weight = 0;
+  for (const auto& o : t.frames) {
+    if (!o) continue;
+    sum += o->score * o->p_right;
+    weight += o->score;
+  }
+  return weight > 0 ? sum / weight : 0.5;
+}
+
+bool Overlap(const Track& a, const Track& b) {
+  return a.first_frame <= b.last_frame() && b.first_frame <= a.last_frame();
+}
+
+// Sides: surest votes first; a side already held by an overlapping track
+// goes to the other side; a track with both sides taken is dropped.
+std::vector<Track> AssignSides(std::vector<Track> tracks, TrackingSummary& summary) {
+  for (Track& t : tracks) t.side_vote = Vote(t);
+  std::sort(tracks.begin(), tracks.end(), [](const Track& a, const Track& b) {
+    const double sa = std::abs(a.side_vote - 0.5) * a.observed();
+    const double sb = std::abs(b.side_vote - 0.5) * b.observed();
+    return sa > sb;
+  });
+  std::vector<Track> kept;
+  for (Track& t : tracks) {
+    const Side wanted = t.side_vote >= 0.5 ? Side::kRight : Side::kLeft;
+    const Side other = wanted == Side::kRight ? Side::kLeft : Side::kRight;
+    auto taken = [&](Side s) {
+      return std::any_of(kept.begin(), kept.end(),
+                         [&](const Track& k) { return k.side == s && Overlap(k, t); });
+    };
+    if (!taken(wanted)) {
+      t.side = wanted;
+    } else if (!taken(other)) {
+      t.side = other;
+      ++summary.side_changes;
+    } else {
+      ++summary.dropped_tracks;
+      continue;
+    }
+    kept.push_back(std::move(t));
+  }
+  std::sort(kept.begin(), kept.end(),
+            [](const Track& a, const Track& b) { return a.first_frame < b.first_frame; });
+  return kept;
+}
+
+}  // namespace
+
+int Track::observed() const {
+  return static_cast<int>(std::count_if(frames.begin(), frames.end(),
+                                        [](const auto& o) { return o.has_value(); }));
+}
+
+std::vector<Track> BuildTracks(const std::vector<FrameObservations>& frames,
+                               const TrackerConfig& config, TrackingSummary* summary) {
+  TrackingSummary local;
+  TrackingSummary& s = summary ? *summary : local;
+  s = {};
+  std::vector<Track> open, closed;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    FrameObservations hands;
+    for (const HandObservation& o : frames[f]) {
+      if (o.score >= config.min_score) hands.push_back(o);
+    }
+    s.detections += static_cast<int>(hands.size());
+    LinkFrame(hands, static_cast<int>(f), config, open, closed);
+  }
+  for (Track& t : open) closed.push_back(std::move(t));
+  std::vector<Track> long_enough;
+  for (Track& t : closed) {
+    if (t.observed() >= config.min_track_frames) {
+      long_enough.push_back(std::move(t));
+    } else {
+      ++s.dropped_tracks;
+    }
+  }
+  return AssignSides(std::move(long_enough), s);
+}
+
+}  // namespace doasido::hands

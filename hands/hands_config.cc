@@ -1,0 +1,25 @@
+#include "hands/hands_config.h"
+
+#include "core/config_check.h"
+
+namespace doasido::hands {
+
+void CheckConfig(const HandsConfig& c, const std::string& section) {
+  RequireInRange(section, "default_fov_deg", c.default_fov_deg, 10, 170);
+  RequireInRange(section, "max_hands", c.max_hands, 1, 2);
+  RequireInRange(section, "max_side", c.max_side, 128, 4096);
+  const std::string t = section + ".tracker";
+  RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);
+  RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);
+  RequireInRange(t, "max_jump", c.tracker.max_jump, 0.01, 100);
+  RequireInRange(t, "min_track_frames", c.tracker.min_track_frames, 1, 100000);
+  const std::string f = section + ".fit";
+  RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);
+  RequireInRange(f, "huber", c.fit.huber, 0.1, 100);
+  RequireInRange(f, "bone_sigma_m", c.fit.bone_sigma_m, 1e-5, 1);
+  RequireInRange(f, "shape_sigma_m", c.fit.shape_sigma_m, 1e-5, 1);
+  RequireInRange(f, "acceleration_sigma_ms2", c.fit.acceleration_sigma_ms2, 1e-3, 1e4);
+  RequireInRange(f, "max_iterations", c.fit.max_iterations, 1, 10000);
+}
+
+}  // namespace doasido::hands

@@ -1,0 +1,63 @@
+// The hands stage's names and configuration: the stage name (its queue
+// name, config section and artifact folder), the files it writes, and the
+// [hands] section with its defaults and valid ranges.
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+
+namespace doasido::hands {
+
+inline constexpr const char* kHandsStageName = "hands";
+// Per frame and hand: the models' 2D keypoints, confidences and the fitted
+// metric joints (hands/hand_keypoints_json.h). The bundle files beside it
+// (meta.json, K.npz, hands.npz) are recon/bundle.h's.
+inline constexpr const char* kKeypointsFile = "keypoints.json";
+// meta.json's extra key: true when K came from the default field of view.
+inline constexpr const char* kIntrinsicsAssumedKey = "intrinsics_assumed";
+
+// How the 2D keypoints of one clip become tracks (hands/hand_tracker.h).
+struct TrackerConfig {
+  double min_score = 0.5;    // hand presence below this is not a detection
+  int max_gap_frames = 5;    // a hand unseen this long or less is filled in; longer splits the track
+  double max_jump = 1.5;     // a detection continues a track when its centre moved less than
+                             // this many hand sizes since the track was last seen
+  int min_track_frames = 3;  // tracks with fewer observed frames are dropped (spurious)
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrackerConfig, min_score, max_gap_frames, max_jump,
+                                                min_track_frames)
+
+// The skeleton fit of one track (hands/hand_skeleton_fit.h). Sigmas weigh
+// each residual: a residual of one sigma costs as much as any other.
+struct FitConfig {
+  double reprojection_sigma = 0.03;  // keypoint noise, fraction of the hand's size in the image
+  double huber = 2.0;                // robust loss: quadratic up to this many sigmas
+  double bone_sigma_m = 0.002;       // a bone's length against the track's constant length
+  double shape_sigma_m = 0.01;       // wrist-relative joints against the model's 3D landmarks
+  double acceleration_sigma_ms2 = 6;  // joint acceleration, m/s^2
+  int max_iterations = 50;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber,
+                                                bone_sigma_m, shape_sigma_m,
+                                                acceleration_sigma_ms2, max_iterations)
+
+// The [hands] section.
+struct HandsConfig {
+  // Horizontal field of view assumed when neither a bundle's K nor the
+  // list's fx/fy/cx/cy or fov columns give the intrinsics: a phone's main
+  // camera filming 16:9 video sees about 65 degrees across.
+  double default_fov_deg = 65;
+  int max_hands = 2;
+  int max_side = 640;  // frames are decoded at most this large for the models
+  std::string node = "node";
+  TrackerConfig tracker;
+  FitConfig fit;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(HandsConfig, default_fov_deg, max_hands, max_side,
+                                                node, tracker, fit)
+
+// Valid ranges; throws Error("bad_config") naming section.key.
+void CheckConfig(const HandsConfig& c, const std::string& section);
+
+}  // namespace doasido::hands

@@ -1,0 +1,141 @@
+// The hands queue stage on a few frames of a real clip: MediaPipe's models
+// (Node + WebAssembly, or whatever backend filters/hand_landmarker.h runs),
+// the fit, and a bundle that recon's reader accepts.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/error.h"
+#include "filters/hand_landmarker.h"
+#include "hands/hand_observation.h"
+#include "hands/hands_stage.h"
+#include "recon/bundle.h"
+#include "test_util.h"
+
+namespace doasido::hands {
+namespace {
+
+namespace fs = std::filesystem;
+
+class HandsStageTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    if (!filters::HandLandmarkerAvailable(&why)) GTEST_SKIP() << "hand models unavailable: " << why;
+  }
+  // A context for `video` frames first..last, its artifact folder in tmp_.
+  ClipContext Context(const std::string& video, std::int64_t first, std::int64_t last) {
+    ClipContext c;
+    c.clip.id = 7;
+    c.clip.external_id = "clip7";
+    c.clip.start_frame = first;
+    c.clip.end_frame = last;
+    c.video.path = (testing::SharedData() / video).string();
+    c.artifact_dir = tmp_ / "artifacts" / "7" / kHandsStageName;
+    fs::create_directories(c.artifact_dir);
+    return c;
+  }
+  testing::TempDir tmp_;
+};
+
+TEST_F(HandsStageTest, WritesABundleThatReconReadsOnAShortRealClip) {
+  HandsStage stage;
+  // eyeliner.avi: one hand holding a pencil, 320 x 240; the kept span is
+  // the shot-boundary trim (frames 3..10) inside the clip's 0..11.
+  ClipContext c = Context("videos/eyeliner.avi", 0, 11);
+  c.measurements["shot_boundary"] = {
+      {"summary", {{"boundaries", {3}}, {"trim", {{"start_frame", 3}, {"end_frame", 10}}}}}};
+  const StageResult r = stage.Run(c);
+  EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
+  EXPECT_EQ(r.measurements.at("first_frame"), 3);
+  EXPECT_EQ(r.measurements.at("last_frame"), 10);
+  const recon::ClipBundle b = recon::ReadBundle(c.artifact_dir);
+  EXPECT_EQ(b.frames, 8);
+  EXPECT_EQ(b.width, 320);
+  EXPECT_EQ(b.height, 240);
+  EXPECT_NEAR(b.fps, 25, 0.01);
+  ASSERT_TRUE(b.hand_right && b.hand_left);
+  EXPECT_TRUE(b.present.count("K"));
+  EXPECT_EQ(b.producers.at("K"), "default_fov");
+  // The pencil hand is seen on (nearly) every frame; its fitted palm is a hand's.
+  int valid = 0;
+  for (int t = 0; t < b.frames; ++t) {
+    for (const auto* hand : {&*b.hand_right, &*b.hand_left}) {
+      if (!hand->valid[t]) continue;
+      ++valid;
+      const double palm = (hand->joints[t].row(5) - hand->joints[t].row(17)).norm();
+      EXPECT_GT(palm, 0.05);
+      EXPECT_LT(palm, 0.12);
+      EXPECT_GT(hand->joints[t](0, 2), 0.05);  // in front of the camera
+    }
+  }
+  EXPECT_GE(valid, 6);
+  const Json meta = Json::parse(testing::ReadFile(c.artifact_dir / "meta.json"));
+  EXPECT_EQ(meta.at("intrinsics_assumed"), true);
+  const Json kp = Json::parse(testing::ReadFile(c.artifact_dir / kKeypointsFile));
+  EXPECT_EQ(kp.at("first_frame"), 3);
+  ASSERT_EQ(kp.at("frames").size(), 8u);
+  for (const Json& frame : kp.at("frames")) {
+    for (const Json& hand : frame.at("hands")) {
+      EXPECT_TRUE(hand.at("side") == "right" || hand.at("side") == "left");
+      EXPECT_EQ(hand.at("keypoints_2d").size(), 21u);
+      EXPECT_EQ(hand.at("confidence").size(), 21u);
+      EXPECT_EQ(hand.at("joints_camera").size(), 21u);
+    }
+  }
+}
+
+TEST_F(HandsStageTest, ARightHandIsRight) {
+  // dex-retargeting's example video: one right hand, palm to the camera
+  // (its pipeline and its keypoint file call it right; so does a look).
+  HandsStage stage;
+  ClipContext c = Context("retarget/human_hand_video.mp4", 100, 107);
+  const StageResult r = stage.Run(c);
+  EXPECT_EQ(r.measurements.at("sides").at("right").at("frames"), 8) << r.measurements.dump();
+  EXPECT_EQ(r.measurements.at("sides").at("left").at("frames"), 0) << r.measurements.dump();
+}
+
+TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {
+  HandsStage stage;
+  ClipContext c = Context("videos/eyeliner.avi", 0, 3);
+  c.clip.metadata = {{"fov", "50"}};
+  const StageResult r = stage.Run(c);
+  EXPECT_EQ(r.measurements.at("intrinsics_source"), "list");
+  EXPECT_EQ(r.measurements.at("intrinsics_assumed"), false);
+  const recon::ClipBundle b = recon::ReadBundle(c.artifact_dir);
+  EXPECT_NEAR(b.K[0](0, 0), 160 / std::tan(25 * M_PI / 180), 1e-6);
+
+  c.clip.metadata = {{"fx", "-1"}};
+  c.video.info = VideoInfo{.width = 320, .height = 240, .fps = 25};
+  try {
+    stage.Run(c);
+    FAIL() << "accepted a negative focal length";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_intrinsics");
+    EXPECT_EQ(e.site().clip, "clip7");
+    EXPECT_EQ(e.site().field, "fx");
+  }
+}
+
+TEST_F(HandsStageTest, MissingOrCorruptVideoIsANamedError) {
+  HandsStage stage;
+  ClipContext c = Context("videos/eyeliner.avi", 0, 3);
+  c.video.path = (tmp_ / "gone.mp4").string();
+  try {
+    stage.Run(c);
+    FAIL() << "accepted a missing video";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gone.mp4"), std::string::npos) << e.what();
+  }
+  testing::WriteFile(tmp_ / "junk.mp4", std::string(5000, 'x'));
+  c.video.path = (tmp_ / "junk.mp4").string();
+  try {
+    stage.Run(c);
+    FAIL() << "accepted a corrupt video";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("junk.mp4"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace doasido::hands

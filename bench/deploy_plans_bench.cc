@@ -5,8 +5,8 @@
 //    preset as bench/retarget_dynamics_bench.cc's wall section does),
 //  - the HOT3D sample (left hand with the coffee pot's stand-in sphere,
 //    onto sharpa_left),
-//  - --carries synthetic two-hand carries (both Sharpa hands, `deploy
-//    plan-two`),
+//  - --carries synthetic two-hand carries of --carry_seconds (both Sharpa
+//    hands, `deploy plan-two`),
 // the share of plans passing every check (reach, joint speed and
 // acceleration at every command), the slowdowns (median, max), the arm
 // replay's object success against the floating hand's, and the wrist
@@ -15,9 +15,11 @@
 // Retargeting is the slow part (~20 s a 10-s clip on 2 threads), so the
 // trajectories are cached in --cache (trajectory.json + scene/ per
 // reference, retarget/dynamic_stage.h's layout) and made only when
-// missing; --make_only stops after making them.
+// missing; --make_only stops after making them, --plan_only plans the ones
+// made so far without making more.
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
-//       [--clip_seconds=10] [--threads=2] [--make_only] [--no_replay]
+//       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only | --plan_only]
+//       [--no_replay]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -47,8 +49,10 @@ const fs::path kData = DOASIDO_SHARED_DATA;
 struct Flags {
   fs::path cache = fs::temp_directory_path() / "doasido-deploy-bench";
   int refs = 10, carries = 5, threads = 2;
-  double clip_seconds = 10;
-  bool make_only = false, replay = true;
+  double clip_seconds = 10, carry_seconds = 4;
+  bool make_only = false, plan_only = false, replay = true;
+  std::string only;         // plan only the reference of this name
+  deploy::PlanConfig plan;  // --no_leads: without the lead moves
 };
 
 Flags Parse(int argc, char** argv) {
@@ -62,8 +66,13 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--carries") f.carries = std::stoi(v);
     else if (k == "--threads") f.threads = std::stoi(v);
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
+    else if (k == "--carry_seconds") f.carry_seconds = std::stod(v);
     else if (k == "--make_only") f.make_only = true;
+    else if (k == "--plan_only") f.plan_only = true;
     else if (k == "--no_replay") f.replay = false;
+    else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
+    else if (k == "--only") f.only = v;
+    else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else throw std::runtime_error("unknown flag " + a);
   }
   return f;
@@ -141,7 +150,7 @@ void MakeCarry(const Flags& f, int i) {
   const fs::path dir = f.cache / ("carry" + std::to_string(i));
   if (fs::exists(dir / "trajectory.json")) return;
   synth::EpisodeSpec spec;
-  spec.frames = static_cast<int>(f.clip_seconds * 30);
+  spec.frames = static_cast<int>(f.carry_seconds * 30);
   spec.two_hand_task = synth::TwoHandTask::kCarry;
   spec.grasp = synth::GraspTypeFromName("pinch");
   spec.object_yaw = 0.4 * i;
@@ -172,8 +181,18 @@ Row PlanOne(const Flags& f, const fs::path& dir) {
   const deploy::TrajectoryFiles files = deploy::FilesBeside(dir / "trajectory.json");
   const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files.trajectory);
   const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
-  deploy::Plan plan = deploy::MakePlan(t, hand, deploy::PlanConfig{});
-  if (f.replay) deploy::ReplayPlan(plan, t, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir);
+  deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
+  if (f.replay) {
+    deploy::ReplayPlan(plan, t, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
+  }
+  const deploy::ReplayReport& r = plan.replay;
+  for (size_t k = 0; !f.only.empty() && k < r.object_position_error.size(); k += 25) {
+    const size_t c = k + plan.lead_in;
+    const Pose o = t.object_poses[std::min<size_t>(std::lround(plan.source_times[c] * t.fps), t.qpos.size() - 1)];
+    std::printf("  t %6.2f s (trajectory %5.2f s): object error %5.1f mm %.2f rad, trajectory's object z %.3f\n",
+                plan.times[c], plan.source_times[c], 1000 * r.object_position_error[k], r.object_rotation_error[k],
+                o.t.z());
+  }
   row.ok = plan.ok;
   row.slowdown = plan.slowdown;
   row.reference_success = plan.replay.reference_success;
@@ -248,21 +267,29 @@ int main(int argc, char** argv) {
   const Flags f = Parse(argc, argv);
   fs::create_directories(f.cache);
   const auto t0 = Clock::now();
-  for (int i = 0; i < f.refs; ++i) MakeSingle(f, i);
-  MakeHot3d(f);
-  for (int i = 0; i < f.carries; ++i) MakeCarry(f, i);
+  for (int i = 0; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
+  if (!f.plan_only) MakeHot3d(f);
+  for (int i = 0; i < f.carries && !f.plan_only; ++i) MakeCarry(f, i);
   std::fprintf(stderr, "trajectories ready in %s (%.0f s)\n", f.cache.c_str(),
                std::chrono::duration<double>(Clock::now() - t0).count());
   if (f.make_only) return 0;
   std::vector<Row> single, two;
   const auto t1 = Clock::now();
+  // Every cached trajectory there is (--plan_only plans what is made so far).
+  const auto made = [&](const fs::path& dir) {
+    return fs::exists(dir / "trajectory.json") && (f.only.empty() || dir.filename() == f.only);
+  };
   for (int i = 0; i < f.refs; ++i) {
     for (const char* kind : {"_clean", "_noisy"}) {
-      single.push_back(PlanOne(f, f.cache / ("ref" + std::to_string(i) + kind)));
+      const fs::path dir = f.cache / ("ref" + std::to_string(i) + kind);
+      if (made(dir)) single.push_back(PlanOne(f, dir));
     }
   }
-  if (fs::exists(f.cache / "hot3d_left" / "trajectory.json")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
-  for (int i = 0; i < f.carries; ++i) two.push_back(PlanTwo(f.cache / ("carry" + std::to_string(i))));
+  if (made(f.cache / "hot3d_left")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
+  for (int i = 0; i < f.carries; ++i) {
+    const fs::path dir = f.cache / ("carry" + std::to_string(i));
+    if (made(dir)) two.push_back(PlanTwo(dir));
+  }
   std::printf("== One arm: %zu trajectories (%d synthetic %.0f-s references clean + noisy, fast preset; HOT3D)\n",
               single.size(), f.refs, f.clip_seconds);
   Report(single);

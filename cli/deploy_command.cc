@@ -97,7 +97,8 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::Plan plan = deploy::MakePlan(trajectory, hand, config);
   plan.source = files.trajectory.string();
   if (config.replay && !a.no_replay) {
-    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir);
+    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir,
+                       config.servo_omega);
   }
   deploy::WritePlanJson(plan, a.out);
   const auto& p = plan.placement;

@@ -141,6 +141,7 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   CheckConfig(c.workspace, section + ".workspace");
   CheckConfig(c.ik, section + ".ik");
   CheckConfig(c.time_scaling, section + ".time_scaling");
+  RequireInRange(section, "servo_omega", c.servo_omega, 0, 1000);
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {

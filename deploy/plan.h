@@ -31,8 +31,8 @@
 //    3 runs again aiming at a smaller share of the limits (time_scaling
 //    attempts). The plan is ok when no frame or command is listed.
 // 5. Replay (replay.cc; when the trajectory has object poses and a scene):
-//    the arm is driven kinematically along the commands (the real arm's
-//    joint servo is stiff), the fingers by the hand's position actuators
+//    the arm tracks the commands by a joint servo (PlanConfig servo_omega),
+//    the fingers by the hand's position actuators
 //    with the trajectory's own controls at each command's trajectory time
 //    (its joint positions when it has none), the object moves freely; the
 //    object's error against the trajectory's object poses at the same
@@ -86,9 +86,15 @@ struct PlanConfig {
   std::array<double, 6> home{0, -1.5708, 1.5708, -1.5708, -1.5708, 0};
   bool lead_in = true;   // move from home to the first frame
   bool lead_out = true;  // and back home after the last
+  // The replay's arm servo (rad/s): each arm joint tracks its command by a
+  // computed-torque PD, M (w^2 e + 2 w e') + bias, critically damped at
+  // this natural frequency; 40 is the floating wrist's servo in the
+  // retargeting (retarget/embodiment.h), so the hand meets the object as
+  // stiffly as it did there. 0 drives the arm kinematically (infinitely stiff).
+  double servo_omega = 40;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
-                                                home, lead_in, lead_out)
+                                                home, lead_in, lead_out, servo_omega)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -118,8 +124,10 @@ struct ReplayReport {
   bool success = false;
   // The floating hand's own outcome (the trajectory's metrics.success), -1 unknown.
   int reference_success = -1;
-  // Per command of the re-timed path (lead moves excluded): the simulated
-  // flange against the trajectory's wrist at the command's trajectory time.
+  // Per command of the re-timed path (lead moves excluded), at the
+  // command's trajectory time: the simulated object against the
+  // trajectory's, and the simulated flange against the trajectory's wrist.
+  std::vector<double> object_position_error, object_rotation_error;  // m, rad
   std::vector<double> wrist_position_error;  // m
   std::vector<double> wrist_rotation_error;  // rad
   double wrist_position_error_mean = 0, wrist_position_error_max = 0;
@@ -174,7 +182,7 @@ Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wris
 // Step 5 on a plan made from `trajectory`; fills plan.replay.
 void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
                 const retarget::Embodiment& embodiment, const std::string& scene_xml,
-                const std::filesystem::path& scene_dir);
+                const std::filesystem::path& scene_dir, double servo_omega = PlanConfig{}.servo_omega);
 
 // JSON: {"format": "doasido_deploy_plan", "version": 2, "source", "embodiment",
 // "rate_hz", "placement": {yaw, x, y, world_to_base: [tx,ty,tz,qw,qx,qy,qz],

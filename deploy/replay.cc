@@ -1,5 +1,5 @@
 // ReplayPlan (plan.h step 5): the plan's commands on the arm + hand +
-// object scene in MuJoCo, measured against the trajectory at each
+// object scene in MuJoCo (the arm servoed, or set kinematically), measured against the trajectory at each
 // command's trajectory time (the time map), so a re-timed plan is judged
 // by what the slowed motion does to the object, not by the video's timing.
 #include <algorithm>
@@ -68,7 +68,7 @@ double Max(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_elem
 }  // namespace
 
 void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
-                const std::string& scene_xml, const std::filesystem::path& scene_dir) {
+                const std::string& scene_xml, const std::filesystem::path& scene_dir, double servo_omega) {
   if (trajectory.object_poses.empty() || scene_xml.empty() || plan.arm.empty()) return;
   const Pose base = plan.placement.world_to_base.Inverse();
   const ArmHandModel model = BuildArmHandModel(embodiment, base, scene_xml, scene_dir);
@@ -81,16 +81,40 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory, const re
   std::vector<Pose> wrists;
   for (int f = 0; f < static_cast<int>(trajectory.qpos.size()); ++f) wrists.push_back(WristPose(trajectory, f));
   const size_t count = plan.arm.size();
+  std::vector<mjtNum> mass(m->nv * m->nv);
+  // The arm toward command q, speed v: set (kinematic) or servoed.
+  const auto drive_arm = [&](const ArmQ& q, const ArmQ& v, bool servo) {
+    if (!servo) {
+      for (int n = 0; n < 6; ++n) {
+        d->qpos[model.arm_qpos[n]] = q[n];
+        d->qvel[model.arm_dof[n]] = v[n];
+      }
+      return;
+    }
+    // Computed torque from the last step's mass matrix and bias forces
+    // (one 5-ms step old), the joints' own damping compensated.
+    mj_fullM(m, mass.data(), d->qM);
+    ArmQ accel;
+    for (int n = 0; n < 6; ++n) {
+      const int dof = model.arm_dof[n];
+      accel[n] = servo_omega * servo_omega * (q[n] - d->qpos[model.arm_qpos[n]]) +
+                 2 * servo_omega * (v[n] - d->qvel[dof]);
+    }
+    for (int r = 0; r < 6; ++r) {
+      const int dof = model.arm_dof[r];
+      double torque = d->qfrc_bias[dof] + m->dof_damping[dof] * d->qvel[dof];
+      for (int c = 0; c < 6; ++c) torque += mass[dof * m->nv + model.arm_dof[c]] * accel[c];
+      d->qfrc_applied[dof] = torque;
+    }
+  };
   // Command k's arm and hand drive, interpolated at fractional command f.
   const auto drive_at = [&](double f, bool with_velocity) {
     f = std::clamp(f, 0.0, static_cast<double>(count - 1));
     const size_t i = std::min(static_cast<size_t>(f), count - 1), j = std::min(i + 1, count - 1);
     const double a = f - i;
     const ArmQ arm = (1 - a) * plan.arm[i] + a * plan.arm[j];
-    for (int n = 0; n < 6; ++n) {
-      d->qpos[model.arm_qpos[n]] = arm[n];
-      d->qvel[model.arm_dof[n]] = with_velocity ? (plan.arm[j][n] - plan.arm[i][n]) * plan.rate_hz : 0;
-    }
+    const ArmQ speed = with_velocity ? ArmQ((plan.arm[j] - plan.arm[i]) * plan.rate_hz) : ArmQ::Zero();
+    drive_arm(arm, speed, with_velocity && servo_omega > 0);
     const VectorXd hand = (1 - a) * plan.hand[i] + a * plan.hand[j];
     for (const auto& [act, h] : drive.from_joint) d->ctrl[act] = hand[h];
     if (drive.from_ctrl.empty()) return;
@@ -105,7 +129,8 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory, const re
   if (trajectory.metrics.is_object() && trajectory.metrics.contains("success")) {
     r.reference_success = trajectory.metrics.at("success").get<bool>();
   }
-  std::vector<double> object_position, object_rotation;
+  std::vector<double>& object_position = r.object_position_error;
+  std::vector<double>& object_rotation = r.object_rotation_error;
   const size_t path_begin = plan.lead_in, path_end = count - plan.lead_out;
   const double dt = m->opt.timestep;
   const auto measure = [&](size_t k) {

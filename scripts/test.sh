@@ -5,8 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-bash scripts/build.sh
+mkdir -p "${BUILD_DIR:-build}"
+BUILD_LOG=${BUILD_LOG:-$PWD/${BUILD_DIR:-build}/build.log} bash scripts/build.sh
 (cd "${BUILD_DIR:-build}" && ctest --output-on-failure -j"${JOBS:-$(nproc)}" --timeout 900)
 if [[ ${FUZZ_SECONDS:-15} != 0 ]]; then
-  bash scripts/fuzz.sh all "${FUZZ_SECONDS:-15}"
+  BUILD_LOG=quiet bash scripts/fuzz.sh all "${FUZZ_SECONDS:-15}"
 fi

@@ -73,9 +73,20 @@ void PrintIssues(const deploy::Plan& plan) {
                 u.frame, u.time, 1000 * u.value, u.limit);
   }
   for (const auto& f : plan.too_fast) {
-    std::printf("too fast     frame %5d  t=%7.3f s  %s %.2f rad/s > %.2f rad/s\n", f.frame, f.time,
+    std::printf("too fast     command %5d  t=%7.3f s  %s %.2f rad/s > %.2f rad/s\n", f.frame, f.time,
                 plan.arm_joints.at(f.joint).c_str(), f.value, f.limit);
   }
+  for (const auto& f : plan.over_acceleration) {
+    std::printf("too abrupt   command %5d  t=%7.3f s  %s %.2f rad/s^2 > %.2f rad/s^2\n", f.frame, f.time,
+                plan.arm_joints.at(f.joint).c_str(), f.value, f.limit);
+  }
+}
+
+void PrintTiming(const deploy::Plan& plan) {
+  std::printf("re-timed: %.2f s of trajectory in %.2f s (slowdown %.2fx), lead-in %.2f s, lead-out %.2f s, "
+              "%zu commands at %.0f Hz\n", plan.trajectory_duration,
+              (plan.times.size() - plan.lead_in - plan.lead_out - 1) / plan.rate_hz, plan.slowdown,
+              plan.lead_in / plan.rate_hz, plan.lead_out / plan.rate_hz, plan.times.size(), plan.rate_hz);
 }
 
 void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
@@ -123,22 +134,27 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::Plan plan = deploy::MakePlan(trajectory, hand, config);
   plan.source = files.trajectory.string();
   if (config.replay && !a.no_replay) {
-    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir);
+    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir,
+                       config.servo_omega);
   }
   WritePlanAtomically(a.out, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });
   const auto& p = plan.placement;
-  std::printf("%s: %zu commands at %.0f Hz (%.2f s), placement yaw %.1f deg at (%.3f, %.3f) m, "
-              "%d candidates\n", hand.name.c_str(), plan.times.size(), plan.rate_hz,
-              plan.times.back(), p.yaw * 180 / 3.14159265358979, p.x, p.y, p.candidates);
+  std::printf("%s: placement yaw %.1f deg at (%.3f, %.3f) m, %d candidates, least manipulability %.3f\n",
+              hand.name.c_str(), p.yaw * 180 / 3.14159265358979, p.x, p.y, p.candidates, p.manipulability);
+  PrintTiming(plan);
   PrintIssues(plan);
   if (plan.replay.ran) {
-    std::printf("replay: object error mean %.1f mm (max %.1f), rotation mean %.3f rad (max %.3f), %s\n",
-                1000 * plan.replay.object_position_error_mean, 1000 * plan.replay.object_position_error_max,
-                plan.replay.object_rotation_error_mean, plan.replay.object_rotation_error_max,
-                plan.replay.success ? "success" : "failure");
+    const deploy::ReplayReport& r = plan.replay;
+    std::printf("replay: object error mean %.1f mm (max %.1f), rotation mean %.3f rad (max %.3f), %s "
+                "(floating hand: %s); wrist tracking mean %.1f mm (max %.1f), %.3f rad (max %.3f)\n",
+                1000 * r.object_position_error_mean, 1000 * r.object_position_error_max,
+                r.object_rotation_error_mean, r.object_rotation_error_max, r.success ? "success" : "failure",
+                r.reference_success < 0 ? "unknown" : r.reference_success ? "success" : "failure",
+                1000 * r.wrist_position_error_mean, 1000 * r.wrist_position_error_max, r.wrist_rotation_error_mean,
+                r.wrist_rotation_error_max);
   }
-  std::printf("%s: %zu unreachable, %zu too fast -> %s\n", plan.ok ? "ok" : "FAILED checks",
-              plan.unreachable.size(), plan.too_fast.size(), a.out.c_str());
+  std::printf("%s: %zu unreachable, %zu too fast, %zu too abrupt -> %s\n", plan.ok ? "ok" : "FAILED checks",
+              plan.unreachable.size(), plan.too_fast.size(), plan.over_acceleration.size(), a.out.c_str());
   if (!plan.ok) {
     throw Error("plan_failed_checks", "the plan was written but fails its checks (see above); "
                 "`deploy stream` will refuse it", {.file = a.out});
@@ -166,10 +182,14 @@ void AddPlan(CLI::App& deploy) {
   AddForceFlag(*cmd, a->force);
   cmd->footer(
       "The workspace (default table pose, search ranges) and IK tolerances are the\n"
-      "[deploy] section of --config (deploy/plan.h PlanConfig). Frames the arm cannot\n"
-      "reach, or only faster than its joint speed limits (180 deg/s base, shoulder,\n"
-      "elbow; 360 deg/s wrists), are listed with their times, and the command exits\n"
-      "non-zero; the plan file is written either way.\n\n"
+      "[deploy] section of --config (deploy/plan.h PlanConfig). The plan runs slower than\n"
+      "the video where the arm needs it: the wrist path is re-timed so that no joint exceeds\n"
+      "its speed (180 deg/s base, shoulder, elbow; 360 deg/s wrists) or acceleration\n"
+      "(5 rad/s^2) limit, starting and ending at rest, with a lead-in from the home pose and\n"
+      "a lead-out back ([deploy.time_scaling], lead_in, lead_out, home). The plan records\n"
+      "each command's trajectory time and the slowdown. Frames the arm cannot reach, and\n"
+      "any command still beyond a limit, are listed with their times, and the command\n"
+      "exits non-zero; the plan file is written either way.\n\n"
       "Examples:\n"
       "  doasido deploy plan --db work/doasido.db --clip 12 --out work/plan12.json\n"
       "  doasido deploy plan --trajectory work/allegro/trajectory.json --hand sharpa_right \\\n"
@@ -210,7 +230,8 @@ void AddPlanTwo(CLI::App& deploy) {
   cmd->footer(
       "The bases stand side by side, the left arm at +base-distance/2 and the right at -base-distance/2\n"
       "across the table, both trajectories placed once (deploy/bimanual.h). Each arm is its link capsules\n"
-      "and the hand a capsule along the flange; frames where the arms come closer than the clearance are\n"
+      "and the hand a capsule along the flange. Both arms are re-timed on one clock (the slower arm sets\n"
+      "the pace) within their speed and acceleration limits; commands where the arms come closer than the clearance are\n"
       "listed with their times and the command exits non-zero (the plan is written either way);\n"
       "`deploy stream` refuses such a plan and sends one doasido_lcm.bimanual_command per tick otherwise.\n\n"
       "Examples:\n"
@@ -237,12 +258,12 @@ void AddPlanTwo(CLI::App& deploy) {
       deploy::WriteBimanualPlanJson(plan, a->config, p);
     });
     const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
-    std::printf("%s + %s: %zu commands at %.0f Hz, bases %.3f m apart, closest approach %.3f m\n",
-                lh.name.c_str(), rh.name.c_str(), plan.right.times.size(), plan.right.rate_hz,
+    std::printf("%s + %s: bases %.3f m apart, closest approach %.3f m\n", lh.name.c_str(), rh.name.c_str(),
                 a->config.base_distance, closest);
+    PrintTiming(plan.right);
     for (const auto* side : {&plan.left, &plan.right}) PrintIssues(*side);
     for (const auto& c : plan.collisions) {
-      std::printf("collision    frame %5d  t=%7.3f s  arms %.1f mm apart (clearance %.1f mm)\n", c.frame, c.time,
+      std::printf("collision    command %5d  t=%7.3f s  arms %.1f mm apart (clearance %.1f mm)\n", c.frame, c.time,
                   1000 * c.value, 1000 * c.limit);
     }
     std::printf("%s: %zu collision frames -> %s\n", plan.ok ? "ok" : "FAILED checks", plan.collisions.size(),

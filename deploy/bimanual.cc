@@ -131,8 +131,14 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
   };
   const Placement left_place = place(+1), right_place = place(-1);
   BimanualPlan out;
-  out.left = MakePlan(left, left_hand, config.plan, &left_place);
-  out.right = MakePlan(right, right_hand, config.plan, &right_place);
+  std::vector<Plan> plans =
+      MakePlansOnOneClock({&left, &right}, {&left_hand, &right_hand}, {left_place, right_place}, config.plan);
+  out.left = std::move(plans[0]);
+  out.right = std::move(plans[1]);
+  for (Plan* p : {&out.left, &out.right}) {
+    p->placement.reachable_fraction = 1.0 - static_cast<double>(p->unreachable.size()) / left.qpos.size();
+    p->placement.candidates = 1;
+  }
   const Pose left_base = left_place.world_to_base.Inverse(), right_base = right_place.world_to_base.Inverse();
   for (size_t k = 0; k < out.left.arm.size(); ++k) {
     const double d = ArmArmDistance(out.left.arm[k], left_base, out.right.arm[k], right_base, config);
@@ -154,12 +160,14 @@ StreamResult StreamBimanualPlan(const BimanualPlan& plan, const StreamOptions& o
       times += (i ? ", " : "") + std::to_string(plan.collisions[i].time) + " s";
     }
     throw Error("plan_failed_checks",
-                "refusing to stream: " + std::to_string(plan.collisions.size()) + " arm-arm collision frames" +
+                "refusing to stream: " + std::to_string(plan.collisions.size()) + " arm-arm collision commands" +
                     (times.empty() ? "" : " (" + times + (plan.collisions.size() > 5 ? ", ..." : "") + ")") +
                     ", left plan " + (plan.left.ok ? "ok" : "failed") + ", right plan " +
                     (plan.right.ok ? "ok" : "failed"),
                 {.field = "ok"});
   }
+  RequireEvenlySpaced(plan.left);
+  RequireEvenlySpaced(plan.right);
   const double rate = options.rate_hz > 0 ? options.rate_hz : plan.right.rate_hz;
   return StreamEncoded(plan.right.arm.size(), rate, options, stop,
                        [&](size_t k, int64_t t) { return EncodeLcm(Message(plan, k, t)); });

@@ -10,10 +10,13 @@
 // plan.h (offset from the workspace config, around the mean of both
 // wrists), turned so that the mean line from the right wrist to the left
 // one points along its +y (then by the workspace's yaw), without the search:
-// the two arms keep one placement. Each arm's plan is then plan.h's steps
-// 2-3 (IK, reach and speed checks).
+// the two arms keep one placement. Both arms then go through plan.h's steps
+// 2-4 on one clock (MakePlansOnOneClock): one time map re-times both paths
+// so that no joint of either arm exceeds its limits, and both lead moves
+// last as long as the longer one, so the two arms' commands stay in step.
 //
-// Collision check: every command frame, each arm is its six link capsules
+// Collision check: every command of the re-timed plans (lead moves
+// included), each arm is its six link capsules
 // (ur3e.h: from each joint's origin to the next, with the links' radii)
 // plus the hand as a capsule of `hand_radius` along the flange's z axis for
 // `hand_length`; the least distance between a capsule of one arm and one of

@@ -2,114 +2,122 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <numbers>
-
-#include <spdlog/spdlog.h>
 
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "deploy/placement.h"
 
 namespace doasido::deploy {
 namespace {
 
+using Eigen::VectorXd;
+
 constexpr const char* kWrist[6] = {"doasido_wrist_x",  "doasido_wrist_y",  "doasido_wrist_z",
                                    "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
 
-// Trajectory sampled at a time: wrist pose (world) and the qpos vector.
-struct Sample {
-  Pose wrist;
-  Eigen::VectorXd qpos;
-};
+ArmQ Home(const PlanConfig& c) { return Eigen::Map<const ArmQ>(c.home.data()); }
 
-Sample SampleAt(const retarget::HandTrajectory& t, double time) {
+// The trajectory's qpos at trajectory time s (linear between frames).
+VectorXd QposAt(const retarget::HandTrajectory& t, double s) {
   const int n = static_cast<int>(t.qpos.size());
-  const double f = std::clamp(time * t.fps, 0.0, static_cast<double>(n - 1));
+  const double f = std::clamp(s * t.fps, 0.0, static_cast<double>(n - 1));
   const int i = std::min(static_cast<int>(f), n - 1);
   const int j = std::min(i + 1, n - 1);
   const double a = f - i;
-  const Pose pi = WristPose(t, i), pj = WristPose(t, j);
-  return {{pi.q.slerp(a, pj.q), (1 - a) * pi.t + a * pj.t}, (1 - a) * t.qpos[i] + a * t.qpos[j]};
+  return (1 - a) * t.qpos[i] + a * t.qpos[j];
 }
 
-Pose PlacementPose(double yaw, double x, double y, const Vec3& centre, double base_height) {
-  const Quat r(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
-  return {r, Vec3(x, y, -base_height) - r * Vec3(centre.x(), centre.y(), 0)};
-}
+// Step 2: the arm's IK at every trajectory frame.
+struct ArmPath {
+  std::vector<ArmQ> q;
+  std::vector<double> position_error, rotation_error;
+  std::vector<FrameIssue> unreachable;
+};
 
-ArmQ Home(const PlanConfig& c) { return Eigen::Map<const ArmQ>(c.home.data()); }
-
-Placement SearchPlacement(const std::vector<Pose>& wrists, const PlanConfig& config) {
-  const WorkspaceConfig& w = config.workspace;
-  Vec3 centre = Vec3::Zero();
-  for (const Pose& p : wrists) centre += p.t;
-  centre /= static_cast<double>(wrists.size());
-  IkConfig ik_config = config.ik;
-  ik_config.restarts = w.search_restarts;
-  ArmIk ik(ik_config);
-  const int frames = std::min<int>(w.search_frames, wrists.size());
-  Placement best;
-  double best_error = 1e300;
-  int best_reached = -1;
-  Progress progress("placement", w.yaw_steps * w.offset_steps * w.offset_steps);
-  for (int k = 0; k < w.yaw_steps; ++k) {
-    // Yaws alternate around the default: 0, +step, -step, +2 step, ...
-    const int signed_k = (k + 1) / 2 * (k % 2 ? 1 : -1);
-    const double yaw = w.yaw + signed_k * 2 * std::numbers::pi / w.yaw_steps;
-    for (int ix = 0; ix < w.offset_steps; ++ix) {
-      for (int iy = 0; iy < w.offset_steps; ++iy) {
-        const auto offset = [&](int i) {
-          return w.offset_steps == 1 ? 0.0 : w.offset_range * (2.0 * i / (w.offset_steps - 1) - 1);
-        };
-        const double x = w.x + offset(ix), y = w.y + offset(iy);
-        const Pose place = PlacementPose(yaw, x, y, centre, w.base_height);
-        ArmQ q = Home(config);
-        int reached = 0;
-        double error = 0;
-        for (int s = 0; s < frames; ++s) {
-          const size_t f = frames == 1 ? 0 : s * (wrists.size() - 1) / (frames - 1);
-          const IkResult r = ik.Solve(place * wrists[f], q);
-          reached += r.reached;
-          error += r.position_error + ik_config.rot_scale * r.rotation_error;
-          if (r.reached) q = r.q;
-        }
-        ++best.candidates;
-        progress.Add();
-        if (reached > best_reached || (reached == best_reached && error < best_error - 1e-9)) {
-          best_reached = reached;
-          best_error = error;
-          best.yaw = yaw;
-          best.x = x;
-          best.y = y;
-          best.world_to_base = place;
-          best.reachable_fraction = static_cast<double>(reached) / frames;
-        }
-      }
+ArmPath SolveArmPath(const retarget::HandTrajectory& t, const Pose& world_to_base, const PlanConfig& config) {
+  ArmIk ik(config.ik);
+  ArmQ q = Home(config);
+  ArmPath path;
+  const int frames = static_cast<int>(t.qpos.size());
+  Progress progress("ik", frames);
+  for (int f = 0; f < frames; ++f) {
+    const IkResult r = ik.Solve(world_to_base * WristPose(t, f), q);
+    q = r.q;
+    path.q.push_back(r.q);
+    path.position_error.push_back(r.position_error);
+    path.rotation_error.push_back(r.rotation_error);
+    if (!r.reached) {
+      path.unreachable.push_back({.frame = f, .time = f / t.fps, .value = r.position_error,
+                                  .limit = r.rotation_error});
     }
+    progress.Add();
   }
   progress.Finish();
-  return best;
+  return path;
 }
 
-void CheckSpeeds(Plan& plan, const ArmLimits& limits) {
-  for (size_t k = 1; k < plan.arm.size(); ++k) {
-    const double dt = plan.times[k] - plan.times[k - 1];
-    int worst = -1;
-    double worst_ratio = 1.0, worst_speed = 0;
-    for (int j = 0; j < 6; ++j) {
-      const double speed = std::abs(plan.arm[k][j] - plan.arm[k - 1][j]) / dt;
-      if (speed / limits.max_speed[j] > worst_ratio) {
-        worst_ratio = speed / limits.max_speed[j];
-        worst = j;
-        worst_speed = speed;
-      }
-    }
-    if (worst >= 0) {
-      plan.too_fast.push_back({.frame = static_cast<int>(k), .time = plan.times[k],
-                               .value = worst_speed, .limit = limits.max_speed[worst],
-                               .joint = worst});
-    }
+// The trajectory's qpos index of each of the plan's hand joints (-1: absent).
+std::vector<int> HandSource(const Plan& plan, const retarget::HandTrajectory& t) {
+  std::vector<int> from(plan.hand_joints.size(), -1);
+  for (size_t h = 0; h < plan.hand_joints.size(); ++h) {
+    const auto it = std::find(t.qpos_names.begin(), t.qpos_names.end(), plan.hand_joints[h]);
+    if (it != t.qpos_names.end()) from[h] = static_cast<int>(it - t.qpos_names.begin());
+  }
+  return from;
+}
+
+VectorXd HandAt(const std::vector<int>& from, const retarget::HandTrajectory& t, double s) {
+  const VectorXd qpos = QposAt(t, s);
+  VectorXd hand = VectorXd::Zero(from.size());
+  for (size_t h = 0; h < from.size(); ++h) {
+    if (from[h] >= 0) hand[h] = qpos[from[h]];
+  }
+  return hand;
+}
+
+// Step 3's commands for arm `index` (joints 6 index .. of the shared
+// path): lead-in, the path at the time map's s, lead-out.
+void FillCommands(Plan& plan, const retarget::HandTrajectory& t, const JointSpline& path, int index,
+                  const TimeMap& map, int lead_in, int lead_out, const ArmQ& home) {
+  const std::vector<int> from = HandSource(plan, t);
+  plan.times.clear();
+  plan.source_times.clear();
+  plan.arm.clear();
+  plan.hand.clear();
+  const auto push = [&](const ArmQ& q, double s) {
+    plan.times.push_back(plan.times.size() / plan.rate_hz);
+    plan.source_times.push_back(s);
+    plan.arm.push_back(q);
+    plan.hand.push_back(HandAt(from, t, s));
+  };
+  const ArmQ first = path.Value(map.s.front()).segment<6>(6 * index);
+  const ArmQ last = path.Value(map.s.back()).segment<6>(6 * index);
+  for (int k = 0; k < lead_in; ++k) push(RestToRestAt(home, first, double(k) / lead_in), map.s.front());
+  for (double s : map.s) push(path.Value(s).segment<6>(6 * index), s);
+  for (int k = 1; k <= lead_out; ++k) push(RestToRestAt(last, home, double(k) / lead_out), map.s.back());
+  plan.lead_in = lead_in;
+  plan.lead_out = lead_out;
+  plan.slowdown = map.slowdown;
+}
+
+// Step 4's speed and acceleration checks.
+void CheckLimits(Plan& plan, const ArmLimits& limits) {
+  plan.too_fast.clear();
+  plan.over_acceleration.clear();
+  const std::vector<VectorXd> q(plan.arm.begin(), plan.arm.end());
+  const VectorXd vmax = Eigen::Map<const VectorXd>(limits.max_speed.data(), 6);
+  const VectorXd amax = Eigen::Map<const VectorXd>(limits.max_acceleration.data(), 6);
+  for (const LimitExcess& e : CheckCommandLimits(q, plan.rate_hz, vmax, amax)) {
+    const FrameIssue issue{.frame = e.command, .time = plan.times[e.command], .value = e.value,
+                           .limit = e.limit, .joint = e.joint};
+    (e.acceleration ? plan.over_acceleration : plan.too_fast).push_back(issue);
+  }
+}
+
+void RequireTrajectory(const retarget::HandTrajectory& t) {
+  if (t.qpos.empty() || !(t.fps > 0)) {
+    throw Error("bad_trajectory", "trajectory has no frames or no frame rate", {.field = "qpos"});
   }
 }
 
@@ -125,12 +133,15 @@ void CheckConfig(const WorkspaceConfig& c, const std::string& section) {
   RequireInRange(section, "offset_steps", c.offset_steps, 1, 21);
   RequireInRange(section, "search_frames", c.search_frames, 1, 1000);
   RequireInRange(section, "search_restarts", c.search_restarts, 0, 100);
+  RequireInRange(section, "manipulability_floor", c.manipulability_floor, 0, 1);
 }
 
 void CheckConfig(const PlanConfig& c, const std::string& section) {
   RequireInRange(section, "rate_hz", c.rate_hz, 1, 1000);
   CheckConfig(c.workspace, section + ".workspace");
   CheckConfig(c.ik, section + ".ik");
+  CheckConfig(c.time_scaling, section + ".time_scaling");
+  RequireInRange(section, "servo_omega", c.servo_omega, 0, 1000);
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -154,135 +165,91 @@ Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wris
   Vec3 centre = Vec3::Zero();
   for (const Pose& p : wrists) centre += p.t;
   centre /= static_cast<double>(std::max<size_t>(1, wrists.size()));
-  return PlacementPose(yaw, x, y, centre, base_height);
+  const Quat r(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
+  return {r, Vec3(x, y, -base_height) - r * Vec3(centre.x(), centre.y(), 0)};
+}
+
+std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& trajectories,
+                                      const std::vector<const retarget::Embodiment*>& embodiments,
+                                      const std::vector<Placement>& placements, const PlanConfig& config) {
+  CheckConfig(config, "deploy");
+  const size_t arms = trajectories.size();
+  for (const auto* t : trajectories) {
+    RequireTrajectory(*t);
+    if (t->qpos.size() != trajectories[0]->qpos.size() || t->fps != trajectories[0]->fps) {
+      throw Error("bad_trajectory", "trajectories on one clock differ in frames or frame rate", {.field = "qpos"});
+    }
+  }
+  const retarget::HandTrajectory& first = *trajectories[0];
+  const int frames = static_cast<int>(first.qpos.size());
+  std::vector<Plan> plans(arms);
+  std::vector<ArmPath> paths;
+  for (size_t a = 0; a < arms; ++a) {
+    Plan& plan = plans[a];
+    plan.embodiment = embodiments[a]->name;
+    plan.rate_hz = config.rate_hz;
+    for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
+    plan.hand_joints = BuildArmHandModel(*embodiments[a], Pose::Identity()).hand_joints;
+    plan.placement = placements[a];
+    plan.trajectory_duration = (frames - 1) / first.fps;
+    paths.push_back(SolveArmPath(*trajectories[a], placements[a].world_to_base, config));
+    plan.position_error = paths[a].position_error;
+    plan.rotation_error = paths[a].rotation_error;
+    plan.unreachable = paths[a].unreachable;
+  }
+  // One joint path over every arm's joints: the re-timing's slowest joint
+  // of any arm sets the pace for all.
+  std::vector<double> knots;
+  std::vector<VectorXd> values;
+  for (int f = 0; f < frames; ++f) {
+    knots.push_back(f / first.fps);
+    VectorXd q(6 * arms);
+    for (size_t a = 0; a < arms; ++a) q.segment<6>(6 * a) = paths[a].q[f];
+    values.push_back(q);
+  }
+  const JointSpline path(knots, values);
+  const ArmLimits limits = Ur3eLimits();
+  const VectorXd vmax1 = Eigen::Map<const VectorXd>(limits.max_speed.data(), 6);
+  const VectorXd amax1 = Eigen::Map<const VectorXd>(limits.max_acceleration.data(), 6);
+  const VectorXd vmax = vmax1.replicate(arms, 1), amax = amax1.replicate(arms, 1);
+  const ArmQ home = Home(config);
+  double margin = config.time_scaling.margin;
+  for (int attempt = 0; attempt < config.time_scaling.attempts; ++attempt, margin *= 0.8) {
+    const TimeMap map = RetimePath(path, vmax, amax, config.rate_hz, config.time_scaling, margin);
+    int lead_in = 0, lead_out = 0;
+    for (size_t a = 0; a < arms; ++a) {
+      const VectorXd start = path.Value(map.s.front()).segment<6>(6 * a);
+      const VectorXd end = path.Value(map.s.back()).segment<6>(6 * a);
+      if (config.lead_in) lead_in = std::max(lead_in, RestToRestIntervals(home, start, vmax1, amax1, config.rate_hz, margin));
+      if (config.lead_out) lead_out = std::max(lead_out, RestToRestIntervals(end, home, vmax1, amax1, config.rate_hz, margin));
+    }
+    bool within = true;
+    for (size_t a = 0; a < arms; ++a) {
+      FillCommands(plans[a], *trajectories[a], path, static_cast<int>(a), map, lead_in, lead_out, home);
+      CheckLimits(plans[a], limits);
+      within = within && plans[a].too_fast.empty() && plans[a].over_acceleration.empty();
+    }
+    if (within) break;
+  }
+  for (Plan& plan : plans) {
+    plan.ok = plan.unreachable.empty() && plan.too_fast.empty() && plan.over_acceleration.empty();
+  }
+  return plans;
 }
 
 Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
               const PlanConfig& config, const Placement* placement) {
   CheckConfig(config, "deploy");
-  if (trajectory.qpos.empty() || !(trajectory.fps > 0)) {
-    throw Error("bad_trajectory", "trajectory has no frames or no frame rate", {.field = "qpos"});
-  }
-  Plan plan;
-  plan.embodiment = embodiment.name;
-  plan.rate_hz = config.rate_hz;
-  for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
-  const ArmHandModel model = BuildArmHandModel(embodiment, Pose::Identity());
-  plan.hand_joints = model.hand_joints;
-  std::vector<int> from(plan.hand_joints.size(), -1);
-  for (size_t h = 0; h < plan.hand_joints.size(); ++h) {
-    const auto it = std::find(trajectory.qpos_names.begin(), trajectory.qpos_names.end(),
-                              plan.hand_joints[h]);
-    if (it != trajectory.qpos_names.end()) from[h] = static_cast<int>(it - trajectory.qpos_names.begin());
-  }
-
-  const double duration = (trajectory.qpos.size() - 1) / trajectory.fps;
-  const int commands = static_cast<int>(std::floor(duration * config.rate_hz + 1e-9)) + 1;
+  RequireTrajectory(trajectory);
   std::vector<Pose> wrists;
-  std::vector<Eigen::VectorXd> qpos;
-  for (int k = 0; k < commands; ++k) {
-    const Sample s = SampleAt(trajectory, k / config.rate_hz);
-    plan.times.push_back(k / config.rate_hz);
-    wrists.push_back(s.wrist);
-    qpos.push_back(s.qpos);
-  }
-  plan.placement = placement ? *placement : SearchPlacement(wrists, config);
-
-  ArmIk ik(config.ik);
-  ArmQ q = Home(config);
-  Progress progress("ik", commands);
-  for (int k = 0; k < commands; ++k) {
-    const IkResult r = ik.Solve(plan.placement.world_to_base * wrists[k], q);
-    q = r.q;
-    plan.arm.push_back(r.q);
-    plan.position_error.push_back(r.position_error);
-    plan.rotation_error.push_back(r.rotation_error);
-    if (!r.reached) {
-      plan.unreachable.push_back({.frame = k, .time = plan.times[k], .value = r.position_error,
-                                  .limit = r.rotation_error});
-    }
-    Eigen::VectorXd hand = Eigen::VectorXd::Zero(plan.hand_joints.size());
-    for (size_t h = 0; h < from.size(); ++h) {
-      if (from[h] >= 0) hand[h] = qpos[k][from[h]];
-    }
-    plan.hand.push_back(hand);
-    progress.Add();
-  }
-  progress.Finish();
-  CheckSpeeds(plan, ik.limits());
+  for (int f = 0; f < static_cast<int>(trajectory.qpos.size()); ++f) wrists.push_back(WristPose(trajectory, f));
+  Placement place = placement ? *placement : SearchPlacement(wrists, trajectory.fps, config);
+  Plan plan = MakePlansOnOneClock({&trajectory}, {&embodiment}, {place}, config)[0];
   if (placement) {
-    plan.placement.reachable_fraction = 1.0 - static_cast<double>(plan.unreachable.size()) / commands;
+    plan.placement.reachable_fraction = 1.0 - static_cast<double>(plan.unreachable.size()) / wrists.size();
     plan.placement.candidates = 1;
   }
-  plan.ok = plan.unreachable.empty() && plan.too_fast.empty();
   return plan;
-}
-
-void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
-                const retarget::Embodiment& embodiment, const std::string& scene_xml,
-                const std::filesystem::path& scene_dir) {
-  if (trajectory.object_poses.empty() || scene_xml.empty() || plan.arm.empty()) return;
-  const ArmHandModel model =
-      BuildArmHandModel(embodiment, plan.placement.world_to_base.Inverse(), scene_xml, scene_dir);
-  if (model.object_qpos < 0) return;
-  const mjModel* m = model.model.get();
-  retarget::DataPtr data = retarget::MakeData(m);
-  mjData* d = data.get();
-  // Actuator -> index into plan.hand for the hand's joint-driven actuators.
-  std::map<int, int> hand_index;
-  for (size_t h = 0; h < model.hand_qpos.size(); ++h) hand_index[model.hand_qpos[h]] = static_cast<int>(h);
-  std::vector<std::pair<int, int>> actuators;
-  for (int a = 0; a < m->nu; ++a) {
-    if (m->actuator_trntype[a] != mjTRN_JOINT) continue;
-    const auto it = hand_index.find(m->jnt_qposadr[m->actuator_trnid[2 * a]]);
-    if (it != hand_index.end()) actuators.emplace_back(a, it->second);
-  }
-  const auto command = [&](double t, ArmQ* arm, Eigen::VectorXd* hand) {
-    const double f = std::clamp(t * plan.rate_hz, 0.0, static_cast<double>(plan.arm.size() - 1));
-    const size_t i = std::min(static_cast<size_t>(f), plan.arm.size() - 1);
-    const size_t j = std::min(i + 1, plan.arm.size() - 1);
-    const double a = f - i;
-    *arm = (1 - a) * plan.arm[i] + a * plan.arm[j];
-    *hand = (1 - a) * plan.hand[i] + a * plan.hand[j];
-  };
-  ArmQ arm, next;
-  Eigen::VectorXd hand, next_hand;
-  command(0, &arm, &hand);
-  for (int i = 0; i < 6; ++i) d->qpos[model.arm_qpos[i]] = arm[i];
-  for (size_t h = 0; h < model.hand_qpos.size(); ++h) d->qpos[model.hand_qpos[h]] = hand[h];
-  mj_forward(m, d);
-  const double dt = m->opt.timestep;
-  double pos_sum = 0, rot_sum = 0;
-  ReplayReport& r = plan.replay;
-  size_t frame = 0;
-  const double end = plan.times.back();
-  for (double t = 0; frame < plan.times.size(); t += dt) {
-    while (frame < plan.times.size() && plan.times[frame] <= t + 1e-9) {
-      const Pose ref = trajectory.object_poses[std::min<size_t>(
-          std::lround(plan.times[frame] * trajectory.fps), trajectory.object_poses.size() - 1)];
-      const mjtNum* q = d->qpos + model.object_qpos;
-      const Pose sim{Quat(q[3], q[4], q[5], q[6]).normalized(), Vec3(q[0], q[1], q[2])};
-      const double pe = (sim.t - ref.t).norm(), re = RotationAngle(sim.q, ref.q);
-      pos_sum += pe;
-      rot_sum += re;
-      r.object_position_error_max = std::max(r.object_position_error_max, pe);
-      r.object_rotation_error_max = std::max(r.object_rotation_error_max, re);
-      ++frame;
-    }
-    if (t > end) break;
-    command(t, &arm, &hand);
-    command(t + dt, &next, &next_hand);
-    for (int i = 0; i < 6; ++i) {
-      d->qpos[model.arm_qpos[i]] = arm[i];
-      d->qvel[model.arm_dof[i]] = (next[i] - arm[i]) / dt;
-    }
-    for (const auto& [a, h] : actuators) d->ctrl[a] = hand[h];
-    mj_step(m, d);
-  }
-  r.ran = frame > 0;
-  r.object_position_error_mean = frame ? pos_sum / frame : 0;
-  r.object_rotation_error_mean = frame ? rot_sum / frame : 0;
-  r.success = r.ran && r.object_position_error_mean < 0.10 && r.object_rotation_error_mean < 0.5;
 }
 
 }  // namespace doasido::deploy

@@ -1,29 +1,44 @@
 // `doasido deploy plan`: a robot trajectory (retarget/kinematic_retarget.h
 // HandTrajectory, the floating wrist plus finger joints) becomes joint
-// commands for a UR3e carrying the hand (ur3e.h), at a fixed command rate.
+// commands for a UR3e carrying the hand (ur3e.h), at a fixed command rate,
+// re-timed so that the arm can run them.
 //
-// 1. Placement. The trajectory's world has the table top (its floor) at
-//    z = 0. The arm's base stands on the table; the trajectory is turned by
-//    a yaw about the vertical and its mean wrist position is put at an
-//    offset from the base:  p_base = Rz(yaw) (p - c) + (x, y, -base_height),
-//    c = (mean wrist x, mean wrist y, 0). The workspace config gives the
-//    default (x, y, yaw); a grid search over yaw and offsets around it keeps
-//    the placement where inverse kinematics reaches most of a subsample of
-//    frames (ties: smaller summed error, then the earlier, i.e. default-
-//    nearer, candidate).
-// 2. Arm IK (arm_ik.h) for the wrist pose of every command frame, warm
-//    started from the previous frame; the wrist pose and finger joints are
-//    interpolated from the trajectory (slerp / linear) at the command times.
-// 3. Checks: frames IK does not reach within tolerance ("unreachable") and
-//    frames whose joint speed from the previous command exceeds the arm's
-//    speed limits ("too_fast"), each with its time; the plan is ok when
-//    there are none.
-// 4. Replay (when the trajectory has object poses and a scene): the arm is
-//    driven kinematically along the commands (the real arm's joint servo is
-//    stiff), the fingers through the hand's position actuators, and the
-//    object moves freely; the object's error against the trajectory's
-//    object poses is reported (position m, rotation rad; success as in
-//    REFERENCE.md section 5: mean < 0.10 m and < 0.5 rad).
+// 1. Placement (placement.h). The trajectory's world has the table top (its
+//    floor) at z = 0. The arm's base stands on the table; the trajectory is
+//    turned by a yaw about the vertical and its mean wrist position is put
+//    at an offset from the base:  p_base = Rz(yaw) (p - c) + (x, y,
+//    -base_height), c = (mean wrist x, mean wrist y, 0). The workspace
+//    config gives the default (x, y, yaw); a grid search over yaw and
+//    offsets around it keeps the placement that reaches most frames, then
+//    needs the least slowdown away from singularities.
+// 2. Arm IK (arm_ik.h) for the wrist pose of every trajectory frame, warm
+//    started from the previous frame (the first from home): the joint path
+//    q(s), s the trajectory's time, a cubic spline through the frames.
+// 3. Time scaling (time_scaling.h): s(t) so that every joint stays within
+//    its speed and acceleration limits, never faster than the video,
+//    starting and ending at rest. The commands are at t = k / rate: a
+//    lead-in from the home pose to the first frame, the re-timed path (the
+//    hand's joints sampled from the trajectory at the same s), a lead-out
+//    back home; the lead moves are rest-to-rest quintics within the limits.
+//    The plan records each command's trajectory time (the time map,
+//    `source_times`) and the slowdown (re-timed duration over the
+//    trajectory's).
+// 4. Checks: trajectory frames IK does not reach within tolerance
+//    ("unreachable", with their trajectory time) and commands whose finite
+//    difference speed or acceleration exceeds a limit ("too_fast",
+//    "over_acceleration", with their plan time; the arm at rest before the
+//    first command and after the last). If a command exceeds a limit, step
+//    3 runs again aiming at a smaller share of the limits (time_scaling
+//    attempts). The plan is ok when no frame or command is listed.
+// 5. Replay (replay.cc; when the trajectory has object poses and a scene):
+//    the arm tracks the commands by a joint servo (PlanConfig servo_omega),
+//    the fingers by the hand's position actuators
+//    with the trajectory's own controls at each command's trajectory time
+//    (its joint positions when it has none), the object moves freely; the
+//    object's error against the trajectory's object poses at the same
+//    trajectory time (position m, rotation rad; success as in REFERENCE.md
+//    section 5: mean < 0.10 m and < 0.5 rad), and the wrist tracking error
+//    (the simulated flange against the trajectory's wrist) per command.
 #pragma once
 
 #include <filesystem>
@@ -35,6 +50,7 @@
 #include "core/config.h"
 #include "core/geometry.h"
 #include "deploy/arm_ik.h"
+#include "deploy/time_scaling.h"
 #include "deploy/ur3e.h"
 #include "retarget/kinematic_retarget.h"
 
@@ -48,12 +64,15 @@ struct WorkspaceConfig {
   int yaw_steps = 12;         // candidates over a full turn (1 = no yaw search)
   double offset_range = 0.1;  // m, offsets searched within +- this of (x, y)
   int offset_steps = 3;       // per axis (1 = no offset search)
-  int search_frames = 20;     // frames subsampled for each candidate
+  int search_frames = 40;     // frames subsampled for each candidate
   int search_restarts = 2;    // IK restarts per frame in the search
+  // Manipulability (ur3e.h, 0..1) below which a placement's cost grows
+  // (placement.h); 0 ignores singularities.
+  double manipulability_floor = 0.05;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WorkspaceConfig, x, y, yaw, base_height, yaw_steps,
                                                 offset_range, offset_steps, search_frames,
-                                                search_restarts)
+                                                search_restarts, manipulability_floor)
 void CheckConfig(const WorkspaceConfig& c, const std::string& section);
 
 struct PlanConfig {
@@ -61,9 +80,21 @@ struct PlanConfig {
   bool replay = true;
   WorkspaceConfig workspace;
   IkConfig ik;
-  std::array<double, 6> home{0, -1.5708, 1.5708, -1.5708, -1.5708, 0};  // first IK seed, rad
+  TimeScalingConfig time_scaling;
+  // The arm's home pose (rad): the first IK seed, where the lead-in starts
+  // and the lead-out ends.
+  std::array<double, 6> home{0, -1.5708, 1.5708, -1.5708, -1.5708, 0};
+  bool lead_in = true;   // move from home to the first frame
+  bool lead_out = true;  // and back home after the last
+  // The replay's arm servo (rad/s): each arm joint tracks its command by a
+  // computed-torque PD, M (w^2 e + 2 w e') + bias, critically damped at
+  // this natural frequency; 40 is the floating wrist's servo in the
+  // retargeting (retarget/embodiment.h), so the hand meets the object as
+  // stiffly as it did there. 0 drives the arm kinematically (infinitely stiff).
+  double servo_omega = 40;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, home)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
+                                                home, lead_in, lead_out, servo_omega)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -72,14 +103,18 @@ struct Placement {
   Pose world_to_base;          // p_base = world_to_base * p_world
   double reachable_fraction = 0;  // of the searched subsample
   int candidates = 0;
+  double search_slowdown = 0;  // the search's estimate of the slowdown (placement.h)
+  double manipulability = 0;   // the least over the searched frames
 };
 
+// unreachable: frame = trajectory frame, time = its trajectory time;
+// too_fast / over_acceleration: frame = command, time = plan time.
 struct FrameIssue {
   int frame = 0;
-  double time = 0;   // s from the trajectory's start
-  double value = 0;  // unreachable: position error (m); too_fast: speed (rad/s)
-  double limit = 0;  // too_fast: the joint's limit; unreachable: rotation error (rad)
-  int joint = -1;    // too_fast: arm joint index
+  double time = 0;   // s
+  double value = 0;  // unreachable: position error (m); too_fast: speed (rad/s); over_acceleration: rad/s^2
+  double limit = 0;  // too_fast, over_acceleration: the joint's limit; unreachable: rotation error (rad)
+  int joint = -1;    // too_fast, over_acceleration: arm joint index
 };
 
 struct ReplayReport {
@@ -87,6 +122,16 @@ struct ReplayReport {
   double object_position_error_mean = 0, object_position_error_max = 0;  // m
   double object_rotation_error_mean = 0, object_rotation_error_max = 0;  // rad
   bool success = false;
+  // The floating hand's own outcome (the trajectory's metrics.success), -1 unknown.
+  int reference_success = -1;
+  // Per command of the re-timed path (lead moves excluded), at the
+  // command's trajectory time: the simulated object against the
+  // trajectory's, and the simulated flange against the trajectory's wrist.
+  std::vector<double> object_position_error, object_rotation_error;  // m, rad
+  std::vector<double> wrist_position_error;  // m
+  std::vector<double> wrist_rotation_error;  // rad
+  double wrist_position_error_mean = 0, wrist_position_error_max = 0;
+  double wrist_rotation_error_mean = 0, wrist_rotation_error_max = 0;
 };
 
 struct Plan {
@@ -96,44 +141,59 @@ struct Plan {
   Placement placement;
   std::vector<std::string> arm_joints;
   std::vector<std::string> hand_joints;
-  std::vector<double> times;          // s
+  std::vector<double> times;          // s, command k at k / rate_hz
+  std::vector<double> source_times;   // the time map: each command's trajectory time (s), non-decreasing
   std::vector<ArmQ> arm;              // rad
   std::vector<Eigen::VectorXd> hand;  // the hand's joints, hand_joints order
-  std::vector<double> position_error, rotation_error;  // IK residual per frame
-  std::vector<FrameIssue> unreachable, too_fast;
+  int lead_in = 0, lead_out = 0;      // commands of the lead moves before and after the path
+  double trajectory_duration = 0;     // s, the trajectory's own
+  double slowdown = 1;                // re-timed path duration / trajectory_duration
+  std::vector<double> position_error, rotation_error;  // IK residual per trajectory frame
+  std::vector<FrameIssue> unreachable, too_fast, over_acceleration;
   ReplayReport replay;
-  bool ok = false;  // no unreachable and no too-fast frame
+  bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration
 };
 
 // The floating-wrist pose of `frame` in the trajectory's world (joints
 // doasido_wrist_x..rz, rotation Rx Ry Rz). Throws Error("bad_trajectory").
 Pose WristPose(const retarget::HandTrajectory& t, int frame);
 
-// Steps 1-3 above. `scene_xml`/`scene_dir` as BuildArmHandModel; the hand
-// joints are those of `embodiment`'s model, filled from the trajectory's
-// qpos by name (a joint the trajectory lacks keeps 0). Throws
-// Error("bad_trajectory") for an empty trajectory or one without a wrist.
-// `placement` (may be null) fixes the placement instead of step 1's search.
-// A fixed placement's reachable_fraction is the share of all command
-// frames the IK reached, its candidates 1.
+// Steps 1-4 above. `embodiment`'s model gives the hand joints, filled from
+// the trajectory's qpos by name (a joint the trajectory lacks keeps 0).
+// Throws Error("bad_trajectory") for an empty trajectory or one without a
+// wrist. `placement` (may be null) fixes the placement instead of step 1's
+// search; a fixed placement's reachable_fraction is the share of all
+// trajectory frames the IK reached, its candidates 1.
 Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
               const PlanConfig& config, const Placement* placement = nullptr);
+
+// Steps 2-4 for arms that share one clock (deploy plan-two): each
+// trajectory at its fixed placement, one time map for all (the slowest
+// joint of any arm sets the pace), lead moves as long as the longest arm's.
+// Trajectories have the same frames and frame rate.
+std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& trajectories,
+                                      const std::vector<const retarget::Embodiment*>& embodiments,
+                                      const std::vector<Placement>& placements, const PlanConfig& config);
 
 // The placement p_base = Rz(yaw) (p - c) + (x, y, -base_height) of step 1,
 // c the mean of `wrists` on the table (z = 0).
 Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wrists, double base_height);
 
-// Step 4 on a plan made from `trajectory`; fills plan.replay.
+// Step 5 on a plan made from `trajectory`; fills plan.replay.
 void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
                 const retarget::Embodiment& embodiment, const std::string& scene_xml,
-                const std::filesystem::path& scene_dir);
+                const std::filesystem::path& scene_dir, double servo_omega = PlanConfig{}.servo_omega);
 
-// JSON: {"format": "doasido_deploy_plan", "version": 1, "source", "embodiment",
+// JSON: {"format": "doasido_deploy_plan", "version": 2, "source", "embodiment",
 // "rate_hz", "placement": {yaw, x, y, world_to_base: [tx,ty,tz,qw,qx,qy,qz],
-// reachable_fraction, candidates}, "arm_joints", "hand_joints", "times",
-// "arm": [[6]], "hand": [[n]], "position_error", "rotation_error",
-// "unreachable": [{frame, time, position_error, rotation_error}],
-// "too_fast": [{frame, time, joint, speed, limit}], "replay": {...}, "ok"}.
+// reachable_fraction, candidates, search_slowdown, manipulability},
+// "arm_joints", "hand_joints", "times", "source_times", "lead_in",
+// "lead_out", "trajectory_duration", "slowdown", "arm": [[6]], "hand": [[n]],
+// "position_error", "rotation_error", "unreachable": [{frame, time,
+// position_error, rotation_error}], "too_fast": [{frame, time, joint, speed,
+// limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],
+// "replay": {...}, "ok"}. Version 1 files (no time map) read with
+// source_times = times and slowdown 1.
 // The "format" member of a plan file.
 inline constexpr const char* kPlanFormat = "doasido_deploy_plan";
 void WritePlanJson(const Plan& plan, const std::filesystem::path& path);

@@ -13,11 +13,12 @@ Json PoseJson(const Pose& p) {
   return Json::array({p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()});
 }
 
-Json IssuesJson(const std::vector<FrameIssue>& issues, bool speed) {
+// `rate_key`: "speed" or "acceleration" for a joint-limit issue, "" for unreachable.
+Json IssuesJson(const std::vector<FrameIssue>& issues, const std::string& rate_key) {
   Json out = Json::array();
   for (const FrameIssue& i : issues) {
-    if (speed) {
-      out.push_back({{"frame", i.frame}, {"time", i.time}, {"joint", i.joint}, {"speed", i.value},
+    if (!rate_key.empty()) {
+      out.push_back({{"frame", i.frame}, {"time", i.time}, {"joint", i.joint}, {rate_key, i.value},
                      {"limit", i.limit}});
     } else {
       out.push_back({{"frame", i.frame}, {"time", i.time}, {"position_error", i.value},
@@ -27,13 +28,13 @@ Json IssuesJson(const std::vector<FrameIssue>& issues, bool speed) {
   return out;
 }
 
-std::vector<FrameIssue> ReadIssues(const Json& j, bool speed) {
+std::vector<FrameIssue> ReadIssues(const Json& j, const std::string& rate_key) {
   std::vector<FrameIssue> out;
   for (const Json& i : j) {
     FrameIssue f{.frame = i.at("frame").get<int>(), .time = i.at("time").get<double>()};
-    if (speed) {
+    if (!rate_key.empty()) {
       f.joint = i.at("joint").get<int>();
-      f.value = i.at("speed").get<double>();
+      f.value = i.at(rate_key).get<double>();
       f.limit = i.at("limit").get<double>();
     } else {
       f.value = i.at("position_error").get<double>();
@@ -49,17 +50,23 @@ std::vector<FrameIssue> ReadIssues(const Json& j, bool speed) {
 Json PlanToJson(const Plan& plan) {
   Json j;
   j["format"] = kFormat;
-  j["version"] = 1;
+  j["version"] = 2;
   j["source"] = plan.source;
   j["embodiment"] = plan.embodiment;
   j["rate_hz"] = plan.rate_hz;
   const Placement& p = plan.placement;
   j["placement"] = {{"yaw", p.yaw}, {"x", p.x}, {"y", p.y},
                     {"world_to_base", PoseJson(p.world_to_base)},
-                    {"reachable_fraction", p.reachable_fraction}, {"candidates", p.candidates}};
+                    {"reachable_fraction", p.reachable_fraction}, {"candidates", p.candidates},
+                    {"search_slowdown", p.search_slowdown}, {"manipulability", p.manipulability}};
   j["arm_joints"] = plan.arm_joints;
   j["hand_joints"] = plan.hand_joints;
   j["times"] = plan.times;
+  j["source_times"] = plan.source_times;
+  j["lead_in"] = plan.lead_in;
+  j["lead_out"] = plan.lead_out;
+  j["trajectory_duration"] = plan.trajectory_duration;
+  j["slowdown"] = plan.slowdown;
   Json arm = Json::array(), hand = Json::array();
   for (const ArmQ& q : plan.arm) arm.push_back(std::vector<double>(q.data(), q.data() + 6));
   for (const Eigen::VectorXd& q : plan.hand) hand.push_back(std::vector<double>(q.data(), q.data() + q.size()));
@@ -67,15 +74,25 @@ Json PlanToJson(const Plan& plan) {
   j["hand"] = hand;
   j["position_error"] = plan.position_error;
   j["rotation_error"] = plan.rotation_error;
-  j["unreachable"] = IssuesJson(plan.unreachable, false);
-  j["too_fast"] = IssuesJson(plan.too_fast, true);
+  j["unreachable"] = IssuesJson(plan.unreachable, "");
+  j["too_fast"] = IssuesJson(plan.too_fast, "speed");
+  j["over_acceleration"] = IssuesJson(plan.over_acceleration, "acceleration");
   const ReplayReport& r = plan.replay;
   j["replay"] = {{"ran", r.ran},
                  {"object_position_error_mean", r.object_position_error_mean},
                  {"object_position_error_max", r.object_position_error_max},
                  {"object_rotation_error_mean", r.object_rotation_error_mean},
                  {"object_rotation_error_max", r.object_rotation_error_max},
-                 {"success", r.success}};
+                 {"success", r.success},
+                 {"reference_success", r.reference_success},
+                 {"object_position_error", r.object_position_error},
+                 {"object_rotation_error", r.object_rotation_error},
+                 {"wrist_position_error", r.wrist_position_error},
+                 {"wrist_rotation_error", r.wrist_rotation_error},
+                 {"wrist_position_error_mean", r.wrist_position_error_mean},
+                 {"wrist_position_error_max", r.wrist_position_error_max},
+                 {"wrist_rotation_error_mean", r.wrist_rotation_error_mean},
+                 {"wrist_rotation_error_max", r.wrist_rotation_error_max}};
   j["ok"] = plan.ok;
   return j;
 }
@@ -92,7 +109,8 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
   try {
     if (j.at("format") != kFormat) throw Error("bad_plan", "not a doasido deploy plan", {.file = file, .field = field});
     field = "version";
-    if (j.at("version").get<int>() != 1) throw Error("bad_plan", "unknown plan version", {.file = file, .field = field});
+    const int version = j.at("version").get<int>();
+    if (version != 1 && version != 2) throw Error("bad_plan", "unknown plan version", {.file = file, .field = field});
     field = "source";
     plan.source = j.value("source", "");
     plan.embodiment = j.value("embodiment", "");
@@ -107,12 +125,26 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
     plan.placement.world_to_base = {Quat(w.at(3), w.at(4), w.at(5), w.at(6)), Vec3(w.at(0), w.at(1), w.at(2))};
     plan.placement.reachable_fraction = p.at("reachable_fraction");
     plan.placement.candidates = p.at("candidates");
+    plan.placement.search_slowdown = p.value("search_slowdown", 0.0);
+    plan.placement.manipulability = p.value("manipulability", 0.0);
     field = "arm_joints";
     plan.arm_joints = j.at("arm_joints").get<std::vector<std::string>>();
     field = "hand_joints";
     plan.hand_joints = j.at("hand_joints").get<std::vector<std::string>>();
     field = "times";
     plan.times = j.at("times").get<std::vector<double>>();
+    if (version >= 2) {
+      field = "source_times";
+      plan.source_times = j.at("source_times").get<std::vector<double>>();
+      field = "lead_in";
+      plan.lead_in = j.at("lead_in").get<int>();
+      plan.lead_out = j.at("lead_out").get<int>();
+      field = "slowdown";
+      plan.trajectory_duration = j.at("trajectory_duration").get<double>();
+      plan.slowdown = j.at("slowdown").get<double>();
+    } else {
+      plan.source_times = plan.times;  // version 1: commands at the video's timing
+    }
     field = "arm";
     for (const auto& q : j.at("arm").get<std::vector<std::vector<double>>>()) {
       if (q.size() != 6) throw Error("bad_plan", "arm command must have 6 joints", {.file = file, .field = field});
@@ -125,16 +157,22 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
       }
       plan.hand.push_back(Eigen::Map<const Eigen::VectorXd>(q.data(), q.size()));
     }
-    if (plan.arm.size() != plan.times.size() || plan.hand.size() != plan.times.size()) {
-      throw Error("bad_plan", "times, arm and hand differ in length", {.file = file, .field = "times"});
+    if (plan.arm.size() != plan.times.size() || plan.hand.size() != plan.times.size() ||
+        plan.source_times.size() != plan.times.size()) {
+      throw Error("bad_plan", "times, source_times, arm and hand differ in length", {.file = file, .field = "times"});
+    }
+    if (plan.lead_in < 0 || plan.lead_out < 0 || plan.lead_in + plan.lead_out > static_cast<int>(plan.times.size())) {
+      throw Error("bad_plan", "lead_in + lead_out exceed the commands", {.file = file, .field = "lead_in"});
     }
     field = "position_error";
     plan.position_error = j.at("position_error").get<std::vector<double>>();
     plan.rotation_error = j.at("rotation_error").get<std::vector<double>>();
     field = "unreachable";
-    plan.unreachable = ReadIssues(j.at("unreachable"), false);
+    plan.unreachable = ReadIssues(j.at("unreachable"), "");
     field = "too_fast";
-    plan.too_fast = ReadIssues(j.at("too_fast"), true);
+    plan.too_fast = ReadIssues(j.at("too_fast"), "speed");
+    field = "over_acceleration";
+    if (version >= 2) plan.over_acceleration = ReadIssues(j.at("over_acceleration"), "acceleration");
     field = "replay";
     const Json& r = j.at("replay");
     plan.replay = {.ran = r.at("ran"),
@@ -142,7 +180,16 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
                    .object_position_error_max = r.at("object_position_error_max"),
                    .object_rotation_error_mean = r.at("object_rotation_error_mean"),
                    .object_rotation_error_max = r.at("object_rotation_error_max"),
-                   .success = r.at("success")};
+                   .success = r.at("success"),
+                   .reference_success = r.value("reference_success", -1),
+                   .object_position_error = r.value("object_position_error", std::vector<double>{}),
+                   .object_rotation_error = r.value("object_rotation_error", std::vector<double>{}),
+                   .wrist_position_error = r.value("wrist_position_error", std::vector<double>{}),
+                   .wrist_rotation_error = r.value("wrist_rotation_error", std::vector<double>{}),
+                   .wrist_position_error_mean = r.value("wrist_position_error_mean", 0.0),
+                   .wrist_position_error_max = r.value("wrist_position_error_max", 0.0),
+                   .wrist_rotation_error_mean = r.value("wrist_rotation_error_mean", 0.0),
+                   .wrist_rotation_error_max = r.value("wrist_rotation_error_max", 0.0)};
     field = "ok";
     plan.ok = j.at("ok").get<bool>();
   } catch (const nlohmann::json::exception& e) {

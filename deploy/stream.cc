@@ -1,6 +1,7 @@
 #include "deploy/stream.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <ctime>
 #include <functional>
@@ -45,6 +46,18 @@ void SleepUntil(const timespec& start, double seconds) {
 }
 
 }  // namespace
+
+void RequireEvenlySpaced(const Plan& plan) {
+  for (size_t k = 0; k < plan.times.size(); ++k) {
+    if (std::abs(plan.times[k] - k / plan.rate_hz) > 1e-6) {
+      throw Error("bad_plan",
+                  "command " + std::to_string(k) + " is at " + std::to_string(plan.times[k]) +
+                      " s, not at k / rate_hz: a plan's commands are evenly spaced (its time map, source_times, "
+                      "holds the re-timing)",
+                  {.file = plan.source, .field = "times"});
+    }
+  }
+}
 
 StreamResult StreamEncoded(size_t count, double rate, const StreamOptions& options,
                            const std::atomic<bool>& stop,
@@ -94,6 +107,7 @@ StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const st
                     " unreachable and " + std::to_string(plan.too_fast.size()) + " too-fast frames",
                 {.file = plan.source, .field = "ok"});
   }
+  RequireEvenlySpaced(plan);
   const double rate = options.rate_hz > 0 ? options.rate_hz : plan.rate_hz;
   return StreamEncoded(plan.arm.size(), rate, options, stop,
                        [&](size_t k, int64_t t) { return EncodeLcm(Message(plan, k, t)); });

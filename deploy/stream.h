@@ -38,6 +38,11 @@ struct StreamResult {
 // unwritable log. Returns early, cleanly, when `stop` becomes true.
 StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const std::atomic<bool>& stop);
 
+// Throws Error("bad_plan") unless command k is at k / rate_hz: the stream
+// paces commands evenly, so a plan's times must be (re-timing changes which
+// trajectory time each command holds, not the command spacing).
+void RequireEvenlySpaced(const Plan& plan);
+
 // An lcm-gen message's bytes.
 template <typename Message>
 std::vector<uint8_t> EncodeLcm(const Message& msg) {

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include <Eigen/LU>
 #include <tinyxml2.h>
 
 #include "core/error.h"
@@ -41,6 +42,7 @@ ArmLimits Ur3eLimits() {
     l.lower[i] = -kTwoPi;
     l.upper[i] = kTwoPi;
     l.max_speed[i] = (i < 3 ? 180 : 360) * kDeg;
+    l.max_acceleration[i] = 5.0;
   }
   return l;
 }
@@ -56,10 +58,9 @@ Pose DhForwardPose(const ArmQ& q, const DhParameters& dh) {
   return {Quat(Mat3(m.topLeftCorner<3, 3>())).normalized(), m.topRightCorner<3, 1>()};
 }
 
-std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh) {
-  std::array<Vec3, 7> out;
-  Mat4 m = Mat4::Identity();
-  out[0] = Vec3::Zero();
+std::array<Mat4, 7> DhFrames(const ArmQ& q, const DhParameters& dh) {
+  std::array<Mat4, 7> out;
+  out[0] = Mat4::Identity();
   for (int i = 0; i < 6; ++i) {
     DhParameters one;  // frame i+1 from frame i: the product's i-th factor alone
     ArmQ qi = ArmQ::Zero();
@@ -67,10 +68,29 @@ std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh) {
     one.d = {dh.d[i], 0, 0, 0, 0, 0};
     one.a = {dh.a[i], 0, 0, 0, 0, 0};
     one.alpha = {dh.alpha[i], 0, 0, 0, 0, 0};
-    m = m * DhForward<double>(qi.data(), one);
-    out[i + 1] = m.topRightCorner<3, 1>();
+    out[i + 1] = out[i] * DhForward<double>(qi.data(), one);
   }
   return out;
+}
+
+std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh) {
+  const std::array<Mat4, 7> frames = DhFrames(q, dh);
+  std::array<Vec3, 7> out;
+  for (int i = 0; i < 7; ++i) out[i] = frames[i].topRightCorner<3, 1>();
+  return out;
+}
+
+double Manipulability(const ArmQ& q, const DhParameters& dh) {
+  const std::array<Mat4, 7> f = DhFrames(q, dh);
+  const Vec3 end = f[6].topRightCorner<3, 1>();
+  Eigen::Matrix<double, 6, 6> j;
+  for (int i = 0; i < 6; ++i) {
+    const Vec3 z = f[i].block<3, 1>(0, 2), o = f[i].topRightCorner<3, 1>();
+    j.block<3, 1>(0, i) = z.cross(end - o);
+    j.block<3, 1>(3, i) = z;
+  }
+  const double a2 = std::abs(dh.a[1]), a3 = std::abs(dh.a[2]);
+  return std::abs(j.determinant()) / (a2 * a3 * (a2 + a3 + std::abs(dh.d[4])));
 }
 
 const std::array<double, 6>& Ur3eLinkRadii() { return kRadius; }

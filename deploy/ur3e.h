@@ -47,9 +47,14 @@ struct ArmLimits {
   std::array<double, 6> lower{};      // rad
   std::array<double, 6> upper{};      // rad
   std::array<double, 6> max_speed{};  // rad/s
+  std::array<double, 6> max_acceleration{};  // rad/s^2
 };
 
-// UR3e: every joint +-360 degrees; 180 deg/s base, shoulder, elbow; 360 deg/s wrists.
+// UR3e: every joint +-360 degrees; 180 deg/s base, shoulder, elbow; 360 deg/s
+// wrists. The arm itself limits torques, not accelerations; 5 rad/s^2 per
+// joint is what Universal Robots' own ROS driver gives MoveIt for time
+// parameterisation (ur_moveit_config joint_limits.yaml, "chosen
+// conservatively").
 ArmLimits Ur3eLimits();
 // Joint names in order: shoulder_pan, shoulder_lift, elbow, wrist_1, wrist_2, wrist_3.
 const std::array<const char*, 6>& Ur3eJointNames();
@@ -78,6 +83,14 @@ Pose DhForwardPose(const ArmQ& q, const DhParameters& dh = {});
 // The origins of the DH frames 0..6 in the base frame at `q` (0: the base,
 // 6: the flange); link i (0-based) runs from origin i to origin i + 1.
 std::array<Vec3, 7> DhOrigins(const ArmQ& q, const DhParameters& dh = {});
+// The DH frames 0..6 themselves (base->frame i).
+std::array<Mat4, 7> DhFrames(const ArmQ& q, const DhParameters& dh = {});
+
+// Distance from singularities: |det J| of the 6x6 geometric Jacobian
+// (independent of the reference point), divided by |a2 a3| (|a2| + |a3| +
+// d5), its bound for a UR arm (det J = s3 s5 a2 a3 (c2 a2 + c23 a3 + s234
+// d5)), so 0 at the elbow, wrist and shoulder singularities and at most 1.
+double Manipulability(const ArmQ& q, const DhParameters& dh = {});
 // The links' capsule radii (m), the MJCF's and the collision check's.
 const std::array<double, 6>& Ur3eLinkRadii();
 

@@ -1,6 +1,7 @@
 // `doasido deploy stream` and `deploy plan` through the built binary. The
 // stream is recorded by Debian's lcm-logger (an independent process) on a
 // loopback-only multicast URL (ttl=0) and read back with LCM's log reader.
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <thread>
@@ -14,6 +15,7 @@
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/ur3e.h"
+#include "tests/joint_path_trajectory.h"
 #include "tests/test_util.h"
 #include "tests/two_hand_episode.h"
 
@@ -34,6 +36,7 @@ deploy::Plan TenSecondPlan(bool ok) {
   for (int h = 0; h < 22; ++h) p.hand_joints.push_back("j" + std::to_string(h));
   for (int k = 0; k < 500; ++k) {
     p.times.push_back(k / 50.0);
+    p.source_times.push_back(k / 50.0);
     deploy::ArmQ q;
     for (int i = 0; i < 6; ++i) q[i] = 0.5 * std::sin(0.37 * k + i) + 1e-3 * i;
     p.arm.push_back(q);
@@ -88,6 +91,51 @@ TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
   EXPECT_NEAR(mean_interval_ms, 20.0, 0.4);
   ExpectEqualsPlan(got, plan);
   for (size_t i = 1; i < got.size(); ++i) EXPECT_GT(got[i].sequence, got[i - 1].sequence);
+}
+
+// A re-timed plan (the base joint asked for twice its speed limit, so the
+// commands hold a slowed time map) is still sent one message per command,
+// 20 ms apart, as lcm-logger's own receive times show.
+TEST(DeployStream, RetimedPlanRecordedByLcmLoggerAtFiftyHertz) {
+  TempDir dir;
+  const double speed = 2 * deploy::Ur3eLimits().max_speed[0];
+  const auto path = [&](double t) {
+    deploy::ArmQ q(0.3, -1.9, 1.7, -1.4, -1.5, 0.2);
+    q[0] += speed * (t - 0.75);
+    return q;
+  };
+  const deploy::Plan plan = testing::PlanInBaseFrame(testing::FromJointPath(path, 76, 50), path(0));
+  ASSERT_TRUE(plan.ok);
+  ASSERT_GE(plan.slowdown, 2.0);
+  deploy::WritePlanJson(plan, dir / "plan.json");
+  const std::string url = LoopbackLcmUrl(), channel = "DOASIDO_RETIMED_" + std::to_string(getpid());
+  const pid_t logger = Spawn({"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel,
+                              (dir / "run.lcmlog").string()}, dir / "logger.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  const auto r = RunDoasido({"deploy", "stream", "--plan", (dir / "plan.json").string(), "--url", url,
+                             "--channel", channel});
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  kill(logger, SIGINT);
+  WaitFor(logger);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto got = deploy::ReadCommandLog(dir / "run.lcmlog", channel);
+  ASSERT_EQ(got.size(), plan.arm.size()) << testing::ReadFile(dir / "logger.txt");
+  std::vector<double> intervals;
+  for (size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].sequence, static_cast<int64_t>(k));
+    EXPECT_EQ(got[k].arm, plan.arm[k]);
+    if (k) intervals.push_back((got[k].log_time_us - got[k - 1].log_time_us) / 1000.0);
+  }
+  const double mean = (got.back().log_time_us - got.front().log_time_us) / 1000.0 / intervals.size();
+  std::vector<double> sorted = intervals;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  int within = 0;
+  for (double i : intervals) within += std::abs(i - 20.0) <= 0.4;
+  std::printf("re-timed plan (slowdown %.2f): %zu commands, lcm-logger mean interval %.4f ms, median %.4f ms, "
+              "%d of %zu within 20 ms +- 2%%\n", plan.slowdown, got.size(), mean, median, within, intervals.size());
+  EXPECT_NEAR(mean, 20.0, 0.4);
+  EXPECT_NEAR(median, 20.0, 0.4);
 }
 
 TEST(DeployStream, DryRunLogHoldsThePlan) {
@@ -177,14 +225,19 @@ TEST(DeployPlanTwo, PlansTwoArmsAndStreamsThemAsOne) {
   args.insert(args.end(), {"--out", (dir / "two.json").string()});
   const auto ok = RunDoasido(args);
   ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
-  EXPECT_NE(ok.out.find("sharpa_left + sharpa_right: 199 commands at 50 Hz, bases 0.600 m apart"),
-            std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("sharpa_left + sharpa_right: bases 0.600 m apart"), std::string::npos) << ok.out;
   EXPECT_NE(ok.out.find("ok: 0 collision frames"), std::string::npos) << ok.out;
+  const auto planned = deploy::BimanualPlanFromJson(deploy::ReadPlanFile(dir / "two.json"), "two");
+  const size_t n = planned.right.arm.size();
+  // One clock: both arms hold the same trajectory time at every command.
+  EXPECT_EQ(planned.left.source_times, planned.right.source_times);
+  EXPECT_NE(ok.out.find("re-timed: "), std::string::npos) << ok.out;
   const auto stream = RunDoasido({"deploy", "stream", "--plan", (dir / "two.json").string(), "--dry-run",
                                   (dir / "two.lcmlog").string()});
   ASSERT_EQ(stream.exit_code, 0) << stream.err;
-  EXPECT_NE(stream.out.find("sent 199 of 199"), std::string::npos) << stream.out;
-  EXPECT_EQ(deploy::ReadBimanualLog(dir / "two.lcmlog").size(), 199u);
+  const std::string count = std::to_string(n);
+  EXPECT_NE(stream.out.find("sent " + count + " of " + count), std::string::npos) << stream.out;
+  EXPECT_EQ(deploy::ReadBimanualLog(dir / "two.lcmlog").size(), n);
 
   // The retarget stage's two-hand trajectory.json plans the same.
   retarget::WriteTrajectoryJson(retarget::CombineBimanualTrajectories(h.left, h.right), dir / "both.json");
@@ -209,13 +262,15 @@ TEST(DeployPlanTwo, PlansTwoArmsAndStreamsThemAsOne) {
   args.insert(args.end(), {"--out", (dir / "close.json").string(), "--base-distance", "0.05"});
   const auto close = RunDoasido(args);
   EXPECT_NE(close.exit_code, 0);
-  EXPECT_NE(close.out.find("collision    frame     0  t=  0.000 s"), std::string::npos) << close.out;
+  EXPECT_NE(close.out.find("collision    command     0  t=  0.000 s"), std::string::npos) << close.out;
   EXPECT_NE(close.err.find("plan_failed_checks"), std::string::npos) << close.err;
   const auto refused = RunDoasido({"deploy", "stream", "--plan", (dir / "close.json").string(), "--dry-run",
                                    (dir / "close.lcmlog").string()});
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_NE(refused.err.find("199 arm-arm collision frames (0.000000 s, 0.020000 s"), std::string::npos)
-      << refused.err;
+  const auto close_plan = deploy::BimanualPlanFromJson(deploy::ReadPlanFile(dir / "close.json"), "close");
+  EXPECT_NE(refused.err.find(std::to_string(close_plan.right.arm.size()) +
+                             " arm-arm collision commands (0.000000 s, 0.020000 s"),
+            std::string::npos) << refused.err;
 }
 
 }  // namespace

@@ -179,7 +179,7 @@ TEST(Plan, UnreachableFramesReportedWithTimes) {
   const retarget::HandTrajectory t = PathWithGap(&centre);
   const PlanConfig config = IdentityPlacement(centre);  // the path is in the base frame
   const Plan plan = MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config);
-  ASSERT_EQ(plan.times.size(), 60u);
+  ASSERT_EQ(plan.position_error.size(), 60u);  // one IK per trajectory frame
   EXPECT_FALSE(plan.ok);
   std::set<int> frames;
   for (const FrameIssue& u : plan.unreachable) {
@@ -199,7 +199,7 @@ TEST(Plan, UnreachableFramesReportedWithTimes) {
   EXPECT_EQ(plan.hand_joints.size(), 22u);
 }
 
-TEST(Plan, ReachablePathPassesAndSpeedLimitIsChecked) {
+TEST(Plan, ReachablePathPassesAndFasterPathIsSlowedDown) {
   Pose centre;
   retarget::HandTrajectory t = PathWithGap(&centre);
   for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;  // close the gap
@@ -209,16 +209,16 @@ TEST(Plan, ReachablePathPassesAndSpeedLimitIsChecked) {
   EXPECT_TRUE(plan.ok) << plan.unreachable.size() << " unreachable, " << plan.too_fast.size()
                        << " too fast";
   // The same path ten times faster: 0.15 rad amplitude over 0.12 s exceeds
-  // 180 deg/s on the big joints.
+  // 180 deg/s on the big joints (and 5 rad/s^2 many times over); the
+  // re-timing slows it down until it passes, commands still 2 ms apart.
   t.fps = 500;
   config.rate_hz = 500;
   const Plan fast = MakePlan(t, e, config);
   EXPECT_TRUE(fast.unreachable.empty());
-  ASSERT_FALSE(fast.too_fast.empty());
-  for (const FrameIssue& f : fast.too_fast) {
-    EXPECT_GT(f.value, f.limit);
-    EXPECT_NEAR(f.time, f.frame / 500.0, 1e-12);
-  }
+  EXPECT_TRUE(fast.ok) << fast.too_fast.size() << " too fast, " << fast.over_acceleration.size() << " too abrupt";
+  EXPECT_GT(fast.slowdown, 3.0);
+  EXPECT_GT(fast.slowdown, 5 * plan.slowdown);
+  for (size_t k = 0; k < fast.times.size(); ++k) EXPECT_NEAR(fast.times[k], k / 500.0, 1e-12);
 }
 
 // The replay measures the object against the trajectory: a mug the hand
@@ -253,8 +253,19 @@ TEST(Plan, ReplayMeasuresObjectError) {
   plan.replay = {};
   ReplayPlan(plan, t, e, xml, dir);
   std::filesystem::remove_all(dir);
-  EXPECT_NEAR(plan.replay.object_position_error_mean, 0.1, 0.005);
+  // Measured at each command's trajectory time (the time map): the claimed
+  // displacement there, averaged over the commands of the path.
+  double claimed = 0;
+  const size_t first = plan.lead_in, end = plan.arm.size() - plan.lead_out;
+  for (size_t k = first; k < end; ++k) claimed += 0.2 * plan.source_times[k] * t.fps / (t.qpos.size() - 1.0);
+  claimed /= end - first;
+  EXPECT_NEAR(plan.replay.object_position_error_mean, claimed, 0.005);
   EXPECT_NEAR(plan.replay.object_position_error_max, 0.2, 0.005);
+  // The flange follows the wrist path: IK within 1 mm at the frames, the
+  // spline between them.
+  ASSERT_EQ(plan.replay.wrist_position_error.size(), end - first);
+  EXPECT_LT(plan.replay.wrist_position_error_max, 0.005);
+  EXPECT_LT(plan.replay.wrist_rotation_error_max, 0.02);
 }
 
 TEST(Plan, JsonRoundTrip) {

@@ -1,0 +1,304 @@
+// Arm plans a real UR3e can run (deploy/plan.h): retargeted trajectories
+// planned for the arm, measured over
+//  - --refs synthetic references x clean/noisy (pick-and-place,
+//    lift-and-rotate, slide in turn; made and retargeted with the `fast`
+//    preset as bench/retarget_dynamics_bench.cc's wall section does),
+//  - the HOT3D sample (left hand with the coffee pot's stand-in sphere,
+//    onto sharpa_left),
+//  - --carries synthetic two-hand carries of --carry_seconds (both Sharpa
+//    hands, `deploy plan-two`),
+// the share of plans passing every check (reach, joint speed and
+// acceleration at every command), the slowdowns (median, max), the arm
+// replay's object success against the floating hand's, and the wrist
+// tracking error (mean, max).
+//
+// Retargeting is the slow part (~20 s a 10-s clip on 2 threads), so the
+// trajectories are cached in --cache (trajectory.json + scene/ per
+// reference, retarget/dynamic_stage.h's layout) and made only when
+// missing; --make_only stops after making them, --plan_only plans the ones
+// made so far without making more.
+//   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
+//       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only | --plan_only]
+//       [--no_replay]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "deploy/bimanual.h"
+#include "deploy/plan.h"
+#include "deploy/trajectory_source.h"
+#include "recon/hot3d_recording.h"
+#include "retarget/bimanual_retarget.h"
+#include "retarget/dynamic_retarget.h"
+#include "synth/objects.h"
+#include "synth/reconstruction_noise.h"
+
+namespace {
+
+using namespace doasido;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+const fs::path kData = DOASIDO_SHARED_DATA;
+
+struct Flags {
+  fs::path cache = fs::temp_directory_path() / "doasido-deploy-bench";
+  int refs = 10, carries = 5, threads = 2;
+  double clip_seconds = 10, carry_seconds = 4;
+  bool make_only = false, plan_only = false, replay = true;
+  std::string only;         // plan only the reference of this name
+  deploy::PlanConfig plan;  // --no_leads: without the lead moves
+};
+
+Flags Parse(int argc, char** argv) {
+  Flags f;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto eq = a.find('=');
+    const std::string k = a.substr(0, eq), v = eq == std::string::npos ? "" : a.substr(eq + 1);
+    if (k == "--cache") f.cache = v;
+    else if (k == "--refs") f.refs = std::stoi(v);
+    else if (k == "--carries") f.carries = std::stoi(v);
+    else if (k == "--threads") f.threads = std::stoi(v);
+    else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
+    else if (k == "--carry_seconds") f.carry_seconds = std::stod(v);
+    else if (k == "--make_only") f.make_only = true;
+    else if (k == "--plan_only") f.plan_only = true;
+    else if (k == "--no_replay") f.replay = false;
+    else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
+    else if (k == "--only") f.only = v;
+    else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
+    else throw std::runtime_error("unknown flag " + a);
+  }
+  return f;
+}
+
+// The retargeting settings of the dynamics bench's wall section.
+retarget::DynamicRetargetConfig FastConfig(const Flags& f) {
+  retarget::DynamicRetargetConfig c;
+  c.preset = "fast";
+  c.robots_dir = (kData / "robots").string();
+  c.kinematic.restarts = 1;
+  c.kinematic.contact_weight = 16;
+  c.kinematic.contact_depth = 0.01;
+  c.scene.density = 400;
+  c.sampler.threads = f.threads;
+  return c;
+}
+
+void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
+  retarget::WriteTrajectoryJson(t, dir / "trajectory.json.tmp");
+  fs::rename(dir / "trajectory.json.tmp", dir / "trajectory.json");
+}
+
+// Reference i as the dynamics bench makes it (verb, object, approach vary with i).
+void MakeSingle(const Flags& f, int i) {
+  const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
+  const TriMesh mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
+  synth::EpisodeSpec spec;
+  spec.verb = verbs[i % 3];
+  spec.frames = static_cast<int>(f.clip_seconds * 30);
+  spec.manipulation_scale = 2.0;
+  spec.object_yaw = 0.4 * i;
+  spec.approach_elevation = 0.55;
+  spec.grasp = synth::GraspTypeFromName("pinch");
+  spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
+  const recon::Reconstruction clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
+  recon::Reconstruction noisy = clean;
+  synth::AddReconstructionNoise(noisy, {}, 1000 + i);
+  const retarget::DynamicRetargetConfig config = FastConfig(f);
+  for (int n = 0; n < 2; ++n) {
+    const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
+    if (fs::exists(dir / "trajectory.json")) continue;
+    fs::create_directories(dir);
+    const auto t0 = Clock::now();
+    const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
+        n ? noisy : clean, mesh, retarget::FindEmbodiment(config.hand, config.robots_dir), config, dir / "scene",
+        dir.filename().string());
+    Save(run.trajectory, dir);
+    std::fprintf(stderr, "made %s: success %d, %.0f s\n", dir.filename().c_str(), run.metrics.success,
+                 std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+}
+
+void MakeHot3d(const Flags& f) {
+  const fs::path dir = f.cache / "hot3d_left";
+  const auto recording = kData / "hot3d_sample" / "Aria" / "P0003_c701bd11";
+  if (fs::exists(dir / "trajectory.json") || !fs::exists(recording)) return;
+  recon::Hot3dReferenceOptions o;
+  o.hand = "left";
+  o.object_uid = "228358276546933";  // the coffee pot, a 5-cm sphere standing in
+  o.stand_in = synth::MakeSphere(0.05);
+  const recon::Hot3dReference ref = recon::Hot3dToReconstruction(
+      recon::ReadHot3dRecording(recording), kData / "hot3d_sample" / "object_library", o);
+  retarget::DynamicRetargetConfig config = FastConfig(f);
+  config.hand = "sharpa_left";
+  fs::create_directories(dir);
+  const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
+      ref.reconstruction, ref.mesh, retarget::FindEmbodiment(config.hand, config.robots_dir), config,
+      dir / "scene", "hot3d");
+  Save(run.trajectory, dir);
+  std::fprintf(stderr, "made hot3d_left: success %d\n", run.metrics.success);
+}
+
+void MakeCarry(const Flags& f, int i) {
+  const fs::path dir = f.cache / ("carry" + std::to_string(i));
+  if (fs::exists(dir / "trajectory.json")) return;
+  synth::EpisodeSpec spec;
+  spec.frames = static_cast<int>(f.carry_seconds * 30);
+  spec.two_hand_task = synth::TwoHandTask::kCarry;
+  spec.grasp = synth::GraspTypeFromName("pinch");
+  spec.object_yaw = 0.4 * i;
+  spec.approach_azimuth = -0.35 + 0.1 * (i % 4);
+  const TriMesh mesh = i % 2 ? synth::MakeBox(0.06, 0.06, 0.09) : synth::MakeCylinder(0.035, 0.10, 16);
+  const recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
+  const retarget::DynamicRetargetConfig config = FastConfig(f);
+  const auto robots = kData / "robots";
+  fs::create_directories(dir);
+  const retarget::BimanualRun run =
+      retarget::RetargetBimanual(r, mesh, retarget::FindEmbodiment("sharpa_left", robots),
+                                 retarget::FindEmbodiment("sharpa_right", robots), config, dir / "scene", "carry");
+  Save(run.trajectory, dir);
+  std::fprintf(stderr, "made carry%d: success %d\n", i, run.metrics.success);
+}
+
+struct Row {
+  std::string name;
+  bool ok = false;
+  double slowdown = 0;
+  int reference_success = -1, arm_success = -1;
+  double wrist_mean = 0, wrist_max = 0;
+  std::string why;
+};
+
+Row PlanOne(const Flags& f, const fs::path& dir) {
+  Row row{.name = dir.filename().string()};
+  const deploy::TrajectoryFiles files = deploy::FilesBeside(dir / "trajectory.json");
+  const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files.trajectory);
+  const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
+  deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
+  if (f.replay) {
+    deploy::ReplayPlan(plan, t, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
+  }
+  const deploy::ReplayReport& r = plan.replay;
+  for (size_t k = 0; !f.only.empty() && k < r.object_position_error.size(); k += 25) {
+    const size_t c = k + plan.lead_in;
+    const Pose o = t.object_poses[std::min<size_t>(std::lround(plan.source_times[c] * t.fps), t.qpos.size() - 1)];
+    std::printf("  t %6.2f s (trajectory %5.2f s): object error %5.1f mm %.2f rad, trajectory's object z %.3f\n",
+                plan.times[c], plan.source_times[c], 1000 * r.object_position_error[k], r.object_rotation_error[k],
+                o.t.z());
+  }
+  row.ok = plan.ok;
+  row.slowdown = plan.slowdown;
+  row.reference_success = plan.replay.reference_success;
+  row.arm_success = plan.replay.ran ? plan.replay.success : -1;
+  row.wrist_mean = plan.replay.wrist_position_error_mean;
+  row.wrist_max = plan.replay.wrist_position_error_max;
+  row.why = std::to_string(plan.unreachable.size()) + " unreachable, " + std::to_string(plan.too_fast.size()) +
+            " too fast, " + std::to_string(plan.over_acceleration.size()) + " too abrupt";
+  if (plan.replay.ran) {
+    char buf[128];
+    std::snprintf(buf, sizeof(buf), "; object %.0f mm / %.2f rad", 1000 * plan.replay.object_position_error_mean,
+                  plan.replay.object_rotation_error_mean);
+    row.why += buf;
+  }
+  return row;
+}
+
+Row PlanTwo(const fs::path& dir) {
+  Row row{.name = dir.filename().string()};
+  const auto [left, right] = retarget::SplitBimanualTrajectory(retarget::ReadTrajectoryJson(dir / "trajectory.json"));
+  const deploy::BimanualPlan plan = deploy::MakeBimanualPlan(
+      left, right, retarget::FindEmbodiment(left.embodiment, kData / "robots"),
+      retarget::FindEmbodiment(right.embodiment, kData / "robots"), deploy::BimanualConfig{});
+  row.ok = plan.ok;
+  row.slowdown = plan.right.slowdown;
+  row.reference_success = left.metrics.value("success", false);
+  const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
+  row.why = "left " + std::to_string(plan.left.unreachable.size() + plan.left.too_fast.size() +
+                                     plan.left.over_acceleration.size()) +
+            " / right " + std::to_string(plan.right.unreachable.size() + plan.right.too_fast.size() +
+                                        plan.right.over_acceleration.size()) +
+            " issues, " + std::to_string(plan.collisions.size()) + " collisions, closest " +
+            std::to_string(closest).substr(0, 5) + " m";
+  return row;
+}
+
+void Report(const std::vector<Row>& rows) {
+  std::printf("%-14s | %-4s | %8s | %-13s | %-17s | %s\n", "reference", "ok", "slowdown", "success f/arm",
+              "wrist mm mean/max", "checks");
+  std::vector<double> slowdowns;
+  int ok = 0, ref_success = 0, arm_success = 0, replays = 0;
+  double wrist_sum = 0, wrist_max = 0;
+  for (const Row& r : rows) {
+    std::printf("%-14s | %-4s | %7.2fx | %4d / %-6d | %6.1f / %-7.1f | %s\n", r.name.c_str(), r.ok ? "yes" : "NO",
+                r.slowdown, r.reference_success, r.arm_success, 1000 * r.wrist_mean, 1000 * r.wrist_max,
+                r.why.c_str());
+    ok += r.ok;
+    slowdowns.push_back(r.slowdown);
+    if (r.arm_success < 0) continue;
+    ++replays;
+    ref_success += r.reference_success > 0;
+    arm_success += r.arm_success;
+    wrist_sum += r.wrist_mean;
+    wrist_max = std::max(wrist_max, r.wrist_max);
+  }
+  if (rows.empty()) return;
+  std::sort(slowdowns.begin(), slowdowns.end());
+  const size_t n = slowdowns.size();
+  const double median = n % 2 ? slowdowns[n / 2] : 0.5 * (slowdowns[n / 2 - 1] + slowdowns[n / 2]);
+  std::printf("passing every check: %d of %zu (%.0f%%); slowdown median %.2fx, max %.2fx\n", ok, n, 100.0 * ok / n,
+              median, slowdowns.back());
+  if (replays) {
+    std::printf("object success over %d replays: floating hand %d (%.0f%%), arm %d (%.0f%%); wrist tracking "
+                "mean %.2f mm, max %.2f mm\n", replays, ref_success, 100.0 * ref_success / replays, arm_success,
+                100.0 * arm_success / replays, 1000 * wrist_sum / replays, 1000 * wrist_max);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Flags f = Parse(argc, argv);
+  fs::create_directories(f.cache);
+  const auto t0 = Clock::now();
+  for (int i = 0; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
+  if (!f.plan_only) MakeHot3d(f);
+  for (int i = 0; i < f.carries && !f.plan_only; ++i) MakeCarry(f, i);
+  std::fprintf(stderr, "trajectories ready in %s (%.0f s)\n", f.cache.c_str(),
+               std::chrono::duration<double>(Clock::now() - t0).count());
+  if (f.make_only) return 0;
+  std::vector<Row> single, two;
+  const auto t1 = Clock::now();
+  // Every cached trajectory there is (--plan_only plans what is made so far).
+  const auto made = [&](const fs::path& dir) {
+    return fs::exists(dir / "trajectory.json") && (f.only.empty() || dir.filename() == f.only);
+  };
+  for (int i = 0; i < f.refs; ++i) {
+    for (const char* kind : {"_clean", "_noisy"}) {
+      const fs::path dir = f.cache / ("ref" + std::to_string(i) + kind);
+      if (made(dir)) single.push_back(PlanOne(f, dir));
+    }
+  }
+  if (made(f.cache / "hot3d_left")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
+  for (int i = 0; i < f.carries; ++i) {
+    const fs::path dir = f.cache / ("carry" + std::to_string(i));
+    if (made(dir)) two.push_back(PlanTwo(dir));
+  }
+  std::printf("== One arm: %zu trajectories (%d synthetic %.0f-s references clean + noisy, fast preset; HOT3D)\n",
+              single.size(), f.refs, f.clip_seconds);
+  Report(single);
+  std::printf("\n== Two arms (deploy plan-two, one clock): %zu synthetic carries\n", two.size());
+  Report(two);
+  std::vector<Row> all = single;
+  all.insert(all.end(), two.begin(), two.end());
+  std::printf("\n== All %zu plans\n", all.size());
+  Report(all);
+  std::printf("planning and replay: %.0f s\n", std::chrono::duration<double>(Clock::now() - t1).count());
+  return 0;
+}

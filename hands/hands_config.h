@@ -6,10 +6,11 @@
 #include <string>
 
 #include "core/config.h"
+#include "recon/bundle_location.h"
 
 namespace doasido::hands {
 
-inline constexpr const char* kHandsStageName = "hands";
+inline constexpr const char* kHandsStageName = recon::kHandsStageFolder;
 // Per frame and hand: the models' 2D keypoints, confidences and the fitted
 // metric joints (hands/hand_keypoints_json.h). The bundle files beside it
 // (meta.json, K.npz, hands.npz) are recon/bundle.h's.

@@ -13,9 +13,10 @@ namespace doasido::recon {
 // The `bundle` stage's name: its queue name, config section and artifact folder.
 inline constexpr const char* kBundleStageName = "bundle";
 
-// The `hands` stage's artifact folder, <artifacts>/<clip>/hands/: a hand-only
-// clip bundle (meta.json, K.npz, hands.npz) measured on the video itself.
-// TODO(i38a merge): this is i38a's kHandsStageName; use that constant.
+// The `hands` stage's name and artifact folder, <artifacts>/<clip>/hands/: a
+// hand-only clip bundle (meta.json, K.npz, hands.npz) measured on the video
+// itself (hands/hands_stage.h, which takes its name from here: the bundle
+// readers below the hands library must know it).
 inline constexpr const char* kHandsStageFolder = "hands";
 
 // No bundle named, none written by a command and no hands found (permanent).

@@ -25,7 +25,7 @@ cat > "$WORK/demo.toml" <<TOML
 [bundle]
 command = "sh '$PWD/tools/ground_truth_bundle.sh' {video} {output}"
 TOML
-$DOASIDO init --db "$DB" --pipeline default,bundle,recon,retarget_kinematic
+$DOASIDO init --db "$DB" --pipeline default,hands,bundle,recon,retarget_kinematic
 $DOASIDO run --db "$DB" --jobs 2 --config "$WORK/demo.toml" examples/demo_clips.csv "$WORK/synth"
 $DOASIDO report --db "$DB" --out "$WORK/report"
 echo

@@ -13,8 +13,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kManifestName = "manifest.json";   // dataset/version.h kManifestFile
-constexpr const char* kArtifactsName = "artifacts";       // Database::ArtifactDir
+constexpr const char* kManifestName = "manifest.json";  // dataset/version.h kManifestFile
+constexpr const char* kArtifactsName = "artifacts";     // Database::ArtifactDir
 constexpr char kSqliteHeader[] = "SQLite format 3";
 
 [[noreturn]] void Refuse(const OutputRequest& r, const fs::path& resolved, const std::string& why,
@@ -116,9 +116,11 @@ void CheckOutputPath(const OutputRequest& r) {
   if (IsSqliteFile(resolved)) Refuse(r, resolved, "it is a SQLite database");
   for (const std::string suffix : {"-wal", "-shm", "-journal"}) {
     const std::string name = resolved.string();
-    if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
+    if (name.size() > suffix.size() &&
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
         IsSqliteFile(name.substr(0, name.size() - suffix.size()))) {
-      Refuse(r, resolved, "it is the journal of the database " + name.substr(0, name.size() - suffix.size()));
+      Refuse(r, resolved,
+             "it is the journal of the database " + name.substr(0, name.size() - suffix.size()));
     }
   }
   if (const std::string why = InsideProtected(resolved, r); !why.empty()) Refuse(r, resolved, why);
@@ -144,9 +146,10 @@ void CheckOutputPath(const OutputRequest& r) {
 
 fs::path TempSibling(const fs::path& path) {
   const fs::path absolute = fs::absolute(path).lexically_normal();
-  const fs::path name = absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename();
-  const fs::path parent = absolute.has_filename() ? absolute.parent_path()
-                                                  : absolute.parent_path().parent_path();
+  const fs::path name =
+      absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename();
+  const fs::path parent =
+      absolute.has_filename() ? absolute.parent_path() : absolute.parent_path().parent_path();
   return parent / ("." + name.string() + ".tmp-" + std::to_string(getpid()));
 }
 
@@ -159,7 +162,8 @@ void RenameIntoPlace(const fs::path& temp, const fs::path& path) {
   }
 }
 
-void WriteFolderAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+void WriteFolderAtomically(const fs::path& path,
+                           const std::function<void(const fs::path&)>& write) {
   const fs::path temp = TempSibling(path);
   std::error_code ec;
   fs::remove_all(temp, ec);

@@ -10,7 +10,8 @@ namespace {
 using ReportRun = Database::ReportRun;
 
 // Why `run`'s recorded inputs are not the clip's current upstream runs, or "".
-std::string StaleInputs(const ReportRun& run, const std::map<std::string, const ReportRun*>& by_stage) {
+std::string StaleInputs(const ReportRun& run,
+                        const std::map<std::string, const ReportRun*>& by_stage) {
   if (!run.inputs.is_array()) return "";  // finished before inputs were recorded
   for (const Json& input : run.inputs) {
     const std::string stage = input.value("stage", "");
@@ -72,7 +73,8 @@ std::string NameClips(const std::vector<UnsettledClip>& clips, size_t max_named)
     if (!clips[i].external_id.empty()) text += " " + clips[i].external_id;
     text += " (" + clips[i].why + ")";
   }
-  if (clips.size() > max_named) text += " and " + std::to_string(clips.size() - max_named) + " more";
+  if (clips.size() > max_named)
+    text += " and " + std::to_string(clips.size() - max_named) + " more";
   return text;
 }
 

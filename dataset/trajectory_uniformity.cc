@@ -12,7 +12,8 @@ Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
     return {"fps", "fps " + std::to_string(t.fps) + " differs from the first episode's (" +
                        std::to_string(first.fps) + ")"};
   }
-  if (t.qpos_names != first.qpos_names) return {"qpos_names", "joints differ from the first episode's"};
+  if (t.qpos_names != first.qpos_names)
+    return {"qpos_names", "joints differ from the first episode's"};
   if (t.ctrl_names != first.ctrl_names || t.ctrl.empty() != first.ctrl.empty()) {
     return {"ctrl_names", "actuators differ from the first episode's"};
   }

@@ -10,11 +10,11 @@
 //  - error text is bounded in bytes, the whole log named;
 //  - a merged shard hands its clips back and refuses further runs;
 //  - worker options are range-checked before anything runs.
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <map>
 #include <set>
-
-#include <gtest/gtest.h>
 
 #include "core/config.h"
 #include "dataset/version.h"
@@ -47,18 +47,18 @@ class ChainTest : public ::testing::Test {
   static void SetUpTestSuite() {
     pool_ = new TempDir();
     const fs::path synth = *pool_ / "s";
-    ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "5", "--seed", "11",
-                          "--frames", "30", "--width", "160", "--height", "120", "--mix",
-                          "clean=1"})
-                  .exit_code,
-              0);
+    ASSERT_EQ(
+        RunDoasido({"synth", "--out", synth.string(), "--clips", "5", "--seed", "11", "--frames",
+                    "30", "--width", "160", "--height", "120", "--mix", "clean=1"})
+            .exit_code,
+        0);
     WriteFile(*pool_ / "run.toml", kBundleCommand);
-    ASSERT_EQ(RunDoasido({"init", "--db", (*pool_ / "d.db").string(), "--pipeline", kPipeline})
-                  .exit_code,
-              0);
-    const auto run = RunDoasido({"run", "--db", (*pool_ / "d.db").string(), "--jobs", "2",
-                                 "--config", (*pool_ / "run.toml").string(),
-                                 (synth / "clips.csv").string()});
+    ASSERT_EQ(
+        RunDoasido({"init", "--db", (*pool_ / "d.db").string(), "--pipeline", kPipeline}).exit_code,
+        0);
+    const auto run =
+        RunDoasido({"run", "--db", (*pool_ / "d.db").string(), "--jobs", "2", "--config",
+                    (*pool_ / "run.toml").string(), (synth / "clips.csv").string()});
     ASSERT_EQ(run.exit_code, 0) << run.err;
   }
   static void TearDownTestSuite() {
@@ -85,30 +85,38 @@ TempDir* ChainTest::pool_ = nullptr;
 
 TEST_F(ChainTest, ChangedReconReRunsDownstreamAndVersionsWaitForIt) {
   const fs::path db = Db();
-  ASSERT_EQ(Count(db, "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
-                      " AND state = 'done'"), 5);
-  const auto old_recon = QueryRows(db, "SELECT clip_id, param_hash, finished_at FROM stage_runs"
-                                       " WHERE stage = 'recon' ORDER BY clip_id");
+  ASSERT_EQ(Count(db,
+                  "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
+                  " AND state = 'done'"),
+            5);
+  const auto old_recon = QueryRows(db,
+                                   "SELECT clip_id, param_hash, finished_at FROM stage_runs"
+                                   " WHERE stage = 'recon' ORDER BY clip_id");
   // Recon alone under the new parameters: its later runs wait for it.
   const std::string changed = Config("[recon.gravity]\nuse_bundle_up = false\n");
   const auto recon = RunDoasido({"run", "--db", Db(), "--config", changed, "--stages", "recon"});
   ASSERT_EQ(recon.exit_code, 0) << recon.err;
   EXPECT_NE(recon.out.find("recon: parameters changed, 5 clips queued again, and 5 later runs"),
-            std::string::npos) << recon.out;
-  const auto new_recon = QueryRows(db, "SELECT clip_id, param_hash, finished_at FROM stage_runs"
-                                       " WHERE stage = 'recon' AND state = 'done' ORDER BY clip_id");
+            std::string::npos)
+      << recon.out;
+  const auto new_recon = QueryRows(db,
+                                   "SELECT clip_id, param_hash, finished_at FROM stage_runs"
+                                   " WHERE stage = 'recon' AND state = 'done' ORDER BY clip_id");
   ASSERT_EQ(new_recon.size(), 5u);
   for (size_t i = 0; i < 5; ++i) EXPECT_NE(new_recon[i], old_recon[i]);
-  const std::string new_hash = QueryRows(db, "SELECT DISTINCT param_hash FROM stage_runs"
-                                             " WHERE stage = 'recon'").at(0);
-  EXPECT_EQ(QueryRows(db, "SELECT clip_id, state, IFNULL(verdict, '~'), requeued_by FROM"
-                          " stage_runs WHERE stage = 'retarget_kinematic' ORDER BY clip_id"),
-            (std::vector<std::string>{"1|pending|~|recon", "2|pending|~|recon",
-                                      "3|pending|~|recon", "4|pending|~|recon",
-                                      "5|pending|~|recon"}));
+  const std::string new_hash = QueryRows(db,
+                                         "SELECT DISTINCT param_hash FROM stage_runs"
+                                         " WHERE stage = 'recon'")
+                                   .at(0);
+  EXPECT_EQ(QueryRows(db,
+                      "SELECT clip_id, state, IFNULL(verdict, '~'), requeued_by FROM"
+                      " stage_runs WHERE stage = 'retarget_kinematic' ORDER BY clip_id"),
+            (std::vector<std::string>{"1|pending|~|recon", "2|pending|~|recon", "3|pending|~|recon",
+                                      "4|pending|~|recon", "5|pending|~|recon"}));
   const auto status = RunDoasido({"status", "--db", Db()});
   EXPECT_NE(status.out.find("5 runs queued again because their recon run changed"),
-            std::string::npos) << status.out;
+            std::string::npos)
+      << status.out;
 
   // A version now would mix reconstructions with trajectories of the old ones.
   const fs::path root = work_ / "datasets";
@@ -121,14 +129,16 @@ TEST_F(ChainTest, ChangedReconReRunsDownstreamAndVersionsWaitForIt) {
         << refused.err;
   }
   EXPECT_NE(refused.err.find("retarget_kinematic pending (queued again after recon changed)"),
-            std::string::npos) << refused.err;
+            std::string::npos)
+      << refused.err;
   EXPECT_FALSE(fs::exists(root / "default/v1"));
 
   const auto rest = RunDoasido({"run", "--db", Db(), "--config", changed});
   ASSERT_EQ(rest.exit_code, 0) << rest.err;
   // Exactly recon and what follows ran again, once each, for the five clips.
-  for (const auto& row : QueryRows(db, "SELECT stage, clip_id, COUNT(*) FROM events WHERE"
-                                       " kind = 'done' GROUP BY 1, 2")) {
+  for (const auto& row : QueryRows(db,
+                                   "SELECT stage, clip_id, COUNT(*) FROM events WHERE"
+                                   " kind = 'done' GROUP BY 1, 2")) {
     const bool again = row.rfind("recon|", 0) == 0 || row.rfind("retarget_kinematic|", 0) == 0;
     EXPECT_EQ(row.substr(row.rfind('|') + 1), again ? "2" : "1") << row;
   }
@@ -153,8 +163,8 @@ TEST_F(ChainTest, ChangedReconReRunsDownstreamAndVersionsWaitForIt) {
       if (input.at("stage") != "recon") continue;
       EXPECT_EQ(input.at("param_hash"), new_hash) << e.id;
       // The very run that is the clip's recon now (SQLite prints REAL with 15 digits).
-      EXPECT_NEAR(input.at("finished_at").get<double>(), std::stod(recon_finished[e.clip_id]),
-                  1e-3) << e.id;
+      EXPECT_NEAR(input.at("finished_at").get<double>(), std::stod(recon_finished[e.clip_id]), 1e-3)
+          << e.id;
       EXPECT_FALSE(input.at("artifacts").empty()) << e.id;
     }
     EXPECT_EQ(stages, (std::set<std::string>{"download", "probe", "bundle", "recon"})) << e.id;
@@ -165,8 +175,8 @@ TEST_F(ChainTest, ChangedReconReRunsDownstreamAndVersionsWaitForIt) {
       EXPECT_TRUE(s.finished_at.has_value()) << e.id << " " << s.stage;
     }
     // The trajectory in the version is the one retargeted after the new recon.
-    const Json info = Json::parse(ReadFile(root / "default/v1/episodes" / e.id / "recon" /
-                                           "reconstruction.json"));
+    const Json info = Json::parse(
+        ReadFile(root / "default/v1/episodes" / e.id / "recon" / "reconstruction.json"));
     EXPECT_NE(info.dump().find("support_plane"), std::string::npos) << info.dump();
   }
 }
@@ -178,12 +188,18 @@ TEST_F(ChainTest, AFailedReRunHasNoVerdictAndIsNoSuccess) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   // Clips with a right hand reach the bad hand name and fail; a failed run
   // keeps neither the verdict nor the parameters of its earlier success.
-  EXPECT_GE(Count(db, "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
-                      " AND state = 'failed'"), 1);
-  EXPECT_EQ(Count(db, "SELECT COUNT(*) FROM stage_runs WHERE state != 'done' AND"
-                      " (verdict IS NOT NULL OR param_hash IS NOT NULL)"), 0);
-  EXPECT_EQ(Count(db, "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
-                      " AND verdict = 'pass'"), 0);
+  EXPECT_GE(Count(db,
+                  "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
+                  " AND state = 'failed'"),
+            1);
+  EXPECT_EQ(Count(db,
+                  "SELECT COUNT(*) FROM stage_runs WHERE state != 'done' AND"
+                  " (verdict IS NOT NULL OR param_hash IS NOT NULL)"),
+            0);
+  EXPECT_EQ(Count(db,
+                  "SELECT COUNT(*) FROM stage_runs WHERE stage = 'retarget_kinematic'"
+                  " AND verdict = 'pass'"),
+            0);
   // Failed is settled (nothing will run it), but no success: no episode.
   const auto made = RunDoasido({"dataset", "create", "--db", Db(), "--root",
                                 (work_ / "ds").string(), "--select", "success"});
@@ -193,11 +209,12 @@ TEST_F(ChainTest, AFailedReRunHasNoVerdictAndIsNoSuccess) {
 
 TEST_F(ChainTest, AllowStaleCutsTheVersionAndRecordsIt) {
   const std::string changed = Config("[recon.gravity]\nuse_bundle_up = false\n");
-  ASSERT_EQ(RunDoasido({"run", "--db", Db(), "--config", changed, "--stages", "recon"}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"run", "--db", Db(), "--config", changed, "--stages", "recon"}).exit_code,
+            0);
   const fs::path root = work_ / "datasets";
-  const auto made = RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(),
-                                "--select", "all", "--no-thumbnails", "--allow-empty",
-                                "--allow-stale"});
+  const auto made =
+      RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(), "--select", "all",
+                  "--no-thumbnails", "--allow-empty", "--allow-stale"});
   ASSERT_EQ(made.exit_code, 0) << made.err;
   const dataset::Manifest m = dataset::ReadManifest(root / "default/v1");
   EXPECT_TRUE(m.allow_stale);
@@ -236,8 +253,8 @@ TEST_F(ChainTest, ExportsRefuseAVersionMixingRobots) {
 TEST(BoundedText, A9MegabyteErrorLineIsStoredAsItsTailAndTheWholeLogIsNamed) {
   TempDir dir;
   const fs::path synth = dir / "s";
-  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "2", "--seed", "2",
-                        "--frames", "24", "--width", "96", "--height", "72", "--mix", "clean=1",
+  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "2", "--seed", "2", "--frames",
+                        "24", "--width", "96", "--height", "72", "--mix", "clean=1",
                         "--no-annotations", "--no-bundles"})
                 .exit_code,
             0);
@@ -245,14 +262,14 @@ TEST(BoundedText, A9MegabyteErrorLineIsStoredAsItsTailAndTheWholeLogIsNamed) {
             "[bundle]\ncommand = \"head -c 9000000 /dev/zero | tr -c x x; echo; echo the real "
             "reason; exit 1\"\n");
   const fs::path db = dir / "d.db";
-  ASSERT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", "download,probe,bundle"})
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      RunDoasido({"init", "--db", db.string(), "--pipeline", "download,probe,bundle"}).exit_code,
+      0);
   const auto run = RunDoasido({"run", "--db", db.string(), "--config", (dir / "loud.toml").string(),
                                (synth / "clips.csv").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  ASSERT_EQ(Count(db, "SELECT COUNT(*) FROM stage_runs WHERE stage = 'bundle' AND state = 'failed'"),
-            2);
+  ASSERT_EQ(
+      Count(db, "SELECT COUNT(*) FROM stage_runs WHERE stage = 'bundle' AND state = 'failed'"), 2);
   EXPECT_LE(Count(db, "SELECT MAX(LENGTH(CAST(error AS BLOB))) FROM stage_runs"), 8192);
   EXPECT_LE(Count(db, "SELECT MAX(LENGTH(CAST(detail AS BLOB))) FROM events"), 8192);
   for (const auto& error : QueryRows(db, "SELECT error FROM stage_runs WHERE state = 'failed'")) {
@@ -269,26 +286,29 @@ TEST(BoundedText, A9MegabyteErrorLineIsStoredAsItsTailAndTheWholeLogIsNamed) {
 TEST(MergedShard, HandsItsClipsBackAndRefusesNewRuns) {
   TempDir dir;
   const fs::path synth = dir / "s";
-  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "2", "--seed", "5",
-                        "--frames", "24", "--width", "96", "--height", "72", "--no-bundles"})
+  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "2", "--seed", "5", "--frames",
+                        "24", "--width", "96", "--height", "72", "--no-bundles"})
                 .exit_code,
             0);
   const fs::path parent = dir / "p/d.db";
   fs::create_directories(parent.parent_path());
-  ASSERT_EQ(RunDoasido({"init", "--db", parent.string(), "--pipeline", "download,probe"}).exit_code, 0);
-  ASSERT_EQ(RunDoasido({"ingest", "--db", parent.string(), (synth / "clips.csv").string()}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"init", "--db", parent.string(), "--pipeline", "download,probe"}).exit_code,
+            0);
+  ASSERT_EQ(
+      RunDoasido({"ingest", "--db", parent.string(), (synth / "clips.csv").string()}).exit_code, 0);
   ASSERT_EQ(RunDoasido({"shard", "--db", parent.string(), "--shards", "1"}).exit_code, 0);
   const fs::path shard = parent.parent_path() / "shards/shard-000/doasido.db";
   ASSERT_TRUE(fs::exists(shard));
   ASSERT_EQ(RunDoasido({"run", "--db", shard.string()}).exit_code, 0);
   const auto merged = RunDoasido({"merge", "--db", parent.string(), shard.string()});
   ASSERT_EQ(merged.exit_code, 0) << merged.err;
-  EXPECT_NE(merged.out.find("its 2 clips are this database's again"), std::string::npos) << merged.out;
+  EXPECT_NE(merged.out.find("its 2 clips are this database's again"), std::string::npos)
+      << merged.out;
   EXPECT_EQ(Count(parent, "SELECT COUNT(*) FROM shard_clips"), 0);
 
   // The merged shard takes no more runs, and says whose the clips are.
-  const auto again = RunDoasido({"queue", "reset", "--db", shard.string(), "--stage", "probe",
-                                "--all"});
+  const auto again =
+      RunDoasido({"queue", "reset", "--db", shard.string(), "--stage", "probe", "--all"});
   ASSERT_EQ(again.exit_code, 0) << again.err;
   const auto refused = RunDoasido({"run", "--db", shard.string()});
   EXPECT_NE(refused.exit_code, 0);
@@ -296,16 +316,21 @@ TEST(MergedShard, HandsItsClipsBackAndRefusesNewRuns) {
   EXPECT_NE(refused.err.find(parent.string()), std::string::npos) << refused.err;
 
   // The parent re-queues and runs a clip of the shard as any of its own.
-  ASSERT_EQ(RunDoasido({"queue", "reset", "--db", parent.string(), "--stage", "probe", "--clip", "1"})
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      RunDoasido({"queue", "reset", "--db", parent.string(), "--stage", "probe", "--clip", "1"})
+          .exit_code,
+      0);
   const auto run = RunDoasido({"run", "--db", parent.string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_EQ(Count(parent, "SELECT COUNT(*) FROM stage_runs WHERE state IN ('pending', 'running')"), 0);
-  EXPECT_EQ(Count(parent, "SELECT COUNT(*) FROM events WHERE kind = 'done' AND stage = 'probe'"
-                          " AND clip_id = 1"), 2);
+  EXPECT_EQ(Count(parent, "SELECT COUNT(*) FROM stage_runs WHERE state IN ('pending', 'running')"),
+            0);
+  EXPECT_EQ(Count(parent,
+                  "SELECT COUNT(*) FROM events WHERE kind = 'done' AND stage = 'probe'"
+                  " AND clip_id = 1"),
+            2);
   // A second merge of the old shard changes nothing the parent re-did.
-  const auto before = QueryRows(parent, "SELECT clip_id, stage, state, finished_at FROM stage_runs");
+  const auto before =
+      QueryRows(parent, "SELECT clip_id, stage, state, finished_at FROM stage_runs");
   ASSERT_EQ(RunDoasido({"merge", "--db", parent.string(), shard.string()}).exit_code, 0);
   EXPECT_EQ(QueryRows(parent, "SELECT clip_id, stage, state, finished_at FROM stage_runs"), before);
 }
@@ -315,8 +340,8 @@ TEST(WorkerOptions, OutOfRangeValuesAreRefusedBeforeAnyWork) {
   const fs::path db = dir / "d.db";
   ASSERT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", "download,probe"}).exit_code, 0);
   const std::vector<std::pair<std::string, std::string>> bad = {
-      {"--jobs", "-5"}, {"--jobs", "0"},  {"--jobs", "100000"}, {"--lease", "0"},
-      {"--lease", "-1"}, {"--lease", "nan"}, {"--lease", "inf"}, {"--lease", "0.5"},
+      {"--jobs", "-5"},        {"--jobs", "0"},    {"--jobs", "100000"}, {"--lease", "0"},
+      {"--lease", "-1"},       {"--lease", "nan"}, {"--lease", "inf"},   {"--lease", "0.5"},
       {"--max-attempts", "0"}, {"--poll", "nan"}};
   for (const auto& [option, value] : bad) {
     for (const char* command : {"run", "worker"}) {

@@ -4,10 +4,10 @@
 // an existing file of another kind, naming it; the database stays byte for
 // byte the same and still opens, the version still verifies. An earlier
 // output of the same command is replaced only with --force.
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "dataset/version.h"
 #include "tests/db_dump.h"
@@ -91,7 +91,8 @@ std::vector<std::vector<std::string>> Writers(const std::string& db, const std::
                                               const std::string& out) {
   return {
       {"dataset", "export", "--root", root, "v1", "--format", "robomimic", "--out", out},
-      {"dataset", "export", "--root", root, "v1", "--format", "lerobot", "--no-videos", "--out", out},
+      {"dataset", "export", "--root", root, "v1", "--format", "lerobot", "--no-videos", "--out",
+       out},
       {"dataset", "create", "--db", db, "--root", out, "--select", "all", "--no-thumbnails"},
       {"deploy", "plan", "--trajectory", trajectory, "--no-replay", "--yaw-steps", "1",
        "--offset-steps", "1", "--out", out},
@@ -110,9 +111,9 @@ std::vector<std::vector<std::string>> Writers(const std::string& db, const std::
 TEST_F(OutputGuard, EveryWriterRefusesTheDatabase) {
   for (const auto& args : Writers(Db(), Root(), Trajectory(), Db())) ExpectRefused(args, Db());
   // Its journal files too.
-  ExpectRefused({"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--out",
-                 Db() + "-wal"},
-                Db() + "-wal");
+  ExpectRefused(
+      {"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--out", Db() + "-wal"},
+      Db() + "-wal");
 }
 
 TEST_F(OutputGuard, EveryWriterRefusesAPlaceInsideAVersion) {
@@ -121,13 +122,13 @@ TEST_F(OutputGuard, EveryWriterRefusesAPlaceInsideAVersion) {
   for (const auto& args : Writers(Db(), Root(), Trajectory(), episodes)) {
     ExpectRefused(args, "inside the dataset version");
   }
-  ExpectRefused({"dataset", "export", "--root", Root(), "v1", "--format", "robomimic", "--out",
-                 manifest},
-                manifest);
+  ExpectRefused(
+      {"dataset", "export", "--root", Root(), "v1", "--format", "robomimic", "--out", manifest},
+      manifest);
   // A dataset root inside a version would nest a dataset in it.
-  ExpectRefused({"dataset", "create", "--db", Db(), "--root", Version().string(), "--select",
-                 "all"},
-                "inside the dataset version");
+  ExpectRefused(
+      {"dataset", "create", "--db", Db(), "--root", Version().string(), "--select", "all"},
+      "inside the dataset version");
 }
 
 TEST_F(OutputGuard, EveryWriterRefusesTheArtifactRoot) {
@@ -135,9 +136,9 @@ TEST_F(OutputGuard, EveryWriterRefusesTheArtifactRoot) {
   for (const auto& args : Writers(Db(), Root(), Trajectory(), inside)) {
     ExpectRefused(args, "inside the artifact root");
   }
-  ExpectRefused({"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--out",
-                 Trajectory()},
-                Trajectory());
+  ExpectRefused(
+      {"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--out", Trajectory()},
+      Trajectory());
 }
 
 TEST_F(OutputGuard, EveryWriterRefusesADevice) {
@@ -149,8 +150,8 @@ TEST_F(OutputGuard, EveryWriterRefusesADevice) {
 TEST_F(OutputGuard, AnExistingFileOfAnotherKindIsRefusedEvenWithForce) {
   const fs::path notes = *dir_ / "notes.txt";
   WriteFile(notes, "my notes\n");
-  ExpectRefused({"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--force",
-                 "--out", notes.string()},
+  ExpectRefused({"deploy", "plan", "--trajectory", Trajectory(), "--no-replay", "--force", "--out",
+                 notes.string()},
                 "not an earlier output");
   ExpectRefused({"dataset", "export", "--root", Root(), "v1", "--format", "robomimic", "--out",
                  notes.string()},
@@ -170,9 +171,9 @@ TEST_F(OutputGuard, AnExistingFileOfAnotherKindIsRefusedEvenWithForce) {
 TEST_F(OutputGuard, AnEarlierOutputIsReplacedOnlyWithForce) {
   const fs::path plan = *dir_ / "plans/plan.json";
   fs::create_directories(plan.parent_path());
-  const std::vector<std::string> args = {"deploy", "plan", "--trajectory", Trajectory(),
-                                         "--no-replay", "--yaw-steps", "1", "--offset-steps", "1",
-                                         "--out", plan.string()};
+  const std::vector<std::string> args = {
+      "deploy",         "plan", "--trajectory", Trajectory(), "--no-replay", "--yaw-steps", "1",
+      "--offset-steps", "1",    "--out",        plan.string()};
   const auto first = RunDoasido(args);
   ASSERT_TRUE(fs::exists(plan)) << first.err;
   const std::string written = ReadFile(plan);
@@ -186,13 +187,13 @@ TEST_F(OutputGuard, AnEarlierOutputIsReplacedOnlyWithForce) {
   EXPECT_EQ(std::distance(fs::directory_iterator(plan.parent_path()), fs::directory_iterator()), 1);
 
   const fs::path report = *dir_ / "report";
-  ASSERT_EQ(RunDoasido({"report", "--db", Db(), "--no-thumbnails", "--out", report.string()})
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      RunDoasido({"report", "--db", Db(), "--no-thumbnails", "--out", report.string()}).exit_code,
+      0);
   ExpectRefused({"report", "--db", Db(), "--no-thumbnails", "--out", report.string()},
                 "--force replaces it", "output_exists");
-  const auto again = RunDoasido({"report", "--db", Db(), "--no-thumbnails", "--force", "--out",
-                                 report.string()});
+  const auto again =
+      RunDoasido({"report", "--db", Db(), "--no-thumbnails", "--force", "--out", report.string()});
   EXPECT_EQ(again.exit_code, 0) << again.err;
   EXPECT_TRUE(fs::exists(report / "report.html"));
   EXPECT_NE(again.out.find((report / "report.html").string()), std::string::npos) << again.out;

@@ -2,10 +2,13 @@
 // overlay read back by OpenCV, and bad inputs named while the others run.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "core/config.h"
+#include "db/database.h"
 #include "dataset/mp4_writer.h"
 #include "filters/hand_landmarker.h"
 #include "test_util.h"
@@ -106,6 +109,43 @@ TEST_F(CliHandsTest, BadOptionsAreRefusedBeforeAnyWork) {
                   "--fov", "60"});
   EXPECT_NE(r.exit_code, 0);
   EXPECT_FALSE(fs::exists(tmp_ / "o/still.json"));
+}
+
+TEST_F(CliHandsTest, TheStageRunsInTheQueueAndNamesABadClip) {
+  // A list with a good clip (its camera given as a field of view) and one
+  // whose fov column is not a number.
+  const std::string video = (tmp_ / "pencil.mp4").string();
+  testing::WriteFile(tmp_ / "list.csv", "video,id,start_frame,end_frame,fov\n" + video + ",pencil,0,5,60\n" +
+                                            video + ",badfov,0,4,wide\n");
+  testing::WriteFile(tmp_ / "hands.toml", "[hands.tracker]\nmax_gap_frames = 3\n");
+  const std::string db = (tmp_ / "q/d.db").string();
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "probe,hands"}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", db, "--config", (tmp_ / "hands.toml").string(), "--max-attempts",
+                               "1", (tmp_ / "list.csv").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Database check(db);
+  std::map<std::string, StageRunRow> runs;
+  for (const StageRunRow& r : check.ListRuns({})) {
+    if (r.stage == "hands") runs[r.external_id] = r;
+  }
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(ToString(runs.at("pencil").state), std::string("done")) << runs.at("pencil").error;
+  EXPECT_EQ(runs.at("pencil").verdict, "pass");
+  const fs::path dir = check.ArtifactDir(runs.at("pencil").clip_id, "hands");
+  const Json meta = Json::parse(testing::ReadFile(dir / "meta.json"));
+  EXPECT_EQ(meta.at("frames"), 6);
+  EXPECT_EQ(meta.at("intrinsics_assumed"), false);
+  EXPECT_TRUE(fs::exists(dir / "hands.npz"));
+  EXPECT_EQ(ToString(runs.at("badfov").state), std::string("failed"));
+  EXPECT_NE(runs.at("badfov").error.find("bad_intrinsics"), std::string::npos) << runs.at("badfov").error;
+  EXPECT_NE(runs.at("badfov").error.find("clip badfov"), std::string::npos) << runs.at("badfov").error;
+  EXPECT_NE(runs.at("badfov").error.find("field fov"), std::string::npos) << runs.at("badfov").error;
+
+  // A [hands] value out of range is refused before any clip runs.
+  testing::WriteFile(tmp_ / "bad.toml", "[hands]\ndefault_fov_deg = 500\n");
+  const auto refused = RunDoasido({"run", "--db", db, "--config", (tmp_ / "bad.toml").string()});
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("hands.default_fov_deg"), std::string::npos) << refused.err;
 }
 
 }  // namespace

@@ -77,9 +77,10 @@ void AddRetargetCommand(CLI::App& app) {
     const retarget::HandTrajectory t =
         solver.Solve(frames, {}, opt->fps, [&progress](std::size_t done) { progress.Set(done); });
     progress.Finish();
-    std::filesystem::create_directories(opt->out);
-    retarget::WriteTrajectoryJson(t, std::filesystem::path(opt->out) / "trajectory.json");
-    retarget::WriteTrajectoryCsv(t, std::filesystem::path(opt->out) / "trajectory.csv");
+    WriteFolderAtomically(opt->out, [&](const std::filesystem::path& temp) {
+      retarget::WriteTrajectoryJson(t, temp / "trajectory.json");
+      retarget::WriteTrajectoryCsv(t, temp / "trajectory.csv");
+    });
     const retarget::FingertipErrorStats e = retarget::SummarizeFingertipError(t.fingertip_error);
     std::printf("%s: %d frames, scale %.3f, fingertip error mean %.1f mm, p95 %.1f mm -> %s\n",
                 t.embodiment.c_str(), e.frames, t.scale, 1000 * e.mean, 1000 * e.p95,

@@ -70,8 +70,12 @@ void AddSynthCommand(CLI::App& app) {
     cfg->write_bundles = !flags->first;
     cfg->write_annotations = !flags->second;
     Progress progress("synth", static_cast<std::uint64_t>(std::max(cfg->clips, 0)));
-    const synth::DatasetSummary summary = synth::GenerateDataset(
-        *cfg, *out, [&](int done) { progress.Set(static_cast<std::uint64_t>(done)); });
+    // Written whole: a killed synth leaves the earlier clips or none.
+    synth::DatasetSummary summary;
+    WriteFolderAtomically(*out, [&](const std::filesystem::path& temp) {
+      summary = synth::GenerateDataset(
+          *cfg, temp, [&](int done) { progress.Set(static_cast<std::uint64_t>(done)); });
+    });
     progress.Finish();
     std::string mix;
     for (const auto& [kind, n] : summary.defect_counts) {

@@ -1,8 +1,11 @@
 #include "core/output_path.h"
 
+#include <fcntl.h>  // AT_FDCWD
 #include <unistd.h>
 
-#include <cstdio>
+#include <cerrno>
+#include <cstdio>  // renameat2, RENAME_EXCHANGE
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -175,18 +178,19 @@ void WriteFolderAtomically(const fs::path& path,
     fs::remove_all(temp, ec);
     throw;
   }
-  const fs::path old = temp.string() + ".old";
-  const bool had = fs::exists(path, ec);
-  if (had) {
-    fs::rename(path, old, ec);
-    if (ec) {
+  // An earlier output is swapped with the new one in one step (the kernel's
+  // RENAME_EXCHANGE): a reader, or a kill, sees one or the other whole.
+  if (fs::exists(path, ec)) {
+    if (renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, path.c_str(), RENAME_EXCHANGE) != 0) {
+      const std::string why = std::strerror(errno);
       fs::remove_all(temp, ec);
-      throw Error("io", "cannot move the earlier output aside: " + ec.message(),
+      throw Error("io", "cannot put the new output in place of the earlier one: " + why,
                   {.file = path.string()});
     }
+    fs::remove_all(temp, ec);  // now the earlier output
+    return;
   }
   RenameIntoPlace(temp, path);
-  if (had) fs::remove_all(old, ec);
 }
 
 void WriteFileAtomically(const fs::path& path, const std::string& bytes) {

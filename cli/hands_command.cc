@@ -121,7 +121,7 @@ void RequireDistinctStems(const std::vector<std::string>& inputs) {
 
 std::unique_ptr<filters::HandLandmarker> StartLandmarker(const HandsConfig& c) {
   return std::make_unique<filters::HandLandmarker>(
-      filters::HandLandmarkerOptions{.max_hands = c.max_hands, .max_side = c.max_side, .node = c.node});
+      filters::HandLandmarkerOptions{.max_hands = c.max_hands, .max_side = c.max_side, .backend = c.backend});
 }
 
 void RunHands(const HandsOptions& o) {

@@ -2,6 +2,7 @@
 // this database, the folder layout of a clip's stage outputs, publishing a
 // run's folder, and the one lookup every reader of artifacts goes through.
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
@@ -38,14 +39,18 @@ std::string OwnerPath(const fs::path& root) {
 void WriteOwnerFile(const fs::path& root, const std::string& uuid, const fs::path& database) {
   std::error_code ec;
   const fs::path owner = root / Database::kArtifactOwnerFile;
-  const fs::path temp = owner.string() + ".tmp";
+  // One temporary per process: workers of one run claim the folder at once.
+  const fs::path temp = owner.string() + ".tmp-" + std::to_string(::getpid());
   {
     std::ofstream out(temp, std::ios::trunc);
     out << Json{{"uuid", uuid}, {"database", database.string()}}.dump() << "\n";
     if (!out) throw Error("io", "cannot write the artifact folder's owner file", {.file = temp.string()});
   }
   fs::rename(temp, owner, ec);
-  if (ec) throw Error("io", "cannot write: " + ec.message(), {.file = owner.string()});
+  if (ec) {
+    fs::remove(temp, ec);
+    throw Error("io", "cannot write: " + ec.message(), {.file = owner.string()});
+  }
 }
 
 const std::string kWorkTag = ".run-";

@@ -8,6 +8,7 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(section, "default_fov_deg", c.default_fov_deg, 10, 170);
   RequireInRange(section, "max_hands", c.max_hands, 1, 2);
   RequireInRange(section, "max_side", c.max_side, 128, 4096);
+  RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
   const std::string t = section + ".tracker";
   RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);
   RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);

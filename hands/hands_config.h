@@ -51,12 +51,12 @@ struct HandsConfig {
   double default_fov_deg = 65;
   int max_hands = 2;
   int max_side = 640;  // frames are decoded at most this large for the models
-  std::string node = "node";
+  std::string backend = "native";  // runtime of the hand models: "native" or "wasm"
   TrackerConfig tracker;
   FitConfig fit;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(HandsConfig, default_fov_deg, max_hands, max_side,
-                                                node, tracker, fit)
+                                                backend, tracker, fit)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const HandsConfig& c, const std::string& section);

@@ -84,7 +84,8 @@ StageResult HandsStage::Run(const ClipContext& context) {
   }
   if (!landmarker_) {
     landmarker_ = std::make_unique<filters::HandLandmarker>(filters::HandLandmarkerOptions{
-        .max_hands = config_.max_hands, .max_side = config_.max_side, .node = config_.node, .clip = clip});
+        .max_hands = config_.max_hands, .max_side = config_.max_side, .clip = clip,
+        .backend = config_.backend});
   }
   DetectedFrames detected;
   try {

@@ -66,10 +66,18 @@ std::string ClipLabel(const ClipContext& context) {
 // Writes `text` whole into the run's artifact folder when it is too long for
 // the database; returns the path named in the stored tail, or "" when the
 // text fits or the file cannot be written.
+// Where a failed run's logs and whole texts are kept: its artifact folder
+// is discarded (a failed run has no output a later command may take), but
+// a person needs the log that says why. <db folder>/logs/<clip>/<stage>-run<run>-<attempt>/.
+std::filesystem::path FailedRunLogs(Database& db, const Claim& claim) {
+  return db.ArtifactRoot().parent_path() / "logs" / std::to_string(claim.clip_id) /
+         (claim.stage + "-run" + std::to_string(claim.run_id) + "-" + std::to_string(claim.attempts));
+}
+
 std::string KeepWhole(Database& db, const Claim& claim, const std::string& file,
                       const std::string& text) {
   if (text.size() <= kMaxStoredTextBytes) return "";
-  const std::filesystem::path path = db.ArtifactDir(claim.clip_id, claim.stage) / file;
+  const std::filesystem::path path = FailedRunLogs(db, claim) / file;
   try {
     std::filesystem::create_directories(path.parent_path());
     WriteFileAtomically(path, text);
@@ -78,6 +86,28 @@ std::string KeepWhole(Database& db, const Claim& claim, const std::string& file,
     return "";
   }
   return path.string();
+}
+
+// Moves the *.log files of a failed run's folder to FailedRunLogs and
+// points `error`, which may name them, there.
+void KeepFailedRunLogs(Database& db, const Claim& claim, const std::filesystem::path& work,
+                       std::string& error) {
+  std::error_code ec;
+  const std::filesystem::path logs = FailedRunLogs(db, claim);
+  bool moved = false;
+  for (const auto& entry : std::filesystem::directory_iterator(work, ec)) {
+    if (!entry.is_regular_file(ec) || entry.path().extension() != ".log") continue;
+    std::filesystem::create_directories(logs, ec);
+    std::filesystem::rename(entry.path(), logs / entry.path().filename(), ec);
+    moved = moved || !ec;
+  }
+  if (!moved) return;
+  for (const std::string& from : {work.string(), std::filesystem::absolute(work).string()}) {
+    for (std::size_t at = error.find(from); at != std::string::npos; at = error.find(from, at)) {
+      error.replace(at, from.size(), logs.string());
+      at += logs.string().size();
+    }
+  }
 }
 
 }  // namespace
@@ -127,6 +157,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
       permanent = true;
     }
   }
+  if (!report.error.empty()) KeepFailedRunLogs(db, claim, work, report.error);
   if (report.error.size() > kMaxStoredTextBytes) {
     report.error = BoundedTail(report.error, kMaxStoredTextBytes,
                                KeepWhole(db, claim, kErrorLogFile, report.error));

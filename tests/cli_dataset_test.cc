@@ -255,7 +255,7 @@ print(json.dumps(out))
   const auto foreign = RunDoasido({"dataset", "export", "--root", root, "--name", "pour", "v2",
                                    "--format", "lerobot", "--out", (work / "notes").string()});
   EXPECT_EQ(foreign.exit_code, 1);
-  EXPECT_THAT(foreign.err, HasSubstr("output_exists"));
+  EXPECT_THAT(foreign.err, HasSubstr("unsafe_output"));  // the output guard refuses it first
   EXPECT_EQ(testing::ReadFile(work / "notes/todo.txt"), "mine");
 
   // One byte of an episode changed: verify fails naming the file.

@@ -81,6 +81,7 @@ std::map<std::string, std::string> ServerLogs(const std::filesystem::path& db) {
   const auto dir = db.parent_path() / "logs";
   if (!std::filesystem::is_directory(dir)) return logs;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;  // logs/<clip>/: failed runs' own logs
     logs[e.path().filename().string()] = doasido::testing::ReadFile(e.path());
   }
   return logs;

@@ -63,11 +63,10 @@ void ExpectEqualsPlan(const std::vector<deploy::CommandRecord>& got, const deplo
   }
 }
 
-TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
-  TempDir dir;
-  const deploy::Plan plan = TenSecondPlan(true);
-  deploy::WritePlanJson(plan, dir / "plan.json");
-  const std::string url = LoopbackLcmUrl(), channel = "DOASIDO_TEST_" + std::to_string(getpid());
+// `deploy stream` of <dir>/plan.json on `channel` while lcm-logger records
+// it into <dir>/run.lcmlog (its output in <dir>/logger.txt).
+testing::CommandResult StreamUnderLcmLogger(const TempDir& dir, const std::string& url,
+                                             const std::string& channel) {
   const pid_t logger = Spawn({"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel,
                               (dir / "run.lcmlog").string()}, dir / "logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
@@ -76,6 +75,15 @@ TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   kill(logger, SIGINT);
   WaitFor(logger);
+  return r;
+}
+
+TEST(DeployStream, LcmLoggerRecordsFiftyHertz) {
+  TempDir dir;
+  const deploy::Plan plan = TenSecondPlan(true);
+  deploy::WritePlanJson(plan, dir / "plan.json");
+  const std::string url = LoopbackLcmUrl(), channel = "DOASIDO_TEST_" + std::to_string(getpid());
+  const auto r = StreamUnderLcmLogger(dir, url, channel);
   ASSERT_EQ(r.exit_code, 0) << r.err << testing::ReadFile(dir / "logger.txt");
   EXPECT_NE(r.out.find("sent 500 of 500"), std::string::npos) << r.out;
 
@@ -109,14 +117,7 @@ TEST(DeployStream, RetimedPlanRecordedByLcmLoggerAtFiftyHertz) {
   ASSERT_GE(plan.slowdown, 2.0);
   deploy::WritePlanJson(plan, dir / "plan.json");
   const std::string url = LoopbackLcmUrl(), channel = "DOASIDO_RETIMED_" + std::to_string(getpid());
-  const pid_t logger = Spawn({"lcm-logger", "-f", "--lcm-url=" + url, "--channel=" + channel,
-                              (dir / "run.lcmlog").string()}, dir / "logger.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(800));
-  const auto r = RunDoasido({"deploy", "stream", "--plan", (dir / "plan.json").string(), "--url", url,
-                             "--channel", channel});
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  kill(logger, SIGINT);
-  WaitFor(logger);
+  const auto r = StreamUnderLcmLogger(dir, url, channel);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto got = deploy::ReadCommandLog(dir / "run.lcmlog", channel);
   ASSERT_EQ(got.size(), plan.arm.size()) << testing::ReadFile(dir / "logger.txt");

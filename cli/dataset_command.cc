@@ -12,7 +12,6 @@
 #include "dataset/version_diff.h"
 #include "dataset/version_files.h"
 #include "dataset/version_store.h"
-#include "dataset/whole_output.h"
 #include "db/database.h"
 
 namespace doasido::cli {
@@ -244,7 +243,7 @@ void Export(const Options& o) {
   if (!lerobot && o.format != "robomimic") {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
   }
-  WriteWhole(o.out, lerobot, "meta/doasido_manifest.json", [&](const fs::path& temp) {
+  WriteWhole(o.out, lerobot ? OutputKind::kFolder : OutputKind::kFile, [&](const fs::path& temp) {
     s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos, .fps = o.fps}) : ExportRobomimic(dir, temp);
   }, &removed);
   for (const fs::path& p : removed) {

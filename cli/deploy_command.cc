@@ -52,21 +52,6 @@ void CheckPlanOut(const std::string& out, const char* format, bool force,
                    .databases = databases});
 }
 
-// Writes the plan through a temporary sibling, so an earlier plan is
-// replaced whole or not at all.
-void WritePlanAtomically(const std::string& out,
-                         const std::function<void(const std::filesystem::path&)>& write) {
-  const std::filesystem::path temp = TempSibling(out);
-  try {
-    write(temp);
-  } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(temp, ec);
-    throw;
-  }
-  RenameIntoPlace(temp, out);
-}
-
 void PrintIssues(const deploy::Plan& plan) {
   for (const auto& u : plan.unreachable) {
     std::printf("unreachable  frame %5d  t=%7.3f s  position error %.1f mm  rotation error %.3f rad\n",
@@ -137,7 +122,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
     deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir,
                        config.servo_omega);
   }
-  WritePlanAtomically(a.out, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });
+  WriteWhole(a.out, OutputKind::kFile, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });
   const auto& p = plan.placement;
   std::printf("%s: placement yaw %.1f deg at (%.3f, %.3f) m, %d candidates, least manipulability %.3f\n",
               hand.name.c_str(), p.yaw * 180 / 3.14159265358979, p.x, p.y, p.candidates, p.manipulability);
@@ -254,7 +239,7 @@ void AddPlanTwo(CLI::App& deploy) {
     deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, lh, rh, a->config);
     plan.left.source = a->trajectory.empty() ? a->left : a->trajectory;
     plan.right.source = a->trajectory.empty() ? a->right : a->trajectory;
-    WritePlanAtomically(a->out, [&](const std::filesystem::path& p) {
+    WriteWhole(a->out, OutputKind::kFile, [&](const std::filesystem::path& p) {
       deploy::WriteBimanualPlanJson(plan, a->config, p);
     });
     const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());

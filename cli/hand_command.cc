@@ -99,14 +99,21 @@ void AddImport(CLI::App& hand) {
     if (opt->urdf.empty() == opt->mjcf.empty()) {
       throw Error("bad_option", "give --urdf F or --mjcf F", {.field = "--urdf"});
     }
+    const fs::path input = opt->urdf.empty() ? opt->mjcf : opt->urdf;
     CheckOutputPath({.path = opt->out,
                      .kind = OutputRequest::Kind::kFolder,
                      .what = "the imported hand",
                      .is_own_output = HoldsHandModel,
-                     .force = opt->force});
-    const retarget::ImportedHand h = opt->urdf.empty()
-                                         ? retarget::DescribeMjcf(opt->mjcf, opt->out, opt->import)
-                                         : retarget::ImportUrdf(opt->urdf, opt->out, opt->import);
+                     .force = opt->force,
+                     .inputs = {input}});
+    // Written whole: a killed import leaves the earlier hand or none.
+    retarget::ImportedHand h;
+    WriteWhole(opt->out, OutputKind::kFolder, [&](const fs::path& temp) {
+      h = opt->urdf.empty() ? retarget::DescribeMjcf(opt->mjcf, temp, opt->import)
+                            : retarget::ImportUrdf(opt->urdf, temp, opt->import);
+    });
+    h.description = fs::path(opt->out) / h.description.filename();
+    if (!opt->urdf.empty()) h.mjcf = fs::path(opt->out) / h.mjcf.filename();
     for (const std::string& line : h.meshes) std::printf("mesh: %s\n", line.c_str());
     for (const std::string& line : h.warnings) std::printf("warning: %s\n", line.c_str());
     std::printf("model: %s\ndescription: %s (%zu points, %zu fingers)\n", h.mjcf.c_str(),
@@ -118,11 +125,38 @@ void AddImport(CLI::App& hand) {
   });
 }
 
+struct CheckOptions {
+  std::string hand, robots_dir, out;
+  bool no_pictures = false;
+  bool force = false;
+};
+
+// Where `hand check` draws one picture of `hand`: checked like every
+// output (an earlier picture is replaced only with --force).
+fs::path PicturePath(const CheckOptions& o, const retarget::Embodiment& hand, const std::string& suffix) {
+  const fs::path dir = o.out.empty() ? fs::current_path() : fs::path(o.out);
+  const std::string option = o.out.empty() ? "the current folder" : "--out";
+  // The folder may hold anything else; it must not be a protected place.
+  CheckOutputPath({.path = dir,
+                   .kind = OutputRequest::Kind::kFolder,
+                   .option = option,
+                   .what = "the hand's pictures",
+                   .is_own_output = [](const fs::path&) { return true; },
+                   .force = true});
+  const fs::path file = dir / (hand.name + suffix);
+  CheckOutputPath({.path = file,
+                   .kind = OutputRequest::Kind::kFile,
+                   .option = option,
+                   .what = "the hand's picture",
+                   .is_own_output = [](const fs::path& p) { return FileStartsWith(p, "\x89PNG"); },
+                   .force = o.force,
+                   .inputs = {hand.model_path}});
+  fs::create_directories(dir);
+  return file;
+}
+
 void AddCheck(CLI::App& hand) {
-  struct Options {
-    std::string hand, robots_dir, out;
-    bool no_pictures = false;
-  };
+  using Options = CheckOptions;
   auto opt = std::make_shared<Options>();
   auto* cmd = hand.add_subcommand(
       "check",
@@ -135,6 +169,7 @@ void AddCheck(CLI::App& hand) {
   cmd->add_option("--robots-dir", opt->robots_dir, "Folder of robot models descriptions refer to");
   cmd->add_option("--out", opt->out, "Folder for <name>_rest.png and <name>_flexed.png (default: the current one)");
   cmd->add_flag("--no-pictures", opt->no_pictures, "Skip the pictures");
+  AddForceFlag(*cmd, opt->force);
   cmd->footer("Examples:\n"
               "  doasido hand check robots/my_hand_mj/my_hand.json --out work/pictures\n"
               "  doasido hand check allegro");
@@ -147,11 +182,9 @@ void AddCheck(CLI::App& hand) {
     PrintJoints(c);
     PrintPoints(c);
     if (!opt->no_pictures) {
-      const fs::path dir = opt->out.empty() ? fs::current_path() : fs::path(opt->out);
-      fs::create_directories(dir);
       const mjModel* m = c.model.get();
-      const fs::path rest = dir / (c.embodiment.name + "_rest.png");
-      const fs::path flexed = dir / (c.embodiment.name + "_flexed.png");
+      const fs::path rest = PicturePath(*opt, c.embodiment, "_rest.png");
+      const fs::path flexed = PicturePath(*opt, c.embodiment, "_flexed.png");
       RenderHandPng(c, Eigen::Map<const Eigen::VectorXd>(m->qpos0, m->nq), rest);
       RenderHandPng(c, retarget::FlexedPose(m, c.structure, 0.8), flexed);
       std::printf("pictures: %s %s\n", rest.c_str(), flexed.c_str());
@@ -202,8 +235,16 @@ void AddMirror(CLI::App& hand) {
                      .kind = OutputRequest::Kind::kFolder,
                      .what = "the mirrored hand",
                      .is_own_output = HoldsHandModel,
-                     .force = opt->force});
-    const retarget::MirroredHand m = retarget::MirrorHand(source, opt->out, {.axis = opt->axis, .name = opt->name});
+                     .force = opt->force,
+                     .inputs = {source.model_path}});
+    // Written whole: a killed mirror leaves the earlier hand or none.
+    retarget::MirroredHand m;
+    WriteWhole(opt->out, OutputKind::kFolder, [&](const fs::path& temp) {
+      m = retarget::MirrorHand(source, temp, {.axis = opt->axis, .name = opt->name});
+    });
+    m.model = fs::path(opt->out) / m.model.filename();
+    m.description = fs::path(opt->out) / m.description.filename();
+    m.embodiment.model_path = fs::absolute(m.model);
     std::printf("%s (%s) mirrored through %c = 0: %s (%s)\nmodel: %s\ndescription: %s (%zu points)\n",
                 source.name.c_str(), source.side.c_str(), opt->axis, m.embodiment.name.c_str(),
                 m.embodiment.side.c_str(), m.model.c_str(), m.description.c_str(), m.embodiment.points.size());

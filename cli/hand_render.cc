@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/whole_output.h"
 #include "retarget/hand_mesh.h"
 #include "synth/rasterizer.h"
 
@@ -171,9 +172,9 @@ void RenderHandPng(const HandCheck& check, const Eigen::VectorXd& qpos, const st
     }
   }
   DrawPoints(check, d.get(), view, image);
-  if (!cv::imwrite(path.string(), image)) {
-    throw Error("io", "cannot write the picture", {.file = path.string()});
-  }
+  std::vector<std::uint8_t> png;
+  if (!cv::imencode(".png", image, png)) throw Error("io", "cannot encode the picture", {.file = path.string()});
+  WriteFileWhole(path, std::string(png.begin(), png.end()));
 }
 
 }  // namespace doasido::cli

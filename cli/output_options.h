@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/output_path.h"
+#include "core/whole_output.h"
 
 namespace doasido::cli {
 

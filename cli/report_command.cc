@@ -50,7 +50,7 @@ void AddReportCommand(CLI::App& app) {
     }
     if (opt->no_thumbnails) options.thumbnails = false;
     reports::ReportOutput out;
-    WriteFolderAtomically(opt->out, [&](const std::filesystem::path& temp) {
+    WriteWhole(opt->out, OutputKind::kFolder, [&](const std::filesystem::path& temp) {
       out = reports::WriteReport(db, temp, options);
     });
     // Named where they are now, not where they were written.

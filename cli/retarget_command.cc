@@ -77,7 +77,7 @@ void AddRetargetCommand(CLI::App& app) {
     const retarget::HandTrajectory t =
         solver.Solve(frames, {}, opt->fps, [&progress](std::size_t done) { progress.Set(done); });
     progress.Finish();
-    WriteFolderAtomically(opt->out, [&](const std::filesystem::path& temp) {
+    WriteWhole(opt->out, OutputKind::kFolder, [&](const std::filesystem::path& temp) {
       retarget::WriteTrajectoryJson(t, temp / "trajectory.json");
       retarget::WriteTrajectoryCsv(t, temp / "trajectory.csv");
     });

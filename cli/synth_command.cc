@@ -72,7 +72,7 @@ void AddSynthCommand(CLI::App& app) {
     Progress progress("synth", static_cast<std::uint64_t>(std::max(cfg->clips, 0)));
     // Written whole: a killed synth leaves the earlier clips or none.
     synth::DatasetSummary summary;
-    WriteFolderAtomically(*out, [&](const std::filesystem::path& temp) {
+    WriteWhole(*out, OutputKind::kFolder, [&](const std::filesystem::path& temp) {
       summary = synth::GenerateDataset(
           *cfg, temp, [&](int done) { progress.Set(static_cast<std::uint64_t>(done)); });
     });

@@ -1,10 +1,5 @@
 #include "core/output_path.h"
 
-#include <fcntl.h>  // AT_FDCWD
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstdio>  // renameat2, RENAME_EXCHANGE
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -70,7 +65,8 @@ std::string InsideProtected(const fs::path& resolved, const OutputRequest& r) {
     if (IsVersionFolder(dir)) {
       return "it lies inside the dataset version " + dir.string() + " (versions never change)";
     }
-    if (dir.filename() == kArtifactsName && HasSqliteBeside(dir.parent_path())) {
+    if (fs::exists(dir / kArtifactRootMarker, ec) ||
+        (dir.filename() == kArtifactsName && HasSqliteBeside(dir.parent_path()))) {
       return "it lies inside the artifact root " + dir.string();
     }
     if (dir == dir.parent_path()) break;
@@ -127,6 +123,12 @@ void CheckOutputPath(const OutputRequest& r) {
     }
   }
   if (const std::string why = InsideProtected(resolved, r); !why.empty()) Refuse(r, resolved, why);
+  for (const auto& input : r.inputs) {
+    if (const fs::path in = Canonical(input); IsInside(in, resolved)) {
+      Refuse(r, resolved, in == resolved ? "it is the command's input"
+                                         : "it holds the command's input " + in.string());
+    }
+  }
   if (!exists) return;
   const bool folder = fs::is_directory(status);
   if (r.kind == OutputRequest::Kind::kFile && folder) {
@@ -145,67 +147,6 @@ void CheckOutputPath(const OutputRequest& r) {
     Refuse(r, resolved, "it holds an earlier output of this command; --force replaces it",
            kOutputExists);
   }
-}
-
-fs::path TempSibling(const fs::path& path) {
-  const fs::path absolute = fs::absolute(path).lexically_normal();
-  const fs::path name =
-      absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename();
-  const fs::path parent =
-      absolute.has_filename() ? absolute.parent_path() : absolute.parent_path().parent_path();
-  return parent / ("." + name.string() + ".tmp-" + std::to_string(getpid()));
-}
-
-void RenameIntoPlace(const fs::path& temp, const fs::path& path) {
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) {
-    fs::remove_all(temp, ec);
-    throw Error("io", "cannot rename into place: " + ec.message(), {.file = path.string()});
-  }
-}
-
-void WriteFolderAtomically(const fs::path& path,
-                           const std::function<void(const fs::path&)>& write) {
-  const fs::path temp = TempSibling(path);
-  std::error_code ec;
-  fs::remove_all(temp, ec);
-  fs::create_directories(temp, ec);
-  if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
-  try {
-    write(temp);
-  } catch (...) {
-    fs::remove_all(temp, ec);
-    throw;
-  }
-  // An earlier output is swapped with the new one in one step (the kernel's
-  // RENAME_EXCHANGE): a reader, or a kill, sees one or the other whole.
-  if (fs::exists(path, ec)) {
-    if (renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, path.c_str(), RENAME_EXCHANGE) != 0) {
-      const std::string why = std::strerror(errno);
-      fs::remove_all(temp, ec);
-      throw Error("io", "cannot put the new output in place of the earlier one: " + why,
-                  {.file = path.string()});
-    }
-    fs::remove_all(temp, ec);  // now the earlier output
-    return;
-  }
-  RenameIntoPlace(temp, path);
-}
-
-void WriteFileAtomically(const fs::path& path, const std::string& bytes) {
-  const fs::path temp = TempSibling(path);
-  {
-    std::ofstream f(temp, std::ios::binary | std::ios::trunc);
-    f << bytes;
-    f.close();
-    if (!f) {
-      std::error_code ec;
-      fs::remove(temp, ec);
-      throw Error("io", "cannot write", {.file = temp.string()});
-    }
-  }
-  RenameIntoPlace(temp, path);
 }
 
 }  // namespace doasido

@@ -11,8 +11,10 @@
 //     database the caller names, or its -wal/-shm/-journal companion);
 //   - is or lies inside a dataset version (a folder holding manifest.json);
 //   - is or lies inside an artifact root (<database folder>/artifacts of a
-//     database the caller names, or any `artifacts` folder beside a
-//     SQLite database);
+//     database the caller names, a folder holding kArtifactRootMarker, or
+//     any `artifacts` folder beside a SQLite database);
+//   - is, or is a folder holding, one of the command's input files (a
+//     folder output replaced whole would delete them);
 //   - exists and is of another kind than the command writes (a folder for
 //     a file output, a file for a folder output, or a file/folder the
 //     command does not recognise as its own output);
@@ -30,6 +32,9 @@ namespace doasido {
 
 inline constexpr const char* kUnsafeOutput = "unsafe_output";
 inline constexpr const char* kOutputExists = "output_exists";
+// The file that marks a folder as a database's artifact root (the database
+// writes it when it claims the folder; Database::kArtifactOwnerFile).
+inline constexpr const char* kArtifactRootMarker = ".doasido-database";
 
 struct OutputRequest {
   std::filesystem::path path;  // as given (relative to the working directory)
@@ -43,6 +48,8 @@ struct OutputRequest {
   bool force = false;
   // Databases (and so their artifact roots) the command works with.
   std::vector<std::filesystem::path> databases;
+  // Files the command reads (a hand model, a URDF and its meshes' folder).
+  std::vector<std::filesystem::path> inputs;
 };
 
 void CheckOutputPath(const OutputRequest& request);
@@ -51,21 +58,5 @@ void CheckOutputPath(const OutputRequest& request);
 bool IsSqliteFile(const std::filesystem::path& path);
 // True when `path` is a regular file whose first bytes are `magic`.
 bool FileStartsWith(const std::filesystem::path& path, const std::string& magic);
-
-// Calls `write(folder)` with a fresh temporary sibling of `path`, then puts
-// that folder in place of `path`; an earlier output at `path` is removed
-// only once the new one is complete (a failed write leaves it as it was).
-void WriteFolderAtomically(const std::filesystem::path& path,
-                           const std::function<void(const std::filesystem::path&)>& write);
-
-// A temporary sibling of `path`: hidden, named after it and this process.
-std::filesystem::path TempSibling(const std::filesystem::path& path);
-// Renames `temp` onto `path` (replacing a file); throws Error("io").
-void RenameIntoPlace(const std::filesystem::path& temp, const std::filesystem::path& path);
-
-// Writes `bytes` to a temporary sibling of `path` and renames it into place,
-// so a reader never sees part of the file and a failed write leaves the old
-// one. Throws Error("io") naming the file.
-void WriteFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
 }  // namespace doasido

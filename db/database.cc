@@ -90,6 +90,7 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s, Ope
                   " PRAGMA mmap_size=268435456; PRAGMA cache_size=-65536;");
     Migrate();
     OpenArtifactRoot();
+    FinishPlacement();  // a merge killed after its commit
   } catch (const Error& e) {
     // Statements still prepared keep sqlite3_close from closing (found by
     // LeakSanitizer: every refused foreign database leaked its connection).

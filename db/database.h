@@ -22,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/output_path.h"
 #include "db/records.h"
 #include "db/stage.h"
 
@@ -124,7 +125,7 @@ class Database {
   // Error("foreign_artifacts") naming both. Stored artifact paths are
   // relative to it.
   static constexpr const char* kArtifactRootKey = "artifact_root";
-  static constexpr const char* kArtifactOwnerFile = ".doasido-database";
+  static constexpr const char* kArtifactOwnerFile = kArtifactRootMarker;
   const std::filesystem::path& ArtifactRoot() const { return artifact_root_; }
   // Writes the owner file (creating the folder); before the first artifact.
   void ClaimArtifactRoot();
@@ -473,14 +474,24 @@ class Database {
     // that mount the media elsewhere; other paths are made absolute.
     std::vector<std::pair<std::string, std::string>> media_map;
   };
-  // Creates the shard database: this database's pipeline, the clips with
-  // their videos, runs (running ones pending again), measurements, verdicts,
-  // reviews, artifact rows and detections, and the shard's parent, name and
-  // stage hashes in its meta; records the shard and its clips here, which
-  // takes them out of this database's queue. Artifact files are the
-  // caller's to copy. Throws Error("shard_exists") for a taken name or path,
+  // Creates the shard database at `file`: this database's pipeline, the
+  // clips with their videos, runs (running ones pending again),
+  // measurements, verdicts, reviews, artifact rows and detections, and the
+  // shard's parent, name and stage hashes in its meta, committed in the
+  // shard's file only. `file` is where it is written (a temporary folder
+  // that becomes spec.path's), spec.path where it will live. Artifact files
+  // are the caller's to copy. Throws Error("shard_exists") for a taken path,
   // Error("already_sharded") for a clip that is in a shard.
-  void ExportShard(const ShardSpec& spec);
+  void WriteShardDatabase(const ShardSpec& spec, const std::filesystem::path& file);
+  // Records the shard and its clips here, which takes them out of this
+  // database's queue, in one transaction with `before_commit` run inside
+  // it (ShardQueue moves the shard's folder into place there): a kill
+  // leaves no row, the rows with their folder, or a folder this database
+  // does not list (UnlistedShardOf).
+  void RegisterShard(const ShardSpec& spec, const std::function<void()>& before_commit = {});
+  // Whether `shard_db` is a shard of this database that it does not list:
+  // what a `shard` killed after moving a folder into place leaves.
+  bool UnlistedShardOf(const std::filesystem::path& shard_db);
 
   struct ShardRow {
     std::int64_t id = 0;
@@ -526,7 +537,35 @@ class Database {
   // than the shard was made for; nothing is written then.
   // `hold_back`: clips of the shard whose rows stay as they are here.
   // Throws Error("self_merge") at once when `shard` is this database.
-  MergeStats MergeShard(const std::filesystem::path& shard, const std::set<ClipId>& hold_back = {});
+  // `placement`: the journal of stage folders the merge staged (see
+  // MergePlacement), recorded in the same transaction as the rows.
+  MergeStats MergeShard(const std::filesystem::path& shard, const std::set<ClipId>& hold_back = {},
+                        const std::string& placement = "");
+
+  // ---- Placing merged files (db/artifact_placement.cc) ----------------------
+  // A merge copies a shard's stage folders into a staging folder of this
+  // artifact root first (nothing a reader looks at changes), commits its
+  // rows together with this journal (meta kPlacementKey), then moves the
+  // staged folders into place and clears the journal. A merge killed after
+  // its commit is finished by the next open of this database, so the rows
+  // and files a reader sees belong together: the old ones or the new ones.
+  struct MergePlacement {
+    std::string staging;  // folder under the artifact root, ".merge-<pid>-<hex>"
+    long pid = 0;         // the merging process (its journal is left to it)
+    std::vector<std::pair<ClipId, std::string>> place;   // staging/<clip>/<stage> -> <clip>/<stage>
+    std::vector<std::pair<ClipId, std::string>> remove;  // <clip>/<stage> the shard does not have
+  };
+  static constexpr const char* kPlacementKey = "pending_placement";
+  static std::string PlacementJson(const MergePlacement& placement);
+  // Moves a committed merge's staged folders into place and clears the
+  // journal; each step may be repeated, so a kill during it is finished by
+  // the next call. `own`: the caller is the merging process; otherwise a
+  // journal whose process still runs is left to it. Returns the folders
+  // placed and removed.
+  std::int64_t FinishPlacement(bool own = false);
+  // Removes staging folders of merges killed before their commit (their
+  // process is gone and no journal names them); returns them.
+  std::vector<std::filesystem::path> RemoveAbandonedStaging();
   // The artifact rows of `clip` as stored: (stage, path relative to the
   // artifact root).
   std::vector<std::pair<std::string, std::string>> ListArtifacts(ClipId clip);
@@ -564,7 +603,7 @@ class Database {
 
  private:
   db::Statement& Prepare(const std::string& sql);
-  void WriteShard(const ShardSpec& spec);  // ExportShard's writes
+  void WriteShard(const ShardSpec& spec, const std::filesystem::path& file);  // WriteShardDatabase's writes
   // The writes both review and verification make once their check passed:
   // the `reviews` row, the human verdict with `verdict_reason` and a
   // "review" event with `event_detail`.

@@ -119,6 +119,14 @@ std::int64_t Count(sqlite3* db, const std::string& sql) {
   return q.Step() ? q.Int(0) : 0;
 }
 
+// temp.selected holds `clips`, the clips a shard operation is about.
+void SelectClips(sqlite3* db, const std::vector<ClipId>& clips) {
+  db::Exec(db, "CREATE TEMP TABLE IF NOT EXISTS selected (clip_id INTEGER PRIMARY KEY);"
+               "DELETE FROM temp.selected;");
+  db::Statement add(db, "INSERT INTO temp.selected VALUES (?)");
+  for (ClipId c : clips) add.Bind(1, c).Run();
+}
+
 std::string ShardMeta(sqlite3* db, const std::string& key) {
   db::Statement q(db, "SELECT value FROM shard.meta WHERE key = ?");
   q.Bind(1, key);
@@ -162,10 +170,12 @@ std::vector<Database::ShardCandidate> Database::ShardCandidates() {
   return out;
 }
 
-void Database::ExportShard(const ShardSpec& spec) {
-  if (std::filesystem::exists(spec.path)) {
-    throw Error("shard_exists", "the shard database already exists: remove it or pick --out",
-                {.file = spec.path.string()});
+void Database::WriteShardDatabase(const ShardSpec& spec, const std::filesystem::path& file) {
+  for (const auto& p : {spec.path, file}) {
+    if (std::filesystem::exists(p)) {
+      throw Error("shard_exists", "the shard database already exists: remove it or pick --out",
+                  {.file = p.string()});
+    }
   }
   for (ClipId c : spec.clips) {
     auto& q = Prepare("SELECT shard_id FROM shard_clips WHERE clip_id = ?");
@@ -178,33 +188,42 @@ void Database::ExportShard(const ShardSpec& spec) {
     }
   }
   try {
-    WriteShard(spec);
+    WriteShard(spec, file);
   } catch (...) {
     for (const char* suffix : {"", "-wal", "-shm"}) {
       std::error_code ec;
-      std::filesystem::remove(spec.path.string() + suffix, ec);
+      std::filesystem::remove(file.string() + suffix, ec);
     }
     throw;
   }
 }
 
-void Database::WriteShard(const ShardSpec& spec) {
+bool Database::UnlistedShardOf(const std::filesystem::path& shard_db) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(shard_db, ec)) return false;
+  for (const ShardRow& row : ListShards()) {
+    if (std::filesystem::equivalent(row.path, shard_db, ec)) return false;
+  }
+  try {
+    Attached attached(db_, shard_db);
+    return ShardMeta(db_, "parent_uuid") == Uuid();
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+void Database::WriteShard(const ShardSpec& spec, const std::filesystem::path& file) {
   {
-    Database shard(spec.path, busy_timeout_s_);  // creates the schema
+    Database shard(file, busy_timeout_s_);  // creates the schema
     shard.SetPipeline(Pipeline(), FlagContinuing());
     shard.SetMeta("parent_uuid", Uuid());
     shard.SetMeta("parent_path", path_.string());
     shard.SetMeta("shard_name", spec.name);
     shard.SetMeta("stage_hashes", spec.stage_hashes.dump());
   }
-  Attached attached(db_, spec.path);
+  Attached attached(db_, file);
   Transaction tx(*this);
-  db::Exec(db_, "CREATE TEMP TABLE IF NOT EXISTS selected (clip_id INTEGER PRIMARY KEY);"
-                "DELETE FROM temp.selected;");
-  {
-    db::Statement add(db_, "INSERT INTO temp.selected VALUES (?)");
-    for (ClipId c : spec.clips) add.Bind(1, c).Run();
-  }
+  SelectClips(db_, spec.clips);
   db::Exec(db_, "INSERT INTO shard.videos SELECT * FROM videos"
                 " WHERE id IN (SELECT video_id FROM clips WHERE id IN temp.selected)");
   {
@@ -233,6 +252,12 @@ void Database::WriteShard(const ShardSpec& spec) {
                       SourceColumns(t) + " FROM " + t.name +
                       " WHERE clip_id IN temp.selected ORDER BY rowid");
   }
+  tx.Commit();
+}
+
+void Database::RegisterShard(const ShardSpec& spec, const std::function<void()>& before_commit) {
+  Transaction tx(*this);
+  SelectClips(db_, spec.clips);
   Prepare("INSERT INTO shards (name, path, config_hash, clips, frames, created_at)"
           " VALUES (?, ?, ?, ?, ?, ?)")
       .Bind(1, spec.name)
@@ -247,6 +272,7 @@ void Database::WriteShard(const ShardSpec& spec) {
       .Run();
   LogEvent(std::nullopt, "", "shard", "",
            Json{{"shard", spec.name}, {"clips", spec.clips.size()}}.dump());
+  if (before_commit) before_commit();
   tx.Commit();
 }
 
@@ -271,7 +297,8 @@ void Database::SetShardJob(const std::string& name, const std::string& job, std:
 }
 
 Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
-                                          const std::set<ClipId>& hold_back) {
+                                          const std::set<ClipId>& hold_back,
+                                          const std::string& placement) {
   const std::string where = std::filesystem::absolute(file).string();
   if (!std::filesystem::is_regular_file(file)) {
     throw Error("not_a_shard", "no such shard database", {.file = where});
@@ -449,6 +476,12 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
                                 " (SELECT COALESCE(MAX(id), 0) FROM shard.events) WHERE id = ?");
       update.Bind(1, Now()).Bind(2, shard_id).Run();
     }
+  }
+  if (!placement.empty()) {
+    Prepare("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)")
+        .Bind(1, kPlacementKey)
+        .Bind(2, placement)
+        .Run();
   }
   tx.Commit();
   return stats;

@@ -2,18 +2,21 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <random>
 #include <set>
 #include <sstream>
 
-#include <fcntl.h>
 #include <unistd.h>
 
+#include <spdlog/spdlog.h>
+
 #include "core/error.h"
+#include "core/whole_output.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -67,54 +70,104 @@ bool SameTree(const fs::path& a, const fs::path& b) {
   return true;
 }
 
-// Copies one stage folder into place: into a hidden staging sibling first,
-// then swapped in (renameat2 RENAME_EXCHANGE), so the folder is the old one
-// or the complete new one. Copies, never links: the two databases never
-// share a file, so a re-run of either cannot change the other's.
-void PlaceFolder(const fs::path& from, const fs::path& to) {
+// The stage folders of `clip` under an artifact root. Hidden folders (runs
+// still writing, staging) are not results.
+std::set<std::string> StageFolders(const fs::path& root, ClipId clip) {
+  std::set<std::string> out;
   std::error_code ec;
-  if (fs::is_directory(to, ec) && SameTree(from, to)) return;
-  const fs::path staging = to.parent_path() / ("." + to.filename().string() + ".merge-" +
-                                               std::to_string(getpid()));
-  fs::remove_all(staging, ec);
-  fs::create_directories(to.parent_path(), ec);
-  fs::copy(from, staging, fs::copy_options::recursive, ec);
-  if (ec) {
-    fs::remove_all(staging, ec);
-    throw Error("io", "cannot copy artifacts: " + ec.message(), {.file = from.string()});
+  for (fs::directory_iterator it(root / std::to_string(clip), ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string leaf = it->path().filename().string();
+    if (!leaf.empty() && leaf[0] != '.' && it->is_directory()) out.insert(leaf);
   }
-  const bool replace = fs::exists(to, ec);
-  const int rc = replace ? renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, to.c_str(), RENAME_EXCHANGE)
-                         : std::rename(staging.c_str(), to.c_str());
-  if (rc != 0) {
-    const int err = errno;
-    fs::remove_all(staging, ec);
-    throw Error("io", std::string("cannot place artifacts: ") + std::strerror(err), {.file = to.string()});
-  }
-  fs::remove_all(staging, ec);  // the replaced folder, after an exchange
+  return out;
 }
 
-// Copies the stage folders of `clip` from one artifact root to another.
-// Hidden folders (runs still writing, staging) are not results and stay.
-// `mirror`: a stage folder the source lacks is removed at the destination
-// too (the source's rows, which replace the destination's, record none).
-void CopyClipArtifacts(const fs::path& from_root, const fs::path& to_root, ClipId clip,
-                       bool mirror) {
-  const fs::path from = from_root / std::to_string(clip);
-  const fs::path to = to_root / std::to_string(clip);
+// Copies, never links: the two databases never share a file, so a re-run
+// of either cannot change the other's.
+void CopyFolder(const fs::path& from, const fs::path& to) {
   std::error_code ec;
-  std::set<std::string> stages;
-  for (const auto& entry : fs::directory_iterator(from, ec)) {
-    const std::string leaf = entry.path().filename().string();
-    if (leaf.empty() || leaf[0] == '.' || !entry.is_directory()) continue;
-    stages.insert(leaf);
-    PlaceFolder(entry.path(), to / leaf);
+  fs::create_directories(to.parent_path(), ec);
+  fs::copy(from, to, fs::copy_options::recursive, ec);
+  if (ec) throw Error("io", "cannot copy artifacts: " + ec.message(), {.file = from.string()});
+}
+
+// Copies the shard's stage folders that differ from the parent's into a
+// fresh staging folder of the parent's artifact root, and lists the
+// parent's stage folders the shard lacks (its rows, which replace the
+// parent's, record none). Nothing a reader looks at changes yet.
+Database::MergePlacement StageShardFiles(const fs::path& shard_root, const fs::path& root,
+                                         const std::vector<ClipId>& clips) {
+  char name[48];
+  std::snprintf(name, sizeof name, ".merge-%ld-%08x", static_cast<long>(getpid()), std::random_device()());
+  Database::MergePlacement p{.staging = name, .pid = static_cast<long>(getpid())};
+  try {
+    for (ClipId clip : clips) {
+      const std::string c = std::to_string(clip);
+      const std::set<std::string> theirs = StageFolders(shard_root, clip);
+      for (const std::string& stage : theirs) {
+        const fs::path mine = root / c / stage;
+        if (fs::is_directory(mine) && SameTree(shard_root / c / stage, mine)) continue;
+        CopyFolder(shard_root / c / stage, root / name / c / stage);
+        p.place.emplace_back(clip, stage);
+      }
+      for (const std::string& stage : StageFolders(root, clip)) {
+        if (!theirs.count(stage)) p.remove.emplace_back(clip, stage);
+      }
+    }
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(root / name, ec);
+    throw;
   }
-  if (!mirror) return;
-  for (const auto& entry : fs::directory_iterator(to, ec)) {
-    const std::string leaf = entry.path().filename().string();
-    if (leaf.empty() || leaf[0] == '.' || !entry.is_directory() || stages.count(leaf)) continue;
-    fs::remove_all(entry.path(), ec);
+  return p;
+}
+
+// A shard is built whole in a temporary sibling of its folder (database
+// and artifacts), then moved into place inside the transaction that records
+// it here: a kill leaves nothing (or a temporary), the shard recorded with
+// its folder, or (between the move and the commit) a folder that
+// RemoveKilledShards removes.
+void WriteShardFolder(Database& db, const Database::ShardSpec& spec) {
+  const fs::path folder = spec.path.parent_path();
+  const fs::path temp = TempSibling(folder);
+  try {
+    fs::create_directories(temp);
+    db.WriteShardDatabase(spec, temp / kShardDbName);
+    {
+      Database shard(temp / kShardDbName);
+      shard.ClaimArtifactRoot();
+      for (ClipId c : spec.clips) {
+        for (const std::string& stage : StageFolders(db.ArtifactRoot(), c)) {
+          CopyFolder(db.ArtifactRoot() / std::to_string(c) / stage,
+                     shard.ArtifactRoot() / std::to_string(c) / stage);
+        }
+      }
+    }
+    db.RegisterShard(spec, [&] {
+      if (std::rename(temp.c_str(), folder.c_str()) != 0) {
+        throw Error("io", std::string("cannot move the shard into place: ") + std::strerror(errno),
+                    {.file = folder.string()});
+      }
+    });
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(temp, ec);
+    throw;
+  }
+}
+
+// Shard folders under `out_dir` that a killed `shard` moved into place
+// without recording them (and temporaries it left): removed, named.
+void RemoveKilledShards(Database& db, const fs::path& out_dir) {
+  for (const fs::path& p : RemoveAbandonedTemporaries(out_dir)) {
+    spdlog::warn("removed {}: left by a killed `doasido shard`", p.string());
+  }
+  std::error_code ec;
+  for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!db.UnlistedShardOf(it->path() / kShardDbName)) continue;
+    std::error_code rm;
+    fs::remove_all(it->path(), rm);
+    spdlog::warn("removed {}: a shard that a killed `doasido shard` left unrecorded", it->path().string());
   }
 }
 
@@ -157,6 +210,7 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options) {
   for (auto& [id, g] : by_video) groups.push_back(std::move(g));
   const auto plan = Balance(groups, options.shards);
 
+  RemoveKilledShards(db, options.out_dir);
   const int existing = static_cast<int>(db.ListShards().size());
   std::vector<ShardInfo> made;
   for (size_t i = 0; i < plan.size(); ++i) {
@@ -174,11 +228,7 @@ std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options) {
     info.clips = static_cast<std::int64_t>(spec.clips.size());
     info.videos = static_cast<std::int64_t>(plan[i].size());
     info.frames = spec.frames;
-    std::filesystem::create_directories(info.db.parent_path());
-    db.ExportShard(spec);
-    Database shard(info.db);
-    shard.ClaimArtifactRoot();
-    for (ClipId c : spec.clips) CopyClipArtifacts(db.ArtifactRoot(), shard.ArtifactRoot(), c, false);
+    WriteShardFolder(db, spec);
     made.push_back(info);
   }
   return made;
@@ -193,28 +243,52 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   if (!fs::is_regular_file(shard_db, ec)) {
     throw Error("not_a_shard", "no such shard database", {.file = fs::absolute(shard_db).string()});
   }
-  // A clip whose recorded file is missing stays unmerged, named; the rows
-  // go first (a refused shard must not leave files here), then the files.
+  db.ClaimArtifactRoot();
+  if (db.GetMeta(Database::kPlacementKey)) {
+    throw Error("merge_in_progress", "another merge into this database is placing its files; run again when it ends",
+                {.file = db.path().string()});
+  }
+  for (const fs::path& p : db.RemoveAbandonedStaging()) {
+    spdlog::info("removed {} (left by a merge killed before its commit)", p.string());
+  }
+  // A clip whose recorded file is missing stays unmerged, named.
   std::map<ClipId, std::string> missing;
   fs::path shard_root;
+  std::vector<ClipId> clips;
+  bool merged_before = false;
   {
     Database shard(shard_db, Database::OpenMode::kExisting);
     missing = MissingArtifacts(shard);
     shard_root = shard.ArtifactRoot();
+    // A shard merged before handed its clips back: their files are this
+    // database's now, and may be newer than the shard's.
+    merged_before = shard.GetMeta(Database::kMergedIntoKey).has_value();
+    for (const ClipRecord& clip : shard.ListClips()) {
+      if (!missing.count(clip.id)) clips.push_back(clip.id);
+    }
   }
   std::set<ClipId> hold_back;
   for (const auto& [clip, why] : missing) hold_back.insert(clip);
-  Database::MergeStats stats = db.MergeShard(shard_db, hold_back);
-  for (const auto& [clip, why] : missing) stats.held_back.push_back(why);
-  db.ClaimArtifactRoot();
-  // A shard merged before handed its clips back: their files are this
-  // database's now, and may be newer than the shard's.
-  if (stats.clips == 0) return stats;
-  Database shard(shard_db, Database::OpenMode::kExisting);
-  for (const ClipRecord& clip : shard.ListClips()) {
-    if (hold_back.count(clip.id)) continue;
-    CopyClipArtifacts(shard_root, db.ArtifactRoot(), clip.id, true);
+  // Files first into staging, then the rows and the placement journal in
+  // one transaction, then the files into place: a kill at any moment
+  // leaves the old rows and files, or the new rows with a journal that the
+  // next open of this database finishes (Database::FinishPlacement).
+  const Database::MergePlacement placement =
+      merged_before ? Database::MergePlacement{} : StageShardFiles(shard_root, db.ArtifactRoot(), clips);
+  const bool moves = !placement.place.empty() || !placement.remove.empty();
+  Database::MergeStats stats;
+  try {
+    stats = db.MergeShard(shard_db, hold_back, moves ? Database::PlacementJson(placement) : "");
+  } catch (...) {
+    if (!placement.staging.empty()) fs::remove_all(db.ArtifactRoot() / placement.staging, ec);
+    throw;
   }
+  if (moves) {
+    db.FinishPlacement(/*own=*/true);
+  } else if (!placement.staging.empty()) {
+    fs::remove_all(db.ArtifactRoot() / placement.staging, ec);
+  }
+  for (const auto& [clip, why] : missing) stats.held_back.push_back(why);
   return stats;
 }
 

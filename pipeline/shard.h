@@ -45,15 +45,17 @@ struct ShardInfo {
 // there are none, Error("shard_exists") when a shard folder is in the way.
 std::vector<ShardInfo> ShardQueue(Database& db, const ShardOptions& options);
 
-// The rows of shard database `shard_db` merged into `db`
-// (Database::MergeShard; a refused shard changes nothing), then its clips'
-// artifact folders copied into the parent's artifact root, each swapped
-// into place whole (never hard links: a re-run of the shard cannot change
-// the parent's files). A clip with a recorded artifact file missing in the
-// shard is not merged and is named in MergeStats::held_back; the others
-// are. Throws Error("self_merge") when `shard_db` is `db`. Safe to repeat;
-// a repeat also finishes placing folders a killed merge left. ShardQueue
-// copies the other way.
+// The rows of shard database `shard_db` merged into `db` (Database::
+// MergeShard; a refused shard changes nothing) together with its clips'
+// stage folders: copied (never hard links: a re-run of the shard cannot
+// change the parent's files) into a staging folder first, committed with
+// the rows as a placement journal, then moved into place; a merge killed
+// after its commit is finished by the next open of `db`, so readers see
+// the old rows and files or the new ones. A clip with a recorded artifact
+// file missing in the shard is not merged and is named in
+// MergeStats::held_back; the others are. Throws Error("self_merge") when
+// `shard_db` is `db`, Error("merge_in_progress") while another merge is
+// placing its files. Safe to repeat. ShardQueue copies the other way.
 Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard_db);
 
 // The shard folders' database name.

@@ -7,7 +7,7 @@
 
 #include "core/bounded_text.h"
 #include "core/error_codes.h"
-#include "core/output_path.h"
+#include "core/whole_output.h"
 #include "core/log.h"
 #include "core/permanent_error.h"
 
@@ -80,7 +80,7 @@ std::string KeepWhole(Database& db, const Claim& claim, const std::string& file,
   const std::filesystem::path path = FailedRunLogs(db, claim) / file;
   try {
     std::filesystem::create_directories(path.parent_path());
-    WriteFileAtomically(path, text);
+    WriteFileWhole(path, text);
   } catch (const std::exception& e) {
     spdlog::warn("cannot keep the whole text in {}: {}", path.string(), e.what());
     return "";

@@ -16,7 +16,11 @@ says so; anything else is a failure and is printed. Operations:
       and no clip folder holds a half-written one under the published name
   merge      `doasido merge` of a finished shard: the parent's rows are the
       old ones (no merged run) or the new ones, and every trajectory the
-      parent records done+pass is a complete file equal to the shard's
+      parent records done+pass is a complete file equal to the shard's, as
+      any doasido command sees it (its open finishes a merge killed after
+      its commit; the notes count those)
+  shard      also checked: every shard folder is recorded by the parent and
+      every recorded shard has its database
   report, hand-import, synth, shard, deploy-plan
       described only: what the kill left (files, leftovers) and whether the
       re-run succeeded
@@ -217,14 +221,20 @@ class Probe:
                 dst = os.path.join(os.path.dirname(parent), f)
                 shutil.copytree(src, dst, symlinks=True) if os.path.isdir(src) else shutil.copy2(src, dst)
             finished = not killed(self.bin, args, self.rng.uniform(0, full))
+
+            def placed():
+                return all(tree_hash(os.path.join(parent_art, str(c), "retarget_kinematic", "trajectory.json")) ==
+                           tree_hash(os.path.join(shard_art, str(c), "retarget_kinematic", "trajectory.json"))
+                           for c in done_trajectories(parent))
+            raw = placed()
+            # The state any doasido command sees: its open finishes a merge
+            # killed after its commit (the placement journal).
+            run(self.bin, ["status", "--db", parent])
+            ok = placed()
             done = done_trajectories(parent)
-            ok = True
-            for clip in done:
-                rel = os.path.join(str(clip), "retarget_kinematic", "trajectory.json")
-                ok &= tree_hash(os.path.join(parent_art, rel)) == tree_hash(os.path.join(shard_art, rel))
             outcome = "finished" if finished else ("new" if done else "old")
-            self.record(op, outcome, ok or not finished,
-                        "" if ok else "rows merged, files not yet placed (the re-run places them)")
+            self.record(op, outcome, ok,
+                        "" if raw else "killed after the commit: files staged, placed by the next open")
             r = run(self.bin, args, check=False)
             good = r.returncode == 0 and all(
                 tree_hash(os.path.join(parent_art, str(c), "retarget_kinematic", "trajectory.json")) ==
@@ -232,7 +242,20 @@ class Probe:
                 for c in done_trajectories(parent))
             self.results[op]["rerun_ok"] += good
 
-    def describe(self, op, args_of, out_of, kills=None):
+    def shard_whole(self, out):
+        """Every shard folder is recorded by the parent and every recorded
+        shard has its database, after any doasido command opened the parent."""
+        parent = os.path.join(os.path.dirname(out), "d.db")
+        run(self.bin, ["status", "--db", parent])
+        c = sqlite3.connect(parent)
+        listed = {os.path.normpath(os.path.join(os.path.dirname(parent), p))
+                  for (p,) in c.execute("SELECT path FROM shards")}
+        c.close()
+        folders = {os.path.join(out, f, "doasido.db") for f in os.listdir(out)} if os.path.isdir(out) else set()
+        visible = {f for f in folders if not os.path.basename(os.path.dirname(f)).startswith(".")}
+        return all(os.path.exists(p) for p in listed) and visible <= listed
+
+    def describe(self, op, args_of, out_of, kills=None, check=None):
         """Kills and reports what is left; the re-run must succeed."""
         full = timed(self.bin, args_of(0))
         r = self.results.setdefault(op, {"left": {}, "rerun_ok": 0, "kills": 0})
@@ -248,9 +271,15 @@ class Probe:
             else:
                 state = f"file of {os.path.getsize(out)} bytes"
             r["left"][state] = r["left"].get(state, 0) + 1
+            if check is not None:
+                fine = check(out)
+                r["whole"] = r.get("whole", 0) + fine
+                r["bad"] = r.get("bad", 0) + (not fine)
             rr = run(self.bin, args, check=False)
-            r["rerun_ok"] += rr.returncode == 0
-            if rr.returncode != 0:
+            # A shard killed after its last commit had finished its work.
+            done_before = op == "shard" and "nothing_to_shard" in rr.stderr
+            r["rerun_ok"] += rr.returncode == 0 or done_before
+            if rr.returncode != 0 and not done_before:
                 r.setdefault("rerun_errors", []).append(rr.stderr.strip().splitlines()[-1:])
 
     def others(self):
@@ -274,7 +303,7 @@ class Probe:
                 run(self.bin, ["ingest", "--db", f"{d}/d.db", self.pool])
             return ["shard", "--db", f"{d}/d.db", "--shards", "2", "--out", f"{d}/sh", "--config",
                     self.config]
-        self.describe("shard", shard_args, lambda i: f"{w}/shardsrc{i}/sh")
+        self.describe("shard", shard_args, lambda i: f"{w}/shardsrc{i}/sh", check=self.shard_whole)
         clip = str(done_trajectories(self.db)[0]) if done_trajectories(self.db) else "1"
         self.describe("deploy-plan", lambda i: ["deploy", "plan", "--db", self.db, "--clip", clip, "--out",
                                                 f"{w}/plan{i}.json", "--no-replay"],

@@ -223,6 +223,79 @@ TEST_F(CliArtifacts, MergeCopiesAndHoldsBackAClipWithAMissingFile) {
   EXPECT_TRUE(Has(text.err, (work_ / "notes.txt").string())) << text.err;
 }
 
+// A merge is atomic for every reader: files are staged, the rows commit
+// with a placement journal, and a merge killed after its commit (here: the
+// journal committed by a process that is gone, one folder already moved)
+// is finished by the next open of the database; staging left by a merge
+// killed before its commit is removed by the next merge.
+TEST_F(CliArtifacts, AMergeKilledAfterItsCommitIsFinishedByTheNextOpen) {
+  const fs::path db = work_ / "p" / "d.db";
+  fs::create_directories(db.parent_path());
+  ASSERT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", kPipeline}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"ingest", "--db", db.string(), (*pool_ / "s").string()}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"shard", "--db", db.string(), "--shards", "1", "--out", (work_ / "sh").string(),
+                        "--config", (*pool_ / "run.toml").string()}).exit_code, 0);
+  const fs::path shard = work_ / "sh/shard-000/doasido.db";
+  ASSERT_EQ(RunDoasido({"run", "--db", shard.string(), "--config", (*pool_ / "run.toml").string()}).exit_code, 0);
+  const fs::path theirs = shard.parent_path() / "artifacts";
+  const fs::path mine = db.parent_path() / "artifacts";
+  const pid_t gone = fork();  // a process id that no longer runs
+  if (gone == 0) _exit(0);
+  waitpid(gone, nullptr, 0);
+  // Killed before its commit: staging nobody names.
+  const fs::path stale = mine / (".merge-" + std::to_string(gone) + "-0000abcd");
+  WriteFile(stale / "1/recon/half.json", "{");
+
+  // The state a kill right after the commit leaves: rows merged, journal
+  // recorded, files still staged (one already moved).
+  const std::string staging = ".merge-" + std::to_string(gone) + "-0000beef";
+  Database::MergePlacement placement{.staging = staging, .pid = gone};
+  for (const auto& clip : fs::directory_iterator(theirs)) {
+    const std::string c = clip.path().filename().string();
+    if (c[0] == '.' || !clip.is_directory()) continue;
+    for (const auto& stage : fs::directory_iterator(clip.path())) {
+      fs::create_directories(mine / staging / c);
+      fs::copy(stage.path(), mine / staging / c / stage.path().filename(), fs::copy_options::recursive);
+      placement.place.emplace_back(std::stoll(c), stage.path().filename().string());
+    }
+  }
+  ASSERT_GE(placement.place.size(), 4u);
+  {
+    Database parent(db);
+    parent.MergeShard(shard, {}, Database::PlacementJson(placement));
+  }
+  const auto& [first_clip, first_stage] = placement.place.front();
+  fs::create_directories(mine / std::to_string(first_clip));
+  fs::rename(mine / staging / std::to_string(first_clip) / first_stage,
+             mine / std::to_string(first_clip) / first_stage);
+  ASSERT_FALSE(QueryRows(db, "SELECT value FROM meta WHERE key = 'pending_placement'").empty());
+  const auto clips = DoneTrajectoryClips(db);
+  ASSERT_GE(clips.size(), 2u);
+
+  // Any command's open finishes it.
+  ASSERT_EQ(RunDoasido({"status", "--db", db.string()}).exit_code, 0);
+  EXPECT_TRUE(QueryRows(db, "SELECT value FROM meta WHERE key = 'pending_placement'").empty());
+  EXPECT_FALSE(fs::exists(mine / staging));
+  for (const auto& [clip, stage] : placement.place) {
+    const fs::path rel = fs::path(std::to_string(clip)) / stage;
+    for (const auto& f : fs::recursive_directory_iterator(theirs / rel)) {
+      if (!f.is_regular_file()) continue;
+      const fs::path placed = mine / rel / fs::relative(f.path(), theirs / rel);
+      ASSERT_TRUE(fs::exists(placed)) << placed;
+      EXPECT_EQ(ingest::FileSha256(placed), ingest::FileSha256(f.path())) << placed;
+    }
+  }
+  // A plan reads the merged trajectory.
+  const auto plan = RunDoasido({"deploy", "plan", "--db", db.string(), "--clip", clips[0], "--no-replay",
+                                "--yaw-steps", "1", "--offset-steps", "1", "--out", (work_ / "plan.json").string()});
+  EXPECT_TRUE(fs::exists(work_ / "plan.json")) << plan.err;
+  // The stale staging is the next merge's to remove; the merge is a no-op.
+  EXPECT_TRUE(fs::exists(stale));
+  const auto again = RunDoasido({"merge", "--db", db.string(), shard.string()});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_FALSE(fs::exists(stale));
+}
+
 // Finding 4.
 TEST_F(CliArtifacts, AVerificationCountsOnlyForTheTrajectorySeen) {
   const fs::path db = CopyBase(work_ / "w");

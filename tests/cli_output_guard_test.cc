@@ -6,8 +6,13 @@
 // output of the same command is replaced only with --force.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <csignal>
 #include <fstream>
+#include <map>
+#include <random>
 #include <sstream>
+#include <thread>
 
 #include "dataset/version.h"
 #include "tests/db_dump.h"
@@ -103,6 +108,7 @@ std::vector<std::vector<std::string>> Writers(const std::string& db, const std::
       {"synth", "--clips", "1", "--out", out},
       {"hand", "import", "--mjcf", "/nonexistent/hand.xml", "--out", out},
       {"hand", "mirror", "shadow", "--out", out},
+      {"hand", "check", "shadow", "--out", out},
       {"retarget-kinematic", "--keypoints", "/nonexistent.csv", "--out", out},
       {"deploy", "stream", "--plan", "/nonexistent/plan.json", "--dry-run", out},
   };
@@ -209,6 +215,83 @@ TEST_F(OutputGuard, ARelativeTrajectoryResolvesAgainstTheWorkingDirectory) {
   EXPECT_TRUE(fs::exists(*dir_ / "rel.json")) << out;
   const Json plan = Json::parse(ReadFile(*dir_ / "rel.json"));
   EXPECT_EQ(plan["source"], (*dir_ / "artifacts/1/retarget_kinematic/trajectory.json").string());
+}
+
+}  // namespace
+}  // namespace doasido
+
+namespace doasido {
+namespace {
+
+// The hand commands (issue #42, finding 4): an earlier hand is replaced
+// whole (a killed `hand mirror --force` leaves the old hand or the new one,
+// never a mix), an output folder that holds the command's input is
+// refused, and `hand check` replaces its pictures only with --force.
+std::map<std::string, std::string> FolderBytes(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) out[fs::relative(e.path(), dir).string()] = ReadFile(e.path());
+  }
+  return out;
+}
+
+TEST_F(OutputGuard, HandsAreReplacedWholeAndNeverOverTheirInput) {
+  const fs::path hands = *dir_ / "hands";
+  const fs::path left = hands / "left";
+  const std::vector<std::string> mirror = {"hand", "mirror", "shadow", "--out", left.string()};
+  const auto first = RunDoasido(mirror);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const auto written = FolderBytes(left);
+  fs::path description;
+  for (const auto& [name, bytes] : written) {
+    if (fs::path(name).extension() == ".json") description = left / name;
+    EXPECT_EQ(bytes.find(".tmp-"), std::string::npos) << name << " names the temporary folder";
+  }
+  ASSERT_FALSE(description.empty());
+  ExpectRefused(mirror, "--force replaces it", "output_exists");
+  // The output folder holds the input: replacing it would delete the input.
+  ExpectRefused({"hand", "mirror", description.string(), "--force", "--out", left.string()},
+                "holds the command's input");
+  ExpectRefused({"hand", "import", "--mjcf", fs::path(description).replace_extension(".xml").string(),
+                 "--force", "--out", left.string()},
+                "holds the command's input");
+  EXPECT_EQ(FolderBytes(left), written);
+
+  // Killed at random moments while replacing: the old hand or the new one.
+  auto forced = mirror;
+  forced.push_back("--force");
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(RunDoasido(forced).exit_code, 0);
+  const double full_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::mt19937 rng(42);
+  for (int kill = 0; kill < 4; ++kill) {
+    std::vector<std::string> argv = {testing::DoasidoBin().string()};
+    argv.insert(argv.end(), forced.begin(), forced.end());
+    const int pid = testing::Spawn(argv, *dir_ / "mirror.log");
+    std::this_thread::sleep_for(std::chrono::duration<double>(
+        std::uniform_real_distribution<double>(0.0, full_s)(rng)));
+    ::kill(pid, SIGKILL);
+    testing::WaitFor(pid);
+    EXPECT_EQ(FolderBytes(left), written) << "kill " << kill << ": the hand is not whole";
+    const auto again = RunDoasido(forced);
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_EQ(FolderBytes(left), written);
+  }
+  for (const auto& e : fs::directory_iterator(hands)) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  }
+
+  // hand check's pictures: replaced only with --force.
+  const fs::path pictures = *dir_ / "pictures";
+  const std::vector<std::string> check = {"hand", "check", "shadow", "--out", pictures.string()};
+  ASSERT_EQ(RunDoasido(check).exit_code, 0);
+  const auto drawn = FolderBytes(pictures);
+  ASSERT_EQ(drawn.size(), 2u);
+  ExpectRefused(check, "--force replaces it", "output_exists");
+  auto check_forced = check;
+  check_forced.push_back("--force");
+  EXPECT_EQ(RunDoasido(check_forced).exit_code, 0);
+  EXPECT_EQ(FolderBytes(pictures), drawn);
 }
 
 }  // namespace

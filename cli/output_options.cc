@@ -27,10 +27,9 @@ std::function<bool(const fs::path&)> FolderHolds(std::vector<std::string> names)
 bool HoldsHandModel(const fs::path& folder) {
   std::error_code ec;
   for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-    const fs::path p = it->path();
-    if (p.extension() == ".json" && fs::exists(fs::path(p).replace_extension(".xml"), ec)) {
-      return true;
-    }
+    if (it->path().extension() != ".json") continue;
+    const Json j = Json::parse(TryReadFile(it->path()).value_or(""), nullptr, false);
+    if (j.is_object() && j.contains("model") && j.contains("points")) return true;
   }
   return false;
 }

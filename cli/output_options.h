@@ -18,8 +18,8 @@ void AddForceFlag(CLI::App& cmd, bool& force);
 
 // A folder holding at least one of `names` (files or folders).
 std::function<bool(const std::filesystem::path&)> FolderHolds(std::vector<std::string> names);
-// A folder holding a <stem>.json beside a <stem>.xml (a hand description
-// with its model, as `hand import` and `hand mirror` write).
+// A folder holding a hand description (a .json with "model" and "points",
+// as `hand import` and `hand mirror` write; with --mjcf it is the only file).
 bool HoldsHandModel(const std::filesystem::path& folder);
 // A JSON file whose "format" member is `format`.
 std::function<bool(const std::filesystem::path&)> JsonOfFormat(std::string format);

@@ -477,7 +477,7 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
       update.Bind(1, Now()).Bind(2, shard_id).Run();
     }
   }
-  if (!placement.empty()) {
+  if (!placement.empty() && stats.clips > 0) {  // else the clips are this database's already
     Prepare("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)")
         .Bind(1, kPlacementKey)
         .Bind(2, placement)

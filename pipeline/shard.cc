@@ -255,14 +255,10 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   std::map<ClipId, std::string> missing;
   fs::path shard_root;
   std::vector<ClipId> clips;
-  bool merged_before = false;
   {
     Database shard(shard_db, Database::OpenMode::kExisting);
     missing = MissingArtifacts(shard);
     shard_root = shard.ArtifactRoot();
-    // A shard merged before handed its clips back: their files are this
-    // database's now, and may be newer than the shard's.
-    merged_before = shard.GetMeta(Database::kMergedIntoKey).has_value();
     for (const ClipRecord& clip : shard.ListClips()) {
       if (!missing.count(clip.id)) clips.push_back(clip.id);
     }
@@ -273,19 +269,20 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   // one transaction, then the files into place: a kill at any moment
   // leaves the old rows and files, or the new rows with a journal that the
   // next open of this database finishes (Database::FinishPlacement).
-  const Database::MergePlacement placement =
-      merged_before ? Database::MergePlacement{} : StageShardFiles(shard_root, db.ArtifactRoot(), clips);
+  const Database::MergePlacement placement = StageShardFiles(shard_root, db.ArtifactRoot(), clips);
   const bool moves = !placement.place.empty() || !placement.remove.empty();
   Database::MergeStats stats;
   try {
     stats = db.MergeShard(shard_db, hold_back, moves ? Database::PlacementJson(placement) : "");
   } catch (...) {
-    if (!placement.staging.empty()) fs::remove_all(db.ArtifactRoot() / placement.staging, ec);
+    fs::remove_all(db.ArtifactRoot() / placement.staging, ec);
     throw;
   }
-  if (moves) {
+  // No clip merged: a shard merged before handed its clips back, and their
+  // files are this database's now (they may be newer than the shard's).
+  if (db.GetMeta(Database::kPlacementKey)) {
     db.FinishPlacement(/*own=*/true);
-  } else if (!placement.staging.empty()) {
+  } else {
     fs::remove_all(db.ArtifactRoot() / placement.staging, ec);
   }
   for (const auto& [clip, why] : missing) stats.held_back.push_back(why);

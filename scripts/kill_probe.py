@@ -98,6 +98,28 @@ def robomimic_whole(out):
     return r.returncode == 0
 
 
+def absent_or(test):
+    """Checks an output a kill left: absent, or whole by `test` (a
+    temporary beside it is the next writer's to remove)."""
+    return lambda out: not os.path.exists(out) or test(out)
+
+
+def json_ok(path):
+    try:
+        json.load(open(path))
+        return True
+    except (OSError, ValueError):
+        return False
+
+
+hand_whole = absent_or(lambda out: any(f.endswith(".json") and json_ok(os.path.join(out, f))
+                                       for f in os.listdir(out)))
+plan_whole = absent_or(json_ok)
+report_whole = absent_or(lambda out: os.path.exists(os.path.join(out, "report.html")) and
+                         json_ok(os.path.join(out, "report.json")))
+synth_whole = absent_or(lambda out: os.path.exists(os.path.join(out, "clips.csv")))
+
+
 def done_trajectories(db):
     c = sqlite3.connect(db)
     rows = c.execute("SELECT clip_id FROM stage_runs WHERE stage = 'retarget_kinematic'"
@@ -255,7 +277,7 @@ class Probe:
         visible = {f for f in folders if not os.path.basename(os.path.dirname(f)).startswith(".")}
         return all(os.path.exists(p) for p in listed) and visible <= listed
 
-    def describe(self, op, args_of, out_of, kills=None, check=None):
+    def describe(self, op, args_of, out_of, kills=None, check=None, force=False):
         """Kills and reports what is left; the re-run must succeed."""
         full = timed(self.bin, args_of(0))
         r = self.results.setdefault(op, {"left": {}, "rerun_ok": 0, "kills": 0})
@@ -275,7 +297,8 @@ class Probe:
                 fine = check(out)
                 r["whole"] = r.get("whole", 0) + fine
                 r["bad"] = r.get("bad", 0) + (not fine)
-            rr = run(self.bin, args, check=False)
+            # The re-run replaces what a kill after the rename completed.
+            rr = run(self.bin, args + (["--force"] if force else []), check=False)
             # A shard killed after its last commit had finished its work.
             done_before = op == "shard" and "nothing_to_shard" in rr.stderr
             r["rerun_ok"] += rr.returncode == 0 or done_before
@@ -285,15 +308,15 @@ class Probe:
     def others(self):
         w = self.work
         self.describe("report", lambda i: ["report", "--db", self.db, "--out", f"{w}/report{i}"],
-                      lambda i: f"{w}/report{i}")
+                      lambda i: f"{w}/report{i}", check=report_whole, force=True)
         hand = os.path.join(os.path.dirname(self.bin), "..", "..", "..", "shared", "data", "robots",
                             "wonik_allegro", "right_hand.xml")
         hand = os.environ.get("PROBE_HAND_MJCF", os.path.abspath(hand))
         self.describe("hand-import", lambda i: ["hand", "import", "--mjcf", hand, "--out", f"{w}/hand{i}"],
-                      lambda i: f"{w}/hand{i}")
+                      lambda i: f"{w}/hand{i}", check=hand_whole, force=True)
         self.describe("synth", lambda i: ["synth", "--out", f"{w}/synth{i}", "--clips", "3", "--frames",
                                           "30", "--width", "96", "--height", "72"],
-                      lambda i: f"{w}/synth{i}")
+                      lambda i: f"{w}/synth{i}", check=synth_whole, force=True)
 
         def shard_args(i):
             d = f"{w}/shardsrc{i}"
@@ -307,7 +330,8 @@ class Probe:
         clip = str(done_trajectories(self.db)[0]) if done_trajectories(self.db) else "1"
         self.describe("deploy-plan", lambda i: ["deploy", "plan", "--db", self.db, "--clip", clip, "--out",
                                                 f"{w}/plan{i}.json", "--no-replay"],
-                      lambda i: f"{w}/plan{i}.json")
+                      lambda i: f"{w}/plan{i}.json", check=plan_whole, force=True)
+        self.results["others-leftovers-after-reruns"] = {"files": leftovers(self.work)}
 
 
 def main():

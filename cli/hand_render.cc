@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "retarget/hand_mesh.h"
+#include "robot/hand_mesh.h"
 #include "synth/rasterizer.h"
 
 namespace doasido::cli {

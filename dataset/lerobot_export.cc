@@ -11,10 +11,10 @@
 #include "dataset/feature_stats.h"
 #include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
-#include "dataset/trajectory_uniformity.h"
 #include "dataset/resample.h"
+#include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 #include "video/frame_count.h"
 #include "video/video_decoder.h"
 

@@ -4,8 +4,8 @@
 
 #include "core/error.h"
 #include "core/file_text.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/mjcf_text.h"
+#include "robot/mjcf_compat.h"
+#include "robot/mjcf_text.h"
 
 namespace doasido::retarget {
 namespace {
@@ -23,24 +23,6 @@ void CheckLeftHand(const recon::Reconstruction& r, const std::string& label) {
   if (!seen) throw Error("bad_reference", "no valid left hand frame", {.file = label, .field = "left_valid"});
 }
 
-}  // namespace
-
-HandTrajectory CombineBimanualTrajectories(const HandTrajectory& left, const HandTrajectory& right) {
-  HandTrajectory out = right;
-  out.embodiment = left.embodiment + kBimanualSeparator + right.embodiment;
-  out.qpos_names.clear();
-  for (const std::string& n : left.qpos_names) out.qpos_names.push_back(kLeftPrefix + n);
-  for (const std::string& n : right.qpos_names) out.qpos_names.push_back(kRightPrefix + n);
-  for (size_t t = 0; t < out.qpos.size(); ++t) {
-    Eigen::VectorXd q(left.qpos[t].size() + right.qpos[t].size());
-    q << left.qpos[t], right.qpos[t];
-    out.qpos[t] = q;
-    out.valid[t] = left.valid[t] || right.valid[t];
-  }
-  return out;
-}
-
-namespace {
 
 // Mean distance of a hand's simulated wrist from its reference over the
 // frames the hand was seen.
@@ -66,42 +48,6 @@ double WristError(const HandTrajectory& simulated, const HandTrajectory& kinemat
 }
 
 }  // namespace
-
-std::pair<HandTrajectory, HandTrajectory> SplitBimanualTrajectory(const HandTrajectory& both) {
-  const size_t plus = both.embodiment.find(kBimanualSeparator);
-  if (plus == std::string::npos) {
-    throw Error("bad_trajectory", "not a two-hand trajectory (embodiment '" + both.embodiment + "')",
-                {.field = "embodiment"});
-  }
-  HandTrajectory hands[2];
-  const std::string prefixes[2] = {kLeftPrefix, kRightPrefix};
-  for (int h = 0; h < 2; ++h) {
-    HandTrajectory& t = hands[h];
-    t = both;
-    t.embodiment = h == 0 ? both.embodiment.substr(0, plus) : both.embodiment.substr(plus + 1);
-    const auto pick = [&](const std::vector<std::string>& names, std::vector<std::string>& kept) {
-      std::vector<int> columns;
-      kept.clear();
-      for (size_t i = 0; i < names.size(); ++i) {
-        if (names[i].rfind(prefixes[h], 0) != 0) continue;
-        columns.push_back(static_cast<int>(i));
-        kept.push_back(names[i].substr(prefixes[h].size()));
-      }
-      return columns;
-    };
-    const std::vector<int> q = pick(both.qpos_names, t.qpos_names);
-    const std::vector<int> u = pick(both.ctrl_names, t.ctrl_names);
-    if (q.empty()) {
-      throw Error("bad_trajectory", "no " + prefixes[h] + " variables in a two-hand trajectory", {.field = "qpos_names"});
-    }
-    for (size_t f = 0; f < t.qpos.size(); ++f) {
-      t.qpos[f] = both.qpos[f](q);
-      if (f < t.ctrl.size()) t.ctrl[f] = both.ctrl[f](u);
-    }
-    if (h == 0) t.reference_keypoints.clear();  // the keypoints recorded are the right hand's
-  }
-  return {hands[0], hands[1]};
-}
 
 BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
                              const Embodiment& right, const DynamicRetargetConfig& config,

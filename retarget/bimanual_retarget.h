@@ -27,14 +27,6 @@
 
 namespace doasido::retarget {
 
-inline constexpr const char* kLeftPrefix = "l_";
-inline constexpr const char* kRightPrefix = "r_";
-// A two-hand trajectory's embodiment: "<left>+<right>".
-inline constexpr char kBimanualSeparator = '+';
-inline bool IsBimanualEmbodiment(const std::string& name) {
-  return name.find(kBimanualSeparator) != std::string::npos;
-}
-
 struct BimanualRun {
   // Both hands at the reference fps: qpos_names and ctrl_names prefixed
   // kLeftPrefix / kRightPrefix, object poses, metrics.
@@ -46,16 +38,6 @@ struct BimanualRun {
   SamplerStats stats;
   std::string robot_scene_xml;  // both hands + object
 };
-
-// A two-hand trajectory (BimanualRun::trajectory, or its trajectory.json)
-// as the left and the right hand's own trajectories: variables without
-// their prefix, the embodiment's two names, object poses and metrics on
-// both; controls split by actuator name the same way. Throws
-// Error("bad_trajectory") for a trajectory that is not a two-hand one.
-std::pair<HandTrajectory, HandTrajectory> SplitBimanualTrajectory(const HandTrajectory& both);
-// The inverse for positions: one trajectory over both hands' variables,
-// names prefixed, embodiment "<left>+<right>" (the right's other fields).
-HandTrajectory CombineBimanualTrajectories(const HandTrajectory& left, const HandTrajectory& right);
 
 // Runs steps 1-5. `r` must carry a left hand (left_valid non-empty);
 // `left` and `right` are the robot hands (e.g. sharpa_left, sharpa_right;

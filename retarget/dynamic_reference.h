@@ -21,7 +21,7 @@
 #include "recon/reconstruction.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/knot_spline.h"
-#include "retarget/mj_model.h"
+#include "robot/mj_model.h"
 
 namespace doasido::retarget {
 

@@ -21,10 +21,10 @@
 #include "recon/reconstruction.h"
 #include "retarget/annealed_sampler.h"
 #include "retarget/dynamic_reference.h"
-#include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
 #include "retarget/retarget_metrics.h"
 #include "retarget/scene_builder.h"
+#include "robot/embodiment.h"
 
 namespace doasido::retarget {
 

@@ -50,16 +50,15 @@
 
 #include "core/config.h"
 #include "core/geometry.h"
-#include "retarget/embodiment.h"
 #include "retarget/object_surface.h"
+#include "robot/embodiment.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::retarget {
 
 // Fingertips that must touch the object together before the grasp terms
 // press them into it (see "Grasp terms" above).
 inline constexpr int kMinGraspFingertips = 2;
-
-using Keypoints21 = Eigen::Matrix<double, 21, 3, Eigen::RowMajor>;
 
 struct KinematicConfig {
   int restarts = 4;              // random starts per frame, besides the warm start
@@ -82,50 +81,6 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_i
                                                 smooth_weight, use_intermediate, scale, seed,
                                                 wrist_noise_rad, wrist_noise_m, robust_loss_scale,
                                                 contact_weight, contact_epsilon, contact_depth)
-
-// The reference the dynamics-aware optimiser tracks.
-struct HandTrajectory {
-  std::string embodiment;
-  double fps = 30;
-  double scale = 1;
-  std::vector<std::string> qpos_names;     // (nq)
-  std::vector<Eigen::VectorXd> qpos;       // (T, nq) robot joint positions, wrist first
-  std::vector<bool> valid;                 // (T) human hand seen; else the pose is held
-  std::vector<double> fingertip_error;     // (T) mean fingertip distance to target, m
-  std::vector<Pose> object_poses;          // (T) object->world, or empty
-  // (T) the human keypoints the hand followed: scaled by `scale` about the
-  // wrist, world frame; NaN where the hand was not seen. Empty in files
-  // written before it was recorded.
-  std::vector<Keypoints21> reference_keypoints;
-  // Written by the dynamics-aware `retarget` stage; empty from retarget_kinematic.
-  std::vector<std::string> ctrl_names;     // (nu) actuator names
-  std::vector<Eigen::VectorXd> ctrl;       // (T, nu) position targets, or empty
-  Json metrics = Json::object();           // e.g. {"e_pos", "e_rot", "success"}
-};
-
-// JSON: {"embodiment", "fps", "scale", "qpos_names", "qpos": [[...]], "valid",
-// "fingertip_error", "object_poses": [[tx,ty,tz,qw,qx,qy,qz]]} plus, when
-// present, "reference_keypoints": [[x0,y0,z0,...,x20,y20,z20] or null],
-// "ctrl_names", "ctrl": [[...]] and "metrics". Throws Error("io").
-void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& path);
-// CSV: frame,time,valid,fingertip_error,<qpos names...>[,obj_tx..obj_qz]; one row a frame.
-void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path);
-// Reads WriteTrajectoryJson's output. Throws Error("bad_trajectory").
-HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path);
-
-// Reads a keypoint CSV: header k0_x,k0_y,k0_z,...,k20_z then one row of 63
-// numbers (metres) per frame. Throws Error("bad_keypoints") naming file and line.
-std::vector<Keypoints21> ReadKeypointCsv(const std::filesystem::path& path);
-
-// Mean and 95th percentile (nearest rank) of the finite entries of a
-// trajectory's fingertip_error, m; `frames` counts them (0: mean 0, p95 NaN).
-// The one definition behind the stage's measurements and the CLI's printout.
-struct FingertipErrorStats {
-  int frames = 0;
-  double mean = 0;
-  double p95 = 0;
-};
-FingertipErrorStats SummarizeFingertipError(const std::vector<double>& error);
 
 struct FrameSolution {
   Eigen::VectorXd qpos;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/geometry.h"
-#include "retarget/mj_model.h"
+#include "robot/mj_model.h"
 
 namespace doasido::retarget {
 

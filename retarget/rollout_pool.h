@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/task_pool.h"
-#include "retarget/mj_model.h"
+#include "robot/mj_model.h"
 
 namespace doasido::retarget {
 

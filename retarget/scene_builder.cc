@@ -8,8 +8,9 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::retarget {
 namespace {
@@ -138,7 +139,7 @@ ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneC
         << "\" contype=\"2\" conaffinity=\"2\" group=\"3\"" << contact << "/>\n";
   }
   xml << "    </body>\n  </worldbody>\n</mujoco>\n";
-  scene.xml_path = out_dir / "scene.xml";
+  scene.xml_path = out_dir / kSceneFile;
   std::ofstream out(scene.xml_path);
   out << xml.str();
   if (!out) throw Error("io", "cannot write scene", {.file = scene.xml_path.string()});

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/embodiment.h"
 #include "retarget/kinematic_retarget.h"
+#include "robot/embodiment.h"
 #include "synth/episode.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"

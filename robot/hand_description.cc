@@ -1,4 +1,4 @@
-#include "retarget/hand_description.h"
+#include "robot/hand_description.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "core/error.h"
-#include "retarget/mj_model.h"
+#include "robot/mj_model.h"
 
 namespace doasido::retarget {
 namespace {

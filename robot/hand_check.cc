@@ -1,11 +1,11 @@
-#include "retarget/hand_check.h"
+#include "robot/hand_check.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "core/error.h"
-#include "retarget/mjcf_compat.h"
+#include "robot/mjcf_compat.h"
 
 namespace doasido::retarget {
 namespace {

@@ -1,4 +1,4 @@
-#include "retarget/hand_mesh.h"
+#include "robot/hand_mesh.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "retarget/mjcf_compat.h"
+#include "robot/mjcf_compat.h"
 
 #include <cmath>
 #include <map>
@@ -11,8 +11,8 @@
 
 #include "core/error.h"
 #include "core/file_text.h"
-#include "retarget/mj_model.h"
-#include "retarget/urdf_import.h"
+#include "robot/mj_model.h"
+#include "robot/urdf_import.h"
 
 namespace doasido::retarget {
 namespace {

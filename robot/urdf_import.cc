@@ -1,4 +1,4 @@
-#include "retarget/urdf_import.h"
+#include "robot/urdf_import.h"
 
 #include <algorithm>
 #include <cctype>
@@ -15,8 +15,8 @@
 #include "core/error.h"
 #include "core/file_text.h"
 #include "core/mesh.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
 
 namespace doasido::retarget {
 namespace {

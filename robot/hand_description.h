@@ -31,7 +31,7 @@
 #include <mujoco/mujoco.h>
 
 #include "core/geometry.h"
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 
 namespace doasido::retarget {
 

@@ -1,4 +1,4 @@
-#include "retarget/mjcf_text.h"
+#include "robot/mjcf_text.h"
 
 #include <filesystem>
 

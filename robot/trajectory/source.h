@@ -1,9 +1,9 @@
 // Where a clip's robot trajectory is: the output of the clip's run of its
-// trajectory stage (the dynamics-aware `retarget` when the pipeline has it,
-// else `retarget_kinematic`, retarget/kinematic_stage.h) that the database
-// records as done with verdict pass (Database::RecordedOutput). Both write retarget::HandTrajectory JSON;
-// the scene the trajectory was retargeted in is scene/scene.xml beside it
-// (or in the kinematic stage's folder).
+// trajectory stage (TrajectoryStageOf, robot/trajectory/format.h) that the
+// database records as done with verdict pass (Database::RecordedOutput).
+// Both trajectory stages write HandTrajectory JSON; the scene the
+// trajectory was retargeted in is kSceneFolder/kSceneFile beside it (or in
+// the kinematic stage's folder).
 #pragma once
 
 #include <filesystem>
@@ -11,9 +11,8 @@
 #include <string>
 
 #include "db/database.h"
-#include "retarget/dynamic_stage.h"
 
-namespace doasido::deploy {
+namespace doasido::retarget {
 
 struct TrajectoryFiles {
   std::string stage;                 // the stage whose trajectory this is
@@ -36,4 +35,4 @@ std::optional<TrajectoryFiles> FindTrajectoryFiles(Database& db, ClipId clip,
 // The text of <scene_dir>/scene.xml, or "" when scene_dir is empty.
 std::string ReadSceneXml(const std::filesystem::path& scene_dir);
 
-}  // namespace doasido::deploy
+}  // namespace doasido::retarget

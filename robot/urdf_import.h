@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "retarget/embodiment.h"
-#include "retarget/hand_description.h"
+#include "robot/embodiment.h"
+#include "robot/hand_description.h"
 
 namespace doasido::retarget {
 

@@ -1,4 +1,4 @@
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 
 #include <cctype>
 #include <cmath>
@@ -12,8 +12,8 @@
 #include "core/error.h"
 #include "core/file_text.h"
 #include "core/json_input.h"
-#include "retarget/mjcf_text.h"
-#include "retarget/urdf_import.h"
+#include "robot/mjcf_text.h"
+#include "robot/urdf_import.h"
 
 namespace doasido::retarget {
 namespace {
@@ -201,6 +201,11 @@ std::filesystem::path FindModelFile(const std::string& model, const std::filesys
 }  // namespace
 
 std::filesystem::path BuiltinModelsDir() { return DataDir("models", "DOASIDO_MODELS_DIR"); }
+
+std::string DefaultRobotsDir() {
+  const std::filesystem::path p = DataDir("robots", "DOASIDO_ROBOTS_DIR");
+  return std::filesystem::exists(p) ? std::filesystem::weakly_canonical(p).string() : std::string();
+}
 
 std::string MissingBodyHint(const std::string& xml) {
   XMLDocument doc;

@@ -1,4 +1,4 @@
-#include "retarget/mj_model.h"
+#include "robot/mj_model.h"
 
 #include <unistd.h>
 

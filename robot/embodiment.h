@@ -11,7 +11,7 @@
 //
 // "model" is looked up relative to the description's folder, then the
 // robots folder given to the loader, then the built-in models folder
-// (retarget/models). Each point names a body or a site and an offset in its
+// (robot/models). Each point names a body or a site and an offset in its
 // frame. "scale" > 0 fixes the human-to-robot scale; 0 adapts it per
 // sequence (kinematic_retarget.h).
 //
@@ -32,8 +32,8 @@
 
 #include "core/config.h"
 #include "core/geometry.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
 
 namespace doasido::retarget {
 
@@ -61,9 +61,13 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Embodiment, name, side, model, f
                                                 points)
 
 // The folder holding doasido's own hand models and their descriptions (the
-// build copies retarget/models there): $DOASIDO_MODELS_DIR, else
+// build copies robot/models there): $DOASIDO_MODELS_DIR, else
 // share/doasido/models beside the executable's folder (core/data_dirs.h).
 std::filesystem::path BuiltinModelsDir();
+// The folder of third-party robot models and descriptions: $DOASIDO_ROBOTS_DIR,
+// else share/doasido/robots beside the executable's folder (the build links
+// it to ../shared/data/robots when that exists), when it exists; else "".
+std::string DefaultRobotsDir();
 
 // Reads and checks a description (keypoints in 0..20, each point naming one
 // body or site, at least one fingertip, model file found). Throws

@@ -10,9 +10,9 @@
 
 #include <Eigen/Core>
 
-#include "retarget/embodiment.h"
-#include "retarget/hand_description.h"
-#include "retarget/mj_model.h"
+#include "robot/embodiment.h"
+#include "robot/hand_description.h"
+#include "robot/mj_model.h"
 
 namespace doasido::retarget {
 

@@ -1,4 +1,4 @@
-#include "retarget/hand_mirror.h"
+#include "robot/hand_mirror.h"
 
 #include <cctype>
 #include <cmath>
@@ -13,8 +13,8 @@
 
 #include "core/error.h"
 #include "core/geometry.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/mjcf_text.h"
+#include "robot/mjcf_compat.h"
+#include "robot/mjcf_text.h"
 
 namespace doasido::retarget {
 namespace {

@@ -35,7 +35,7 @@
 #include <filesystem>
 #include <string>
 
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 
 namespace doasido::retarget {
 

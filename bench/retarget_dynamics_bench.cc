@@ -53,10 +53,10 @@
 
 #include "core/error.h"
 #include "recon/hot3d_recording.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
+#include "retarget/dynamic/rollout_pool.h"
 #include "retarget/reference_hold.h"
-#include "retarget/rollout_pool.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
 

@@ -19,7 +19,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/mesh.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "robot/embodiment.h"
 #include "robot/mjcf_compat.h"
 #include "robot/urdf_import.h"

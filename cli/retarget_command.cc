@@ -9,7 +9,7 @@
 #include "cli/output_options.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
 #include "robot/embodiment.h"
 

@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 #include "recon/bundle_location.h"
-#include "retarget/bimanual_retarget.h"
+#include "retarget/dynamic/bimanual_retarget.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::retarget {

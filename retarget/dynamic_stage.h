@@ -30,7 +30,7 @@
 
 #include "db/stage.h"
 #include "recon/recon_stage.h"
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
 
 namespace doasido::retarget {
 

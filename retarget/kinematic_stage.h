@@ -33,8 +33,8 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "retarget/config_checks.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/scene_builder.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/scene_builder.h"
 
 namespace doasido::retarget {
 

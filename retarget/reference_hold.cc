@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "retarget/dynamic_reference.h"
+#include "retarget/dynamic/dynamic_reference.h"
 
 namespace doasido::retarget {
 

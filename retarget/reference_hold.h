@@ -9,7 +9,7 @@
 #include <mujoco/mujoco.h>
 
 #include "core/geometry.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 
 namespace doasido::retarget {
 

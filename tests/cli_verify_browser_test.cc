@@ -19,7 +19,7 @@
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 #include "retarget/mug_mesh.h"
-#include "retarget/scene_builder.h"
+#include "retarget/scene/scene_builder.h"
 #include "review/server.h"
 #include "robot/embodiment.h"
 #include "robot/trajectory/format.h"

@@ -15,7 +15,7 @@
 #include "deploy/plan.h"
 #include "deploy/ur3e.h"
 #include "retarget/mug_mesh.h"
-#include "retarget/scene_builder.h"
+#include "retarget/scene/scene_builder.h"
 #include "robot/embodiment.h"
 
 namespace doasido::deploy {

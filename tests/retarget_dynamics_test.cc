@@ -8,12 +8,12 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/annealed_sampler.h"
-#include "retarget/dynamic_reference.h"
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/annealed_sampler.h"
+#include "retarget/dynamic/dynamic_reference.h"
+#include "retarget/dynamic/dynamic_retarget.h"
+#include "retarget/dynamic/retarget_reward.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
-#include "retarget/retarget_reward.h"
 #include "synth/objects.h"
 #include "synth/reconstruction_noise.h"
 #include "tests/small_retarget_config.h"

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "robot/embodiment.h"
 #include "robot/hand_check.h"
 #include "robot/hand_description.h"

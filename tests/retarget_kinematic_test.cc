@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "robot/embodiment.h"
 #include "tests/test_util.h"
 

@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 
 #include "core/mesh.h"
-#include "retarget/convex_decomposition.h"
 #include "retarget/mug_mesh.h"
-#include "retarget/scene_builder.h"
+#include "retarget/scene/convex_decomposition.h"
+#include "retarget/scene/scene_builder.h"
 #include "robot/mj_model.h"
 #include "robot/mjcf_compat.h"
 #include "tests/test_util.h"

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "robot/embodiment.h"
 #include "synth/episode.h"
 #include "synth/objects.h"

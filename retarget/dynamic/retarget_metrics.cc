@@ -1,4 +1,4 @@
-#include "retarget/retarget_metrics.h"
+#include "retarget/dynamic/retarget_metrics.h"
 
 #include <cmath>
 

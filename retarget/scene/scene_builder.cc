@@ -1,4 +1,4 @@
-#include "retarget/scene_builder.h"
+#include "retarget/scene/scene_builder.h"
 
 #include <cmath>
 #include <fstream>

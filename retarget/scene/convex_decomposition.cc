@@ -1,4 +1,4 @@
-#include "retarget/convex_decomposition.h"
+#include "retarget/scene/convex_decomposition.h"
 
 #include <algorithm>
 #include <cmath>

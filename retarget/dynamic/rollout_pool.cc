@@ -1,4 +1,4 @@
-#include "retarget/rollout_pool.h"
+#include "retarget/dynamic/rollout_pool.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
 
 #include "core/config_check.h"
 #include "core/error.h"

@@ -19,8 +19,8 @@
 #include "core/geometry.h"
 #include "core/mesh.h"
 #include "recon/reconstruction.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/knot_spline.h"
+#include "retarget/dynamic/knot_spline.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "robot/mj_model.h"
 
 namespace doasido::retarget {

@@ -1,4 +1,4 @@
-#include "retarget/knot_spline.h"
+#include "retarget/dynamic/knot_spline.h"
 
 #include <algorithm>
 #include <cmath>

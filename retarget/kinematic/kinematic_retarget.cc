@@ -1,4 +1,4 @@
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 
 #include <algorithm>
 #include <cmath>

@@ -50,7 +50,7 @@
 
 #include "core/config.h"
 #include "core/geometry.h"
-#include "retarget/object_surface.h"
+#include "retarget/scene/object_surface.h"
 #include "robot/embodiment.h"
 #include "robot/trajectory/format.h"
 

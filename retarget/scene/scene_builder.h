@@ -29,7 +29,7 @@
 #include "core/config.h"
 #include "core/geometry.h"
 #include "core/mesh.h"
-#include "retarget/convex_decomposition.h"
+#include "retarget/scene/convex_decomposition.h"
 
 namespace doasido::retarget {
 

@@ -19,11 +19,11 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "recon/reconstruction.h"
-#include "retarget/annealed_sampler.h"
-#include "retarget/dynamic_reference.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/retarget_metrics.h"
-#include "retarget/scene_builder.h"
+#include "retarget/dynamic/annealed_sampler.h"
+#include "retarget/dynamic/dynamic_reference.h"
+#include "retarget/dynamic/retarget_metrics.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/scene_builder.h"
 #include "robot/embodiment.h"
 
 namespace doasido::retarget {

@@ -1,4 +1,4 @@
-#include "retarget/object_surface.h"
+#include "retarget/scene/object_surface.h"
 
 #include <limits>
 

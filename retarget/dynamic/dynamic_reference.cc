@@ -1,4 +1,4 @@
-#include "retarget/dynamic_reference.h"
+#include "retarget/dynamic/dynamic_reference.h"
 
 #include <algorithm>
 #include <cmath>

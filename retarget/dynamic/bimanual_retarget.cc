@@ -1,4 +1,4 @@
-#include "retarget/bimanual_retarget.h"
+#include "retarget/dynamic/bimanual_retarget.h"
 
 #include <tinyxml2.h>
 

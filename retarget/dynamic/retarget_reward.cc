@@ -1,4 +1,4 @@
-#include "retarget/retarget_reward.h"
+#include "retarget/dynamic/retarget_reward.h"
 
 #include <cmath>
 

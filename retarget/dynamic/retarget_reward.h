@@ -17,7 +17,7 @@
 #pragma once
 
 #include "core/config.h"
-#include "retarget/dynamic_reference.h"
+#include "retarget/dynamic/dynamic_reference.h"
 
 namespace doasido::retarget {
 

@@ -56,8 +56,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "retarget/dynamic_reference.h"
-#include "retarget/retarget_reward.h"
+#include "retarget/dynamic/dynamic_reference.h"
+#include "retarget/dynamic/retarget_reward.h"
 
 namespace doasido::retarget {
 

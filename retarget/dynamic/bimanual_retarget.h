@@ -23,7 +23,7 @@
 #include <string>
 
 #include "recon/reconstruction.h"
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
 
 namespace doasido::retarget {
 

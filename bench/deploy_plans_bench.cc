@@ -31,12 +31,12 @@
 #include "core/error.h"
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
-#include "recon/hot3d_recording.h"
+#include "eval/hot3d_recording.h"
+#include "eval/reconstruction_noise.h"
 #include "retarget/dynamic/bimanual_retarget.h"
 #include "retarget/dynamic/dynamic_retarget.h"
 #include "robot/trajectory/source.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 
 namespace {
 

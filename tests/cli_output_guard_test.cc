@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "dataset/version.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

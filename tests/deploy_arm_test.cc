@@ -14,7 +14,7 @@
 #include "deploy/arm_ik.h"
 #include "deploy/plan.h"
 #include "deploy/ur3e.h"
-#include "retarget/mug_mesh.h"
+#include "eval/mug_mesh.h"
 #include "retarget/scene/scene_builder.h"
 #include "robot/embodiment.h"
 

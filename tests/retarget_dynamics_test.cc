@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "eval/reconstruction_noise.h"
 #include "retarget/dynamic/annealed_sampler.h"
 #include "retarget/dynamic/dynamic_reference.h"
 #include "retarget/dynamic/dynamic_retarget.h"
@@ -15,7 +16,6 @@
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 #include "tests/small_retarget_config.h"
 #include "tests/test_util.h"
 

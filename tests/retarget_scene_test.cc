@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "core/mesh.h"
-#include "retarget/mug_mesh.h"
+#include "eval/mug_mesh.h"
 #include "retarget/scene/convex_decomposition.h"
 #include "retarget/scene/scene_builder.h"
 #include "robot/mj_model.h"

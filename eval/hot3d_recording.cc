@@ -1,4 +1,4 @@
-#include "recon/hot3d_recording.h"
+#include "eval/hot3d_recording.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "retarget/mug_mesh.h"
+#include "eval/mug_mesh.h"
 
 #include <algorithm>
 #include <cmath>

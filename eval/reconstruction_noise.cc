@@ -1,4 +1,4 @@
-#include "synth/reconstruction_noise.h"
+#include "eval/reconstruction_noise.h"
 
 #include <random>
 

@@ -21,8 +21,8 @@
 #include <string>
 
 #include "core/mesh.h"
+#include "eval/umetrack_hand.h"
 #include "recon/reconstruction.h"
-#include "recon/umetrack_hand.h"
 
 namespace doasido::recon {
 

@@ -1,4 +1,4 @@
-#include "recon/umetrack_hand.h"
+#include "eval/umetrack_hand.h"
 
 #include <cmath>
 

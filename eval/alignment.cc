@@ -1,4 +1,4 @@
-#include "recon/alignment.h"
+#include "eval/alignment.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // A one-node Slurm cluster on loopback, for tests/cli_slurm_test.cc and
 // bench/pipeline_shard_bench.cc: Debian's munged, slurmctld and slurmd
-// (installed by scripts/setup.sh) run as root from tests/slurm/slurm.conf.in
+// (installed by scripts/setup.sh) run as root from testing/slurm/slurm.conf.in
 // with a fresh key, free ports and the machine's CPUs, two partitions (test,
 // the default, and gpu) and one "gpu" GRES, for the lifetime of
 // the object; they are stopped by their pids when it is destroyed.

@@ -1,4 +1,4 @@
-#include "synth/tracking_ablation.h"
+#include "eval/tracking_ablation.h"
 
 #include "recon/adaptive_guidance.h"
 #include "recon/object_tracker.h"

@@ -1,4 +1,4 @@
-#include "recon/mixture_file.h"
+#include "eval/mixture_file.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "tests/slurm/loopback_cluster.h"
+#include "testing/slurm/loopback_cluster.h"
 
 #include <netinet/in.h>
 #include <signal.h>
@@ -62,7 +62,7 @@ std::string Shell(const std::string& command) {
 
 LoopbackSlurm::LoopbackSlurm(const std::filesystem::path& dir) : dir_(dir) {
   for (const char* sub : {"state", "spool"}) std::filesystem::create_directories(dir / sub);
-  std::string conf = Slurp(std::filesystem::path(DOASIDO_SOURCE_DIR) / "tests/slurm/slurm.conf.in");
+  std::string conf = Slurp(std::filesystem::path(DOASIDO_SOURCE_DIR) / "testing/slurm/slurm.conf.in");
   conf = Replace(conf, "@DIR@", dir.string());
   conf = Replace(conf, "@CTLD_PORT@", std::to_string(FreePort()));
   conf = Replace(conf, "@SLURMD_PORT@", std::to_string(FreePort()));

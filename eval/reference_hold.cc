@@ -1,4 +1,4 @@
-#include "retarget/reference_hold.h"
+#include "eval/reference_hold.h"
 
 #include <algorithm>
 #include <cmath>

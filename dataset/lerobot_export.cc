@@ -9,13 +9,13 @@
 #include "core/error.h"
 #include "core/tool_version.h"
 #include "dataset/feature_stats.h"
-#include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
 #include "dataset/resample.h"
 #include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
 #include "robot/trajectory/format.h"
 #include "video/frame_count.h"
+#include "video/mp4_writer.h"
 #include "video/video_decoder.h"
 
 namespace doasido::dataset {

@@ -10,7 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace doasido::dataset {
+namespace doasido {
 
 struct Mp4Info {
   int width = 0, height = 0;  // even
@@ -44,4 +44,4 @@ class Mp4Writer {
   bool finished_ = false;
 };
 
-}  // namespace doasido::dataset
+}  // namespace doasido

@@ -1,4 +1,4 @@
-#include "dataset/mp4_writer.h"
+#include "video/mp4_writer.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -11,7 +11,7 @@ extern "C" {
 
 #include "core/error.h"
 
-namespace doasido::dataset {
+namespace doasido {
 
 struct Mp4Writer::Av {
   AVFormatContext* format = nullptr;
@@ -126,4 +126,4 @@ std::int64_t Mp4Writer::Finish() {
   return frames_;
 }
 
-}  // namespace doasido::dataset
+}  // namespace doasido

@@ -18,8 +18,8 @@
 #include "dataset/robomimic_export.h"
 #include "dataset/version_store.h"
 #include "db/database.h"
-#include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/trajectory/format.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

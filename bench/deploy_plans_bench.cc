@@ -31,12 +31,12 @@
 #include "core/error.h"
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
-#include "deploy/trajectory_source.h"
-#include "recon/hot3d_recording.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/dynamic_retarget.h"
+#include "eval/hot3d_recording.h"
+#include "eval/reconstruction_noise.h"
+#include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
+#include "robot/trajectory/source.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 
 namespace {
 
@@ -178,12 +178,12 @@ struct Row {
 
 Row PlanOne(const Flags& f, const fs::path& dir) {
   Row row{.name = dir.filename().string()};
-  const deploy::TrajectoryFiles files = deploy::FilesBeside(dir / "trajectory.json");
+  const retarget::TrajectoryFiles files = retarget::FilesBeside(dir / "trajectory.json");
   const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files.trajectory);
   const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
   deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
   if (f.replay) {
-    deploy::ReplayPlan(plan, t, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
+    deploy::ReplayPlan(plan, t, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
   }
   const deploy::ReplayReport& r = plan.replay;
   for (size_t k = 0; !f.only.empty() && k < r.object_position_error.size(); k += 25) {

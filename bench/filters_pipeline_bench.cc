@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "bench/child_cpu.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 
 namespace {
 

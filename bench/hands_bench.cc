@@ -33,7 +33,7 @@
 #include "hands/hand_detection.h"
 #include "hands/hand_reconstruction.h"
 #include "synth/generator.h"
-#include "tests/synthetic_hand_track.h"
+#include "testing/synthetic_hand_track.h"
 
 using namespace doasido;
 using namespace doasido::hands;
@@ -286,7 +286,7 @@ void SynthRendered(int clips) {
   PrintError("default fov", errors[1]);
 }
 
-// Synthetic tracks (tests/synthetic_hand_track.h): a real hand's motion
+// Synthetic tracks (testing/synthetic_hand_track.h): a real hand's motion
 // seen through cameras of three focal lengths, keypoints with 1.5 px noise,
 // 3D landmarks with 3 mm noise; fitted with the true K and the default fov.
 void SynthTracks() {

@@ -18,7 +18,7 @@
 //    three stage groups, the middle one, a light stage, on partition gpu with
 //    a GRES): the same clips in a fresh parent, `doasido slurm submit --shards 4
 //    --cpus-per-task 1` to a one-node cluster started on loopback
-//    (tests/slurm/loopback_cluster.h), timed from the submit command to the
+//    (testing/slurm/loopback_cluster.h), timed from the submit command to the
 //    merge job's end by polling squeue every 0.2 s, against the one
 //    `doasido run` of section 2: total wall time, and what Slurm adds in
 //    phases (submit = shard + script + sbatch; the wait for the first task;
@@ -38,8 +38,8 @@
 
 #include "db/database.h"
 #include "pipeline/shard.h"
-#include "tests/db_dump.h"
-#include "tests/slurm/loopback_cluster.h"
+#include "testing/db_dump.h"
+#include "testing/slurm/loopback_cluster.h"
 
 namespace {
 

@@ -23,8 +23,8 @@
 
 
 #include "core/mesh.h"
+#include "eval/hot3d_recording.h"
 #include "recon/hand_object_alignment.h"
-#include "recon/hot3d_recording.h"
 #include "recon/ray_caster.h"
 #include "synth/generator.h"
 #include "synth/model_noise.h"

@@ -10,7 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include "core/mesh.h"
-#include "recon/alignment.h"
+#include "eval/alignment.h"
 #include "recon/recon_metrics.h"
 
 namespace doasido::recon {

@@ -17,7 +17,7 @@
 #include <fstream>
 #include <string>
 
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 
 namespace {
 

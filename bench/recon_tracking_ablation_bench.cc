@@ -20,11 +20,11 @@
 #include <cstdlib>
 #include <vector>
 
-#include "recon/mixture_file.h"
+#include "eval/mixture_file.h"
+#include "eval/tracking_ablation.h"
 #include "recon/object_tracker.h"
 #include "recon/silhouette.h"
 #include "recon/velocity_server.h"
-#include "synth/tracking_ablation.h"
 
 namespace {
 

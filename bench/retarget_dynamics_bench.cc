@@ -14,7 +14,7 @@
 //     them (noisy) with the seed preset (14-17 min a clip; without it,
 //     its bound at 32 iterations a plan, i.e. without early stops);
 //  4. real references (--sections=hot3d): the HOT3D sample's hands and the
-//     object each hand's fingertips come closest to (recon/hot3d_recording.h),
+//     object each hand's fingertips come closest to (eval/hot3d_recording.h),
 //     the left hand onto sharpa_left and, mirrored, onto sharpa_right; the
 //     right hand onto sharpa_right; fast preset, and seed with --seed_wall;
 //  5. the kinematic reference's grasps (--sections=grasp), with and without
@@ -52,13 +52,13 @@
 #include <thread>
 
 #include "core/error.h"
-#include "recon/hot3d_recording.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/dynamic_retarget.h"
-#include "retarget/reference_hold.h"
-#include "retarget/rollout_pool.h"
+#include "eval/hot3d_recording.h"
+#include "eval/reconstruction_noise.h"
+#include "eval/reference_hold.h"
+#include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
+#include "retarget/dynamic/rollout_pool.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 
 namespace {
 

@@ -19,10 +19,10 @@
 #include <spdlog/spdlog.h>
 
 #include "core/mesh.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/urdf_import.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "robot/embodiment.h"
+#include "robot/mjcf_compat.h"
+#include "robot/urdf_import.h"
 
 namespace {
 

@@ -18,9 +18,9 @@
 
 #include "core/file_text.h"
 #include "core/mesh.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/scene_builder.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/scene_builder.h"
+#include "robot/embodiment.h"
 
 namespace {
 

@@ -18,10 +18,10 @@
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
-#include "deploy/trajectory_source.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/embodiment.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/embodiment.h"
+#include "robot/trajectory/format.h"
+#include "robot/trajectory/source.h"
 
 namespace doasido::cli {
 namespace {
@@ -89,14 +89,14 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   if (cmd.count("--yaw-steps")) config.workspace.yaw_steps = a.config.workspace.yaw_steps;
   if (cmd.count("--offset-steps")) config.workspace.offset_steps = a.config.workspace.offset_steps;
   deploy::CheckConfig(config, "deploy");
-  deploy::TrajectoryFiles files;
+  retarget::TrajectoryFiles files;
   if (!a.trajectory.empty()) {
     // Relative to the working directory, like every path on the command line.
-    files = deploy::FilesBeside(std::filesystem::absolute(a.trajectory));
+    files = retarget::FilesBeside(std::filesystem::absolute(a.trajectory));
   } else {
     Database db(a.db.db, Database::OpenMode::kExisting);
     std::string why;
-    auto found = deploy::FindTrajectoryFiles(db, a.clip, &why);
+    auto found = retarget::FindTrajectoryFiles(db, a.clip, &why);
     if (!found) {
       throw Error("no_trajectory", "no trajectory to plan: " + why,
                   {.clip = std::to_string(a.clip), .file = db.path().string()});
@@ -119,7 +119,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::Plan plan = deploy::MakePlan(trajectory, hand, config);
   plan.source = files.trajectory.string();
   if (config.replay && !a.no_replay) {
-    deploy::ReplayPlan(plan, trajectory, hand, deploy::ReadSceneXml(files.scene_dir), files.scene_dir,
+    deploy::ReplayPlan(plan, trajectory, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir,
                        config.servo_omega);
   }
   WriteWhole(a.out, OutputKind::kFile, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });

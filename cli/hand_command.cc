@@ -6,13 +6,13 @@
 #include <memory>
 
 #include "cli/commands.h"
-#include "cli/output_options.h"
 #include "cli/hand_render.h"
+#include "cli/output_options.h"
 #include "core/error.h"
-#include "retarget/hand_check.h"
-#include "retarget/hand_mirror.h"
 #include "retarget/kinematic_stage.h"
-#include "retarget/urdf_import.h"
+#include "robot/hand_check.h"
+#include "robot/hand_mirror.h"
+#include "robot/urdf_import.h"
 
 namespace doasido::cli {
 namespace {

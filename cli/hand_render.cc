@@ -9,7 +9,7 @@
 
 #include "core/error.h"
 #include "core/whole_output.h"
-#include "retarget/hand_mesh.h"
+#include "robot/hand_mesh.h"
 #include "synth/rasterizer.h"
 
 namespace doasido::cli {

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "retarget/hand_check.h"
+#include "robot/hand_check.h"
 
 namespace doasido::cli {
 

@@ -12,10 +12,10 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "dataset/mp4_writer.h"
 #include "hands/hand_keypoints_json.h"
 #include "hands/hand_overlay.h"
 #include "hands/hand_reconstruction.h"
+#include "video/mp4_writer.h"
 
 namespace doasido::cli {
 namespace {
@@ -51,7 +51,7 @@ void WriteVideoOverlay(const fs::path& video, const Json& keypoints, const fs::p
   VideoDecoder decoder(video, options);
   const int width = keypoints.at("width"), height = keypoints.at("height");
   const double fps = keypoints.at("fps").get<double>() > 0 ? keypoints.at("fps").get<double>() : 30.0;
-  dataset::Mp4Writer writer(path, decoder.geometry().width, decoder.geometry().height, fps);
+  Mp4Writer writer(path, decoder.geometry().width, decoder.geometry().height, fps);
   const Json& frames = keypoints.at("frames");
   AnalysisFrame frame;
   for (size_t i = 0; i < frames.size() && decoder.Next(&frame); ++i) {

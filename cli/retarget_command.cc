@@ -9,9 +9,9 @@
 #include "cli/output_options.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/embodiment.h"
 
 namespace doasido::cli {
 
@@ -62,7 +62,7 @@ void AddRetargetCommand(CLI::App& app) {
     CheckOutputPath({.path = opt->out,
                      .kind = OutputRequest::Kind::kFolder,
                      .what = "the trajectory",
-                     .is_own_output = FolderHolds({"trajectory.json"}),
+                     .is_own_output = FolderHolds({retarget::kTrajectoryFile}),
                      .force = opt->force});
     const std::string robots =
         opt->robots_dir.empty() ? retarget::DefaultRobotsDir() : opt->robots_dir;
@@ -78,8 +78,8 @@ void AddRetargetCommand(CLI::App& app) {
         solver.Solve(frames, {}, opt->fps, [&progress](std::size_t done) { progress.Set(done); });
     progress.Finish();
     WriteWhole(opt->out, OutputKind::kFolder, [&](const std::filesystem::path& temp) {
-      retarget::WriteTrajectoryJson(t, temp / "trajectory.json");
-      retarget::WriteTrajectoryCsv(t, temp / "trajectory.csv");
+      retarget::WriteTrajectoryJson(t, temp / retarget::kTrajectoryFile);
+      retarget::WriteTrajectoryCsv(t, temp / retarget::kTrajectoryCsvFile);
     });
     const retarget::FingertipErrorStats e = retarget::SummarizeFingertipError(t.fingertip_error);
     std::printf("%s: %d frames, scale %.3f, fingertip error mean %.1f mm, p95 %.1f mm -> %s\n",

@@ -6,8 +6,7 @@
 
 #include "core/error.h"
 #include "ingest/file_sha256.h"
-#include "retarget/dynamic_stage.h"
-#include "retarget/kinematic_stage.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 namespace {
@@ -56,9 +55,7 @@ std::string Text(const Json& metadata, const char* key) {
 }  // namespace
 
 std::string TrajectoryStage(const std::vector<std::string>& pipeline) {
-  for (const char* stage : {retarget::kRetargetStageName, retarget::kKinematicStageName}) {
-    if (std::find(pipeline.begin(), pipeline.end(), stage) != pipeline.end()) return stage;
-  }
+  if (std::string stage = retarget::TrajectoryStageOf(pipeline); !stage.empty()) return stage;
   throw Error("no_trajectory_stage",
               "the pipeline has no retargeting stage (add retarget or retarget_kinematic with "
               "`doasido init --pipeline ...`)",

@@ -9,13 +9,13 @@
 #include "core/error.h"
 #include "core/tool_version.h"
 #include "dataset/feature_stats.h"
-#include "dataset/mp4_writer.h"
 #include "dataset/parquet_writer.h"
-#include "dataset/trajectory_uniformity.h"
 #include "dataset/resample.h"
+#include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 #include "video/frame_count.h"
+#include "video/mp4_writer.h"
 #include "video/video_decoder.h"
 
 namespace doasido::dataset {
@@ -155,84 +155,94 @@ std::string ListType(const char* element, size_t n) {
   return std::string(element) + "[" + std::to_string(n) + "]";
 }
 
-}  // namespace
 
-ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir,
-                            const LeRobotOptions& options) {
-  const Manifest m = ReadManifest(version_dir);
-  std::error_code ec;
-  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec)) {
-    throw Error("output_exists", "the export folder is not empty", {.file = out_dir.string()});
-  }
-  if (m.episodes.empty()) throw Error("empty_version", "the version has no episodes", {.file = version_dir.string()});
-
+// What every step of the export shares: the episodes loaded in export
+// order with their actions, the tasks, and what the features hold.
+struct ExportPlan {
   std::vector<LoadedEpisode> episodes;
-  std::map<std::string, std::int64_t> task_index;
   std::vector<std::string> tasks;
+  double fps = 0;
+  bool use_ctrl = false;     // actions are the controls (all episodes have the same), else next qpos
+  bool with_object = false;  // every episode has object poses
+  std::int64_t total = 0;    // frames over all episodes
+  size_t nq = 0, na = 0;     // state and action sizes
+  const retarget::HandTrajectory& first() const { return episodes.front().trajectory; }
+  const std::vector<std::string>& action_names() const {
+    return use_ctrl ? first().ctrl_names : first().qpos_names;
+  }
+};
+
+// Loads the version's episodes in export order, numbers their tasks and
+// derives each frame's action and global index.
+ExportPlan LoadPlan(const Manifest& m, const fs::path& version_dir, const LeRobotOptions& options) {
+  ExportPlan plan;
+  std::vector<LoadedEpisode>& episodes = plan.episodes;
+  std::map<std::string, std::int64_t> task_index;
   for (const Episode* e : ExportOrder(m)) {
     LoadedEpisode l;
     l.episode = e;
     Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front(), options.fps);
     if (!task_index.count(e->task)) {
-      task_index[e->task] = static_cast<std::int64_t>(tasks.size());
-      tasks.push_back(e->task);
+      task_index[e->task] = static_cast<std::int64_t>(plan.tasks.size());
+      plan.tasks.push_back(e->task);
     }
     l.task_index = task_index[e->task];
     episodes.push_back(std::move(l));
   }
-  const retarget::HandTrajectory& first = episodes.front().trajectory;
-  const double fps = first.fps;
-  const bool use_ctrl = std::all_of(episodes.begin(), episodes.end(), [&](const LoadedEpisode& l) {
+  const retarget::HandTrajectory& first = plan.first();
+  plan.fps = first.fps;
+  plan.use_ctrl = std::all_of(episodes.begin(), episodes.end(), [&](const LoadedEpisode& l) {
     return !l.trajectory.ctrl.empty() && l.trajectory.ctrl_names == first.ctrl_names;
   });
-  const bool with_object = std::all_of(episodes.begin(), episodes.end(),
-                                       [](const LoadedEpisode& l) { return !l.object_pose.empty(); });
-  std::int64_t total = 0;
+  plan.with_object = std::all_of(episodes.begin(), episodes.end(),
+                                 [](const LoadedEpisode& l) { return !l.object_pose.empty(); });
   for (LoadedEpisode& l : episodes) {
     const auto& t = l.trajectory;
     const size_t n = t.qpos.size();
     for (size_t f = 0; f < n; ++f) {
-      const Eigen::VectorXd& a = use_ctrl ? t.ctrl[f] : t.qpos[std::min(f + 1, n - 1)];
+      const Eigen::VectorXd& a = plan.use_ctrl ? t.ctrl[f] : t.qpos[std::min(f + 1, n - 1)];
       l.action.emplace_back(a.data(), a.data() + a.size());
     }
-    l.from = total;
-    total += static_cast<std::int64_t>(n);
+    l.from = plan.total;
+    plan.total += static_cast<std::int64_t>(n);
   }
-  const size_t nq = first.qpos_names.size();
-  const size_t na = episodes.front().action[0].size();
-  const std::vector<std::string>& action_names = use_ctrl ? first.ctrl_names : first.qpos_names;
+  plan.nq = first.qpos_names.size();
+  plan.na = episodes.front().action[0].size();
+  return plan;
+}
 
-  // Frames.
+// data/chunk-000/file-000.parquet: one row a frame, one row group an episode.
+void WriteFrames(const ExportPlan& plan, const fs::path& out_dir, const fs::path& scratch) {
   std::vector<ParquetColumn> data_columns = {
       {"timestamp", "FLOAT"},          {"frame_index", "BIGINT"}, {"episode_index", "BIGINT"},
-      {"index", "BIGINT"},             {"task_index", "BIGINT"},  {kStateFeature, ListType("FLOAT", nq)},
-      {kActionFeature, ListType("FLOAT", na)}};
-  if (with_object) data_columns.push_back({kObjectPoseFeature, "FLOAT[7]"});
-  const fs::path scratch = out_dir / ".staging";
-  ExportSummary summary;
-  {
-    ParquetWriter data(out_dir / "data" / kChunk / (std::string(kFile) + ".parquet"), data_columns, scratch);
-    for (size_t i = 0; i < episodes.size(); ++i) {
-      const LoadedEpisode& l = episodes[i];
-      std::vector<Json> rows;
-      for (size_t f = 0; f < l.state.size(); ++f) {
-        Json row = {{"timestamp", static_cast<double>(f) / fps},
-                    {"frame_index", f},
-                    {"episode_index", i},
-                    {"index", l.from + static_cast<std::int64_t>(f)},
-                    {"task_index", l.task_index},
-                    {kStateFeature, l.state[f]},
-                    {kActionFeature, l.action[f]}};
-        if (with_object) row[kObjectPoseFeature] = l.object_pose[f];
-        rows.push_back(std::move(row));
-      }
-      data.AddRowGroup(rows);
+      {"index", "BIGINT"},             {"task_index", "BIGINT"},  {kStateFeature, ListType("FLOAT", plan.nq)},
+      {kActionFeature, ListType("FLOAT", plan.na)}};
+  if (plan.with_object) data_columns.push_back({kObjectPoseFeature, "FLOAT[7]"});
+  ParquetWriter data(out_dir / "data" / kChunk / (std::string(kFile) + ".parquet"), data_columns, scratch);
+  for (size_t i = 0; i < plan.episodes.size(); ++i) {
+    const LoadedEpisode& l = plan.episodes[i];
+    std::vector<Json> rows;
+    for (size_t f = 0; f < l.state.size(); ++f) {
+      Json row = {{"timestamp", static_cast<double>(f) / plan.fps},
+                  {"frame_index", f},
+                  {"episode_index", i},
+                  {"index", l.from + static_cast<std::int64_t>(f)},
+                  {"task_index", l.task_index},
+                  {kStateFeature, l.state[f]},
+                  {kActionFeature, l.action[f]}};
+      if (plan.with_object) row[kObjectPoseFeature] = l.object_pose[f];
+      rows.push_back(std::move(row));
     }
-    data.Finish();
+    data.AddRowGroup(rows);
   }
+  data.Finish();
+}
 
-  // Statistics, per episode and over the dataset.
-  std::vector<std::pair<std::string, std::function<Rows(const LoadedEpisode&, size_t)>>> numeric = {
+// The numeric features, each with the rows it holds for episode i.
+using NumericFeatures = std::vector<std::pair<std::string, std::function<Rows(const LoadedEpisode&, size_t)>>>;
+NumericFeatures NumericFeaturesOf(const ExportPlan& plan) {
+  const double fps = plan.fps;
+  NumericFeatures numeric = {
       {"timestamp", [fps](const LoadedEpisode& l, size_t) {
          Rows r;
          for (size_t f = 0; f < l.state.size(); ++f) r.push_back({static_cast<double>(static_cast<float>(f / fps))});
@@ -253,29 +263,34 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
       {kStateFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.state); }},
       {kActionFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.action); }},
   };
-  if (with_object) {
+  if (plan.with_object) {
     numeric.push_back({kObjectPoseFeature, [](const LoadedEpisode& l, size_t) { return AsFloat32(l.object_pose); }});
   }
+  return numeric;
+}
+
+// Statistics of every numeric feature over the dataset (returned) and per
+// episode (*episode_stats).
+Json ComputeStatistics(const ExportPlan& plan, const NumericFeatures& numeric, std::vector<Json>* episode_stats) {
   Json stats = Json::object();
-  std::vector<Json> episode_stats(episodes.size(), Json::object());
+  episode_stats->assign(plan.episodes.size(), Json::object());
   for (const auto& [feature, rows_of] : numeric) {
     Rows all;
-    for (size_t i = 0; i < episodes.size(); ++i) {
-      Rows rows = rows_of(episodes[i], i);
-      episode_stats[i][feature] = ToJson(ComputeStats(rows));
+    for (size_t i = 0; i < plan.episodes.size(); ++i) {
+      Rows rows = rows_of(plan.episodes[i], i);
+      (*episode_stats)[i][feature] = ToJson(ComputeStats(rows));
       all.insert(all.end(), rows.begin(), rows.end());
     }
     stats[feature] = ToJson(ComputeStats(all));
   }
+  return stats;
+}
 
-  // Video.
-  Json video_feature;
-  if (options.videos) {
-    video_feature = WriteVideo(episodes, fps,
-                               out_dir / "videos" / kSourceVideoFeature / kChunk / (std::string(kFile) + ".mp4"));
-  }
-
-  // Episodes.
+// meta/episodes/chunk-000/file-000.parquet: one row an episode, with where
+// its frames (and video span) are and its statistics.
+void WriteEpisodeTable(const ExportPlan& plan, const NumericFeatures& numeric,
+                       const std::vector<Json>& episode_stats, bool videos, const fs::path& out_dir,
+                       const fs::path& scratch) {
   std::vector<ParquetColumn> episode_columns = {
       {"episode_index", "BIGINT"},          {"tasks", "VARCHAR[]"},
       {"length", "BIGINT"},                 {"data/chunk_index", "BIGINT"},
@@ -285,7 +300,7 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
       {"doasido/clip_id", "BIGINT"},        {"doasido/split", "VARCHAR"},
       {kHandOnlyColumn, "BOOLEAN"}};
   const std::string video_prefix = std::string("videos/") + kSourceVideoFeature + "/";
-  if (options.videos) {
+  if (videos) {
     for (const char* c : {"chunk_index", "file_index"}) episode_columns.push_back({video_prefix + c, "BIGINT"});
     for (const char* c : {"from_timestamp", "to_timestamp"}) episode_columns.push_back({video_prefix + c, "DOUBLE"});
   }
@@ -296,63 +311,65 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
                                  std::string(stat) == "count" ? "BIGINT[1]" : ListType("DOUBLE", dims)});
     }
   }
-  {
-    ParquetWriter writer(out_dir / "meta/episodes" / kChunk / (std::string(kFile) + ".parquet"),
-                         episode_columns, scratch);
-    std::vector<Json> rows;
-    for (size_t i = 0; i < episodes.size(); ++i) {
-      const LoadedEpisode& l = episodes[i];
-      const auto length = static_cast<std::int64_t>(l.state.size());
-      Json row = {{"episode_index", i},
-                  {"tasks", {l.episode->task}},
-                  {"length", length},
-                  {"data/chunk_index", 0},
-                  {"data/file_index", 0},
-                  {"dataset_from_index", l.from},
-                  {"dataset_to_index", l.from + length},
-                  {"meta/episodes/chunk_index", 0},
-                  {"meta/episodes/file_index", 0},
-                  {"doasido/episode_id", l.episode->id},
-                  {"doasido/clip_id", l.episode->clip_id},
-                  {"doasido/split", l.episode->split},
-                  {kHandOnlyColumn, l.episode->hand_only}};
-      if (options.videos) {
-        row[video_prefix + "chunk_index"] = 0;
-        row[video_prefix + "file_index"] = 0;
-        row[video_prefix + "from_timestamp"] = static_cast<double>(l.from) / fps;
-        row[video_prefix + "to_timestamp"] = static_cast<double>(l.from + length) / fps;
-      }
-      for (const auto& [feature, s] : episode_stats[i].items()) {
-        for (const auto& [stat, v] : s.items()) row["stats/" + feature + "/" + stat] = v;
-      }
-      rows.push_back(std::move(row));
+  ParquetWriter writer(out_dir / "meta/episodes" / kChunk / (std::string(kFile) + ".parquet"),
+                       episode_columns, scratch);
+  std::vector<Json> rows;
+  for (size_t i = 0; i < plan.episodes.size(); ++i) {
+    const LoadedEpisode& l = plan.episodes[i];
+    const auto length = static_cast<std::int64_t>(l.state.size());
+    Json row = {{"episode_index", i},
+                {"tasks", {l.episode->task}},
+                {"length", length},
+                {"data/chunk_index", 0},
+                {"data/file_index", 0},
+                {"dataset_from_index", l.from},
+                {"dataset_to_index", l.from + length},
+                {"meta/episodes/chunk_index", 0},
+                {"meta/episodes/file_index", 0},
+                {"doasido/episode_id", l.episode->id},
+                {"doasido/clip_id", l.episode->clip_id},
+                {"doasido/split", l.episode->split},
+                {kHandOnlyColumn, l.episode->hand_only}};
+    if (videos) {
+      row[video_prefix + "chunk_index"] = 0;
+      row[video_prefix + "file_index"] = 0;
+      row[video_prefix + "from_timestamp"] = static_cast<double>(l.from) / plan.fps;
+      row[video_prefix + "to_timestamp"] = static_cast<double>(l.from + length) / plan.fps;
     }
-    writer.AddRowGroup(rows);
-    writer.Finish();
+    for (const auto& [feature, s] : episode_stats[i].items()) {
+      for (const auto& [stat, v] : s.items()) row["stats/" + feature + "/" + stat] = v;
+    }
+    rows.push_back(std::move(row));
   }
-  {
-    ParquetWriter writer(out_dir / "meta/tasks.parquet", {{"task_index", "BIGINT"}, {"task", "VARCHAR"}},
-                         scratch);
-    writer.SetMetadata("pandas", PandasTaskIndex().dump());
-    std::vector<Json> rows;
-    for (size_t i = 0; i < tasks.size(); ++i) rows.push_back({{"task", tasks[i]}, {"task_index", i}});
-    writer.AddRowGroup(rows);
-    writer.Finish();
-  }
-  fs::remove_all(scratch, ec);
+  writer.AddRowGroup(rows);
+  writer.Finish();
+}
 
-  // info.json, stats.json, provenance.
+// meta/tasks.parquet: the task texts by index.
+void WriteTaskTable(const ExportPlan& plan, const fs::path& out_dir, const fs::path& scratch) {
+  ParquetWriter writer(out_dir / "meta/tasks.parquet", {{"task_index", "BIGINT"}, {"task", "VARCHAR"}},
+                       scratch);
+  writer.SetMetadata("pandas", PandasTaskIndex().dump());
+  std::vector<Json> rows;
+  for (size_t i = 0; i < plan.tasks.size(); ++i) rows.push_back({{"task", plan.tasks[i]}, {"task_index", i}});
+  writer.AddRowGroup(rows);
+  writer.Finish();
+}
+
+// meta/info.json: the features, the splits as episode ranges, the paths.
+Json InfoJson(const ExportPlan& plan, bool videos, const Json& video_feature) {
+  const std::vector<LoadedEpisode>& episodes = plan.episodes;
   Json features = {{"timestamp", Feature("float32", {1}, nullptr)},
                    {"frame_index", Feature("int64", {1}, nullptr)},
                    {"episode_index", Feature("int64", {1}, nullptr)},
                    {"index", Feature("int64", {1}, nullptr)},
                    {"task_index", Feature("int64", {1}, nullptr)},
-                   {kStateFeature, Feature("float32", {static_cast<int>(nq)}, first.qpos_names)},
-                   {kActionFeature, Feature("float32", {static_cast<int>(na)}, action_names)}};
-  if (with_object) {
+                   {kStateFeature, Feature("float32", {static_cast<int>(plan.nq)}, plan.first().qpos_names)},
+                   {kActionFeature, Feature("float32", {static_cast<int>(plan.na)}, plan.action_names())}};
+  if (plan.with_object) {
     features[kObjectPoseFeature] = Feature("float32", {7}, {"tx", "ty", "tz", "qw", "qx", "qy", "qz"});
   }
-  if (options.videos) features[kSourceVideoFeature] = video_feature;
+  if (videos) features[kSourceVideoFeature] = video_feature;
   Json splits = Json::object();
   for (size_t i = 0; i < episodes.size();) {
     size_t j = i;
@@ -360,30 +377,65 @@ ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir
     splits[episodes[i].episode->split] = std::to_string(i) + ":" + std::to_string(j);
     i = j;
   }
-  const Json info = {
+  return {
       {"codebase_version", kLeRobotVersion},
-      {"robot_type", first.embodiment},
+      {"robot_type", plan.first().embodiment},
       {"total_episodes", episodes.size()},
-      {"total_frames", total},
-      {"total_tasks", tasks.size()},
+      {"total_frames", plan.total},
+      {"total_tasks", plan.tasks.size()},
       {"chunks_size", 1000},
       {"data_files_size_in_mb", 100},
       {"video_files_size_in_mb", 200},
-      {"fps", fps},
+      {"fps", plan.fps},
       {"splits", splits},
       {"data_path", "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"},
-      {"video_path", options.videos ? Json("videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4")
-                                    : Json(nullptr)},
+      {"video_path", videos ? Json("videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4")
+                            : Json(nullptr)},
       {"features", features}};
-  WriteJson(out_dir / "meta/info.json", info);
+}
+
+std::int64_t FolderBytes(const fs::path& dir) {
+  std::int64_t bytes = 0;
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::end(it); ++it) {
+    if (it->is_regular_file()) bytes += static_cast<std::int64_t>(it->file_size());
+  }
+  return bytes;
+}
+
+}  // namespace
+
+ExportSummary ExportLeRobot(const fs::path& version_dir, const fs::path& out_dir,
+                            const LeRobotOptions& options) {
+  const Manifest m = ReadManifest(version_dir);
+  std::error_code ec;
+  if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec)) {
+    throw Error("output_exists", "the export folder is not empty", {.file = out_dir.string()});
+  }
+  if (m.episodes.empty()) throw Error("empty_version", "the version has no episodes", {.file = version_dir.string()});
+
+  const ExportPlan plan = LoadPlan(m, version_dir, options);
+  const fs::path scratch = out_dir / ".staging";
+  WriteFrames(plan, out_dir, scratch);
+  const NumericFeatures numeric = NumericFeaturesOf(plan);
+  std::vector<Json> episode_stats;
+  const Json stats = ComputeStatistics(plan, numeric, &episode_stats);
+  Json video_feature;
+  if (options.videos) {
+    video_feature = WriteVideo(plan.episodes, plan.fps,
+                               out_dir / "videos" / kSourceVideoFeature / kChunk / (std::string(kFile) + ".mp4"));
+  }
+  WriteEpisodeTable(plan, numeric, episode_stats, options.videos, out_dir, scratch);
+  WriteTaskTable(plan, out_dir, scratch);
+  fs::remove_all(scratch, ec);
+
+  WriteJson(out_dir / "meta/info.json", InfoJson(plan, options.videos, video_feature));
   WriteJson(out_dir / "meta/stats.json", stats);
   WriteJson(out_dir / "meta/doasido_manifest.json", ToJson(m));
 
-  summary.episodes = static_cast<std::int64_t>(episodes.size());
-  summary.frames = total;
-  for (auto it = fs::recursive_directory_iterator(out_dir); it != fs::end(it); ++it) {
-    if (it->is_regular_file()) summary.bytes += static_cast<std::int64_t>(it->file_size());
-  }
+  ExportSummary summary;
+  summary.episodes = static_cast<std::int64_t>(plan.episodes.size());
+  summary.frames = plan.total;
+  summary.bytes = FolderBytes(out_dir);
   return summary;
 }
 

@@ -9,7 +9,7 @@
 //   data/chunk-000/file-000.parquet            one row per frame, one row group
 //                         per episode (dataset/parquet_writer.h for the limit)
 //   videos/observation.images.source/chunk-000/file-000.mp4   the episodes'
-//                         source spans, one after another (dataset/mp4_writer.h)
+//                         source spans, one after another (video/mp4_writer.h)
 //   meta/doasido_manifest.json   the version's manifest (provenance)
 // Frame features: observation.state (the robot's joint positions), action
 // (the actuator targets when every trajectory has them, else the next

@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 

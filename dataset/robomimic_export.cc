@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "dataset/trajectory_uniformity.h"
 #include "dataset/version.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 

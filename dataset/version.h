@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/config.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 
@@ -31,8 +32,9 @@ inline constexpr const char* kManifestFile = "manifest.json";
 inline constexpr const char* kManifestHashFile = "manifest.sha256";
 inline constexpr const char* kEpisodesFolder = "episodes";
 inline constexpr const char* kPlaybookFolder = "playbook";
-// Every episode folder holds its robot trajectory under this name.
-inline constexpr const char* kTrajectoryFile = "trajectory.json";
+// Every episode folder holds its robot trajectory under the name the
+// trajectory stage wrote it.
+using retarget::kTrajectoryFile;
 
 // Which trajectories a version takes.
 enum class Selection {

@@ -19,7 +19,7 @@
 #include "dataset/version_files.h"
 #include "recon/recon_stage.h"
 #include "reports/report.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::dataset {
 namespace {

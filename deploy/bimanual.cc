@@ -9,6 +9,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
+#include "deploy/lcm_log.h"
 #include "doasido_lcm/bimanual_command.hpp"
 
 namespace doasido::deploy {
@@ -221,27 +222,18 @@ BimanualPlan BimanualPlanFromJson(const Json& j, const std::string& file) {
 }
 
 std::vector<BimanualRecord> ReadBimanualLog(const std::filesystem::path& path, const std::string& channel) {
-  lcm::LogFile log(path.string(), "r");
-  if (!log.good()) throw Error("bad_log", "cannot read LCM log", {.file = path.string()});
-  std::vector<BimanualRecord> out;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != channel) continue;
-    doasido_lcm::bimanual_command msg;
-    if (msg.decode(e->data, 0, e->datalen) < 0) {
-      throw Error("bad_log", "event " + std::to_string(e->eventnum) + " is not a bimanual_command",
-                  {.file = path.string(), .field = channel});
-    }
-    BimanualRecord r{.log_time_us = e->timestamp, .timestamp_us = msg.timestamp_us,
-                     .sequence = msg.sequence, .plan_time = msg.plan_time};
-    for (int i = 0; i < 6; ++i) {
-      r.left_arm[i] = msg.left_arm_q[i];
-      r.right_arm[i] = msg.right_arm_q[i];
-    }
-    r.left_hand = msg.left_hand_q;
-    r.right_hand = msg.right_hand_q;
-    out.push_back(std::move(r));
-  }
-  return out;
+  return ReadLcmLog<doasido_lcm::bimanual_command, BimanualRecord>(
+      path, channel, "a bimanual_command", [](const lcm::LogEvent& e, const doasido_lcm::bimanual_command& msg) {
+        BimanualRecord r{.log_time_us = e.timestamp, .timestamp_us = msg.timestamp_us,
+                         .sequence = msg.sequence, .plan_time = msg.plan_time};
+        for (int i = 0; i < 6; ++i) {
+          r.left_arm[i] = msg.left_arm_q[i];
+          r.right_arm[i] = msg.right_arm_q[i];
+        }
+        r.left_hand = msg.left_hand_q;
+        r.right_hand = msg.right_hand_q;
+        return r;
+      });
 }
 
 }  // namespace doasido::deploy

@@ -52,7 +52,7 @@
 #include "deploy/arm_ik.h"
 #include "deploy/time_scaling.h"
 #include "deploy/ur3e.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::deploy {
 

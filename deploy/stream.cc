@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "deploy/lcm_log.h"
 #include "doasido_lcm/arm_hand_command.hpp"
 
 namespace doasido::deploy {
@@ -114,23 +115,14 @@ StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const st
 }
 
 std::vector<CommandRecord> ReadCommandLog(const std::filesystem::path& path, const std::string& channel) {
-  lcm::LogFile log(path.string(), "r");
-  if (!log.good()) throw Error("bad_log", "cannot read LCM log", {.file = path.string()});
-  std::vector<CommandRecord> out;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != channel) continue;
-    doasido_lcm::arm_hand_command msg;
-    if (msg.decode(e->data, 0, e->datalen) < 0) {
-      throw Error("bad_log", "event " + std::to_string(e->eventnum) + " is not an arm_hand_command",
-                  {.file = path.string(), .field = channel});
-    }
-    CommandRecord r{.log_time_us = e->timestamp, .timestamp_us = msg.timestamp_us,
-                    .sequence = msg.sequence, .plan_time = msg.plan_time};
-    for (int i = 0; i < 6; ++i) r.arm[i] = msg.arm_q[i];
-    r.hand = msg.hand_q;
-    out.push_back(std::move(r));
-  }
-  return out;
+  return ReadLcmLog<doasido_lcm::arm_hand_command, CommandRecord>(
+      path, channel, "an arm_hand_command", [](const lcm::LogEvent& e, const doasido_lcm::arm_hand_command& msg) {
+        CommandRecord r{.log_time_us = e.timestamp, .timestamp_us = msg.timestamp_us,
+                        .sequence = msg.sequence, .plan_time = msg.plan_time};
+        for (int i = 0; i < 6; ++i) r.arm[i] = msg.arm_q[i];
+        r.hand = msg.hand_q;
+        return r;
+      });
 }
 
 }  // namespace doasido::deploy

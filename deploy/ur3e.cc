@@ -7,8 +7,8 @@
 #include <tinyxml2.h>
 
 #include "core/error.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/mjcf_text.h"
+#include "robot/mjcf_compat.h"
+#include "robot/mjcf_text.h"
 
 namespace doasido::deploy {
 namespace {

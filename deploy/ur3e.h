@@ -29,8 +29,8 @@
 #include <Eigen/Core>
 
 #include "core/geometry.h"
-#include "retarget/embodiment.h"
-#include "retarget/mj_model.h"
+#include "robot/embodiment.h"
+#include "robot/mj_model.h"
 
 namespace doasido::deploy {
 

@@ -3,8 +3,8 @@
 #include <numbers>
 
 #include "core/config_check.h"
-#include "retarget/embodiment.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/embodiment.h"
 
 namespace doasido::retarget {
 

@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "retarget/convex_decomposition.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/scene_builder.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/convex_decomposition.h"
+#include "retarget/scene/scene_builder.h"
 
 namespace doasido::retarget {
 

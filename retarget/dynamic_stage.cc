@@ -5,8 +5,8 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
-#include "retarget/bimanual_retarget.h"
 #include "recon/bundle_location.h"
+#include "retarget/dynamic/bimanual_retarget.h"
 #include "retarget/kinematic_stage.h"
 
 namespace doasido::retarget {
@@ -48,7 +48,7 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   if (!config_.left_hand.empty() && left_seen) {
     BimanualRun both = RetargetBimanual(r, mesh, FindEmbodiment(config_.left_hand, robots),
                                         FindEmbodiment(config_.hand, robots), config_,
-                                        context.artifact_dir / "scene", clip);
+                                        context.artifact_dir / kSceneFolder, clip);
     WriteTrajectoryJson(both.left_kinematic, context.artifact_dir / "kinematic_reference_left.json");
     result.artifacts.push_back({"kinematic_reference_left", "kinematic_reference_left.json"});
     m["left_wrist_error"] = both.left_wrist_error;
@@ -62,18 +62,18 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
     run.in_hand_frames = both.right_in_hand_frames;
   } else {
     run = RetargetReconstruction(r, mesh, FindEmbodiment(config_.hand, robots), config_,
-                                 context.artifact_dir / "scene", clip);
+                                 context.artifact_dir / kSceneFolder, clip);
   }
 
-  WriteTrajectoryJson(run.trajectory, context.artifact_dir / "trajectory.json");
-  WriteTrajectoryCsv(run.trajectory, context.artifact_dir / "trajectory.csv");
+  WriteTrajectoryJson(run.trajectory, context.artifact_dir / kTrajectoryFile);
+  WriteTrajectoryCsv(run.trajectory, context.artifact_dir / kTrajectoryCsvFile);
   WriteTrajectoryJson(run.kinematic, context.artifact_dir / "kinematic_reference.json");
-  std::ofstream(context.artifact_dir / "robot_scene.xml") << run.robot_scene_xml;
-  result.artifacts.insert(result.artifacts.begin(), {{"trajectory", "trajectory.json"},
-                                                     {"trajectory_csv", "trajectory.csv"},
+  std::ofstream(context.artifact_dir / kRobotSceneFile) << run.robot_scene_xml;
+  result.artifacts.insert(result.artifacts.begin(), {{"trajectory", kTrajectoryFile},
+                                                     {"trajectory_csv", kTrajectoryCsvFile},
                                                      {"kinematic_reference", "kinematic_reference.json"},
-                                                     {"scene", "scene/scene.xml"},
-                                                     {"robot_scene", "robot_scene.xml"}});
+                                                     {"scene", std::string(kSceneFolder) + "/" + kSceneFile},
+                                                     {"robot_scene", kRobotSceneFile}});
   m["e_pos"] = run.metrics.e_pos;
   m["e_rot"] = run.metrics.e_rot;
   m["success"] = run.metrics.success;

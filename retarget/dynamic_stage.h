@@ -30,12 +30,12 @@
 
 #include "db/stage.h"
 #include "recon/recon_stage.h"
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
 
 namespace doasido::retarget {
 
-// The stage's name: its queue name, its config section and its artifact folder.
-inline constexpr const char* kRetargetStageName = "retarget";
+// The stage's name (kRetargetStageName, robot/trajectory/format.h with the
+// trajectory file names) is its queue name, config section and artifact folder.
 
 // Reason codes of the stage's verdicts.
 inline constexpr const char* kReasonTrackingFailed = "tracking_failed";

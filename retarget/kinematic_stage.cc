@@ -17,7 +17,7 @@
 #include "recon/recon_stage.h"
 #include "recon/reconstruction.h"
 #include "retarget/dynamic_stage.h"
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 
 namespace doasido::retarget {
 namespace {
@@ -137,14 +137,6 @@ StageInput LoadInput(const ClipContext& context, const std::string& clip) {
   }
 }
 
-}  // namespace
-
-std::string DefaultRobotsDir() {
-  const std::filesystem::path p = DataDir("robots", "DOASIDO_ROBOTS_DIR");
-  return std::filesystem::exists(p) ? std::filesystem::weakly_canonical(p).string() : std::string();
-}
-
-namespace {
 
 // The left hand reflected through the world's x = 0 plane: a right hand
 // moving as the left did in a mirror, for the right robot hand.
@@ -198,26 +190,26 @@ StageResult KinematicStage::Run(const ClipContext& context) {
   std::filesystem::create_directories(context.artifact_dir);
   SceneFiles scene;
   if (in.object_mesh && !object_world.empty()) {
-    scene.dir = context.artifact_dir / "scene";
+    scene.dir = context.artifact_dir / kSceneFolder;
     SceneConfig scene_config = config_.scene;
     scene_config.place_on_floor = false;  // the floor is already under the object
     const ObjectScene built = BuildObjectScene(*in.object_mesh, object_world[0], scene_config, scene.dir);
     scene.xml = TryReadFile(built.xml_path).value_or("");
     m["object_mass"] = built.mass;
     m["object_hulls"] = built.hull_files.size();
-    result.artifacts.emplace_back("scene", "scene/scene.xml");
+    result.artifacts.emplace_back("scene", std::string(kSceneFolder) + "/" + kSceneFile);
   }
   if (!scene.xml.empty()) {
-    scene.robot_scene = context.artifact_dir / "robot_scene.xml";
-    result.artifacts.emplace_back("robot_scene", "robot_scene.xml");
+    scene.robot_scene = context.artifact_dir / kRobotSceneFile;
+    result.artifacts.emplace_back("robot_scene", kRobotSceneFile);
   }
   size_t changes = 0;
   HandTrajectory trajectory = RetargetHand(config_.hand, robots, human, valid, in.fps, scene, &changes);
   trajectory.object_poses = object_world;
-  WriteTrajectoryJson(trajectory, context.artifact_dir / "trajectory.json");
-  WriteTrajectoryCsv(trajectory, context.artifact_dir / "trajectory.csv");
-  result.artifacts.emplace_back("trajectory", "trajectory.json");
-  result.artifacts.emplace_back("trajectory_csv", "trajectory.csv");
+  WriteTrajectoryJson(trajectory, context.artifact_dir / kTrajectoryFile);
+  WriteTrajectoryCsv(trajectory, context.artifact_dir / kTrajectoryCsvFile);
+  result.artifacts.emplace_back("trajectory", kTrajectoryFile);
+  result.artifacts.emplace_back("trajectory_csv", kTrajectoryCsvFile);
 
   const FingertipErrorStats error = SummarizeFingertipError(trajectory.fingertip_error);
   m[kMeasureRetargetedHand] = in.has_right_hand ? kHandRight : kHandLeftMirrored;

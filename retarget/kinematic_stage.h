@@ -33,13 +33,13 @@
 #include "core/config.h"
 #include "db/stage.h"
 #include "retarget/config_checks.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/scene_builder.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/scene_builder.h"
 
 namespace doasido::retarget {
 
-// The stage's name: its queue name, its config section and its artifact folder.
-inline constexpr const char* kKinematicStageName = "retarget_kinematic";
+// The stage's name (kKinematicStageName, robot/trajectory/format.h with the
+// trajectory file names) is its queue name, config section and artifact folder.
 inline constexpr const char* kLeftTrajectoryFile = "trajectory_left.json";
 inline constexpr const char* kReasonNoHand = "no_hand";
 inline constexpr const char* kMeasureRetargetedHand = "retargeted_hand";
@@ -58,11 +58,6 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, left
                                                 flag_fingertip_error, kinematic, scene)
 // Also checks the nested kinematic and scene tables (retarget/config_checks.h).
 void CheckConfig(const KinematicStageConfig& c, const std::string& section);
-
-// The folder of third-party robot models and descriptions: $DOASIDO_ROBOTS_DIR,
-// else share/doasido/robots beside the executable's folder (the build links
-// it to ../shared/data/robots when that exists), when it exists; else "".
-std::string DefaultRobotsDir();
 
 class KinematicStage : public Stage {
  public:

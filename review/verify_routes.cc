@@ -9,11 +9,9 @@
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "core/file_text.h"
-#include "deploy/trajectory_source.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/kinematic_stage.h"
+#include "robot/embodiment.h"
+#include "robot/trajectory/format.h"
+#include "robot/trajectory/source.h"
 
 #include <httplib.h>  // after Eigen (see verify_routes.h)
 
@@ -21,8 +19,8 @@ namespace doasido::review {
 namespace {
 
 const std::vector<std::string>& TrajectoryStages() {
-  static const std::vector<std::string> stages{retarget::kRetargetStageName,
-                                               retarget::kKinematicStageName};
+  static const std::vector<std::string> stages(retarget::kTrajectoryStages.begin(),
+                                               retarget::kTrajectoryStages.end());
   return stages;
 }
 
@@ -111,7 +109,7 @@ Json Replay(const mjModel* m, const retarget::HandTrajectory& t) {
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
   std::string why;
-  std::optional<deploy::TrajectoryFiles> files = deploy::FindTrajectoryFiles(db, clip, &why, true);
+  std::optional<retarget::TrajectoryFiles> files = retarget::FindTrajectoryFiles(db, clip, &why, true);
   if (files && files->stage != stage) {
     why = "stage " + stage + " is not the trajectory stage (" + files->stage + ")";
     files.reset();
@@ -125,12 +123,12 @@ Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
   // hand is rebuilt from its description and the object scene.
   retarget::ModelPtr model;
   if (retarget::IsBimanualEmbodiment(t.embodiment)) {
-    const auto xml = files->trajectory.parent_path() / "robot_scene.xml";
+    const auto xml = files->trajectory.parent_path() / retarget::kRobotSceneFile;
     model = retarget::CompileMjcfText(ReadFileOrThrow(xml, "no_such_trajectory", "no robot scene beside a two-hand "
                                                       "trajectory"), xml.string());
   } else {
     model = retarget::BuildHandModel(retarget::FindEmbodiment(t.embodiment, retarget::DefaultRobotsDir()),
-                                     deploy::ReadSceneXml(files->scene_dir), files->scene_dir)
+                                     retarget::ReadSceneXml(files->scene_dir), files->scene_dir)
                 .model;
   }
   Json out = Geometry(model.get());
@@ -193,8 +191,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
   http.Get(R"(/api/verify/scene/(\d+))", [hooks](const httplib::Request& req, httplib::Response& res) {
     hooks.with_db(res, [&](Database& d) {
       const std::string stage = req.get_param_value("stage");
-      const auto& stages = TrajectoryStages();
-      if (std::find(stages.begin(), stages.end(), stage) == stages.end()) {
+      if (!retarget::IsTrajectoryStage(stage)) {
         res.status = 400;
         res.set_content(Json({{"error", "stage must be a trajectory stage"}}).dump(), "application/json");
         return;
@@ -217,8 +214,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
         res.status = 400;
         res.set_content(Json({{"error", message}}).dump(), "application/json");
       };
-      const auto& stages = TrajectoryStages();
-      if (std::find(stages.begin(), stages.end(), stage) == stages.end()) {
+      if (!retarget::IsTrajectoryStage(stage)) {
         return bad("stage must be a trajectory stage");
       }
       if (decision != "accept" && decision != "reject") return bad("decision must be accept or reject");
@@ -232,7 +228,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
       // says which one it showed (trajectory_sha256) is refused when the
       // trajectory changed since.
       std::string why;
-      const auto files = deploy::FindTrajectoryFiles(d, clip, &why, true);
+      const auto files = retarget::FindTrajectoryFiles(d, clip, &why, true);
       if (!files || files->stage != stage) {
         res.status = 409;
         res.set_content(Json({{"error", "no trajectory to verify: " + why}}).dump(),
@@ -249,7 +245,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
       }
       d.RecordVerification(clip, stage, reviewer, decision == "accept", reason, sha);
       res.set_content(Json({{"ok", true},
-                            {"remaining", d.ListTrajectoriesToVerify(stages).size()}}).dump(),
+                            {"remaining", d.ListTrajectoriesToVerify(TrajectoryStages()).size()}}).dump(),
                       "application/json");
     });
   });

@@ -30,7 +30,7 @@
 #include "db/database.h"
 #include "ingest/file_sha256.h"
 #include "retarget/kinematic_stage.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

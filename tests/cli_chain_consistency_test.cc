@@ -18,7 +18,7 @@
 
 #include "core/config.h"
 #include "dataset/version.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

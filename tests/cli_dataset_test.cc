@@ -25,8 +25,8 @@
 #include "dataset/version_store.h"
 #include "db/database.h"
 #include "ingest/file_sha256.h"
-#include "retarget/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/trajectory/format.h"
 #include "tests/test_util.h"
 
 namespace doasido {

@@ -11,10 +11,10 @@
 #include <gtest/gtest.h>
 
 #include "deploy/bimanual.h"
-#include "retarget/bimanual_retarget.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "deploy/ur3e.h"
+#include "robot/trajectory/format.h"
 #include "tests/joint_path_trajectory.h"
 #include "tests/test_util.h"
 #include "tests/two_hand_episode.h"

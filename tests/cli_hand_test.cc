@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/config.h"
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 #include "tests/test_util.h"
 #include "tests/two_finger_hand.h"
 
@@ -87,7 +87,7 @@ TEST(CliHand, MirrorMakesALeftHandAndMirroringBackTheRightOne) {
   ASSERT_EQ(back.exit_code, 0) << back.out << back.err;
   // Compared as descriptions (the file spells defaults out).
   const auto original =
-      Json::parse(ReadFile(SourceDir() / "retarget/models/shadow_right.json")).get<retarget::Embodiment>();
+      Json::parse(ReadFile(SourceDir() / "robot/models/shadow_right.json")).get<retarget::Embodiment>();
   const auto returned = Json::parse(ReadFile(dir / "back/shadow_right.json")).get<retarget::Embodiment>();
   EXPECT_EQ(returned.side, "right");
   EXPECT_EQ(Json(returned.points), Json(original.points));

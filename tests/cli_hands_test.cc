@@ -9,9 +9,9 @@
 
 #include "core/config.h"
 #include "db/database.h"
-#include "dataset/mp4_writer.h"
 #include "filters/hand_landmarker.h"
 #include "test_util.h"
+#include "video/mp4_writer.h"
 
 namespace doasido {
 namespace {
@@ -26,7 +26,7 @@ class CliHandsTest : public ::testing::Test {
     if (!filters::HandLandmarkerAvailable(&why)) GTEST_SKIP() << "hand models unavailable: " << why;
     // A short clip (the first 6 frames of a real one) and one of its frames as an image.
     cv::VideoCapture in((testing::SharedData() / "videos/eyeliner.avi").string());
-    dataset::Mp4Writer out(tmp_ / "pencil.mp4", 320, 240, 25);
+    Mp4Writer out(tmp_ / "pencil.mp4", 320, 240, 25);
     cv::Mat frame;
     for (int i = 0; i < 6 && in.read(frame); ++i) {
       out.Write(frame);

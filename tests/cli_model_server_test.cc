@@ -17,7 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "db/database.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "dataset/version.h"
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

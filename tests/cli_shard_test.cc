@@ -12,7 +12,7 @@
 
 #include <filesystem>
 
-#include "tests/db_dump.h"
+#include "testing/db_dump.h"
 #include "tests/test_util.h"
 
 namespace doasido {

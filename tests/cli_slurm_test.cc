@@ -1,6 +1,6 @@
 // doasido slurm submit / resume against a real one-node Slurm cluster that
 // the test starts on loopback (Debian's munge and slurm-wlm, installed by
-// scripts/setup.sh; the daemons run as root from tests/slurm/slurm.conf.in
+// scripts/setup.sh; the daemons run as root from testing/slurm/slurm.conf.in
 // and are stopped by their pids at the end): 200 synthetic clips in 4
 // shards as an array job plus a merge job give the parent exactly what one
 // machine's `doasido run` gives, after one task was cancelled mid-run and
@@ -18,8 +18,8 @@
 #include <regex>
 #include <thread>
 
-#include "tests/db_dump.h"
-#include "tests/slurm/loopback_cluster.h"
+#include "testing/db_dump.h"
+#include "testing/slurm/loopback_cluster.h"
 #include "tests/test_util.h"
 
 namespace doasido {

@@ -12,7 +12,7 @@
 #include "dataset/lerobot_export.h"
 #include "dataset/resample.h"
 #include "dataset/version.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 #include "tests/parquet_read.h"
 #include "tests/test_util.h"
 

@@ -14,9 +14,9 @@
 #include "deploy/arm_ik.h"
 #include "deploy/plan.h"
 #include "deploy/ur3e.h"
-#include "retarget/embodiment.h"
-#include "retarget/mug_mesh.h"
-#include "retarget/scene_builder.h"
+#include "eval/mug_mesh.h"
+#include "retarget/scene/scene_builder.h"
+#include "robot/embodiment.h"
 
 namespace doasido::deploy {
 namespace {

@@ -11,7 +11,7 @@
 #include "deploy/plan.h"
 #include "deploy/time_scaling.h"
 #include "deploy/ur3e.h"
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 #include "tests/joint_path_trajectory.h"
 
 namespace doasido::deploy {

@@ -16,7 +16,7 @@
 #include <fstream>
 
 #include "recon/bundle.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/trajectory/format.h"
 #include "tests/test_util.h"
 
 namespace doasido::testing {

@@ -1,6 +1,6 @@
 // The hands module without the models: tracks from per-frame hands (gaps
 // filled or split, one side per track) and the skeleton fit against a hand
-// with exact answers (tests/synthetic_hand_track.h: a real hand's motion
+// with exact answers (testing/synthetic_hand_track.h: a real hand's motion
 // from ../shared/data/retarget, carried in front of a known camera).
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 
 #include "hands/hand_reconstruction.h"
 #include "hands/hand_tracker.h"
+#include "testing/synthetic_hand_track.h"
 #include "test_util.h"
-#include "synthetic_hand_track.h"
 
 namespace doasido::hands {
 namespace {

@@ -7,8 +7,8 @@
 
 #include "deploy/plan.h"
 #include "deploy/ur3e.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
+#include "robot/embodiment.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::testing {
 

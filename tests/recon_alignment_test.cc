@@ -2,7 +2,7 @@
 // from exact correspondences, ICP from a small offset, multi-start Sim(3)
 // from a large turn and a scale change, the hand-root frame from a motion
 // shared by hand and object.
-#include "recon/alignment.h"
+#include "eval/alignment.h"
 
 #include <cmath>
 #include <random>

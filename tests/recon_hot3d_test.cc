@@ -10,9 +10,9 @@
 #include <gtest/gtest.h>
 
 #include "core/mesh.h"
+#include "eval/hot3d_recording.h"
 #include "recon/bundle.h"
 #include "recon/conventions.h"
-#include "recon/hot3d_recording.h"
 #include "recon/recon_metrics.h"
 #include "synth/objects.h"
 #include "tests/test_util.h"

@@ -11,8 +11,8 @@
 
 #include <opencv2/videoio.hpp>
 
+#include "eval/mixture_file.h"
 #include "recon/bundle.h"
-#include "recon/mixture_file.h"
 #include "recon/npy.h"
 #include "recon/recon_stage.h"
 #include "recon/velocity_server.h"

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "recon/mixture_file.h"
+#include "eval/mixture_file.h"
 #include "recon/object_tracker.h"
 #include "recon/silhouette.h"
 #include "recon/velocity_server.h"

@@ -8,14 +8,14 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/annealed_sampler.h"
-#include "retarget/dynamic_reference.h"
-#include "retarget/dynamic_retarget.h"
+#include "eval/reconstruction_noise.h"
+#include "retarget/dynamic/annealed_sampler.h"
+#include "retarget/dynamic/dynamic_reference.h"
+#include "retarget/dynamic/dynamic_retarget.h"
+#include "retarget/dynamic/retarget_reward.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"
-#include "retarget/retarget_reward.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 #include "tests/small_retarget_config.h"
 #include "tests/test_util.h"
 

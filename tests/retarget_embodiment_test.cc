@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "retarget/embodiment.h"
+#include "robot/embodiment.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {

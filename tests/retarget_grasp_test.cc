@@ -8,15 +8,15 @@
 #include <gtest/gtest.h>
 
 #include "core/file_text.h"
-#include "retarget/bimanual_retarget.h"
-#include "retarget/dynamic_reference.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/object_surface.h"
-#include "retarget/reference_hold.h"
-#include "retarget/scene_builder.h"
+#include "eval/reconstruction_noise.h"
+#include "eval/reference_hold.h"
+#include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/dynamic/dynamic_reference.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "retarget/scene/object_surface.h"
+#include "retarget/scene/scene_builder.h"
 #include "synth/episode.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 #include "tests/small_retarget_config.h"
 #include "tests/test_util.h"
 

@@ -12,12 +12,12 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "retarget/embodiment.h"
-#include "retarget/hand_check.h"
-#include "retarget/hand_description.h"
-#include "retarget/kinematic_retarget.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/urdf_import.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "robot/embodiment.h"
+#include "robot/hand_check.h"
+#include "robot/hand_description.h"
+#include "robot/mjcf_compat.h"
+#include "robot/urdf_import.h"
 #include "tests/test_util.h"
 #include "tests/two_finger_hand.h"
 

@@ -12,15 +12,15 @@
 
 #include "core/error.h"
 #include "core/file_text.h"
-#include "retarget/embodiment.h"
-#include "retarget/hand_check.h"
-#include "retarget/hand_mirror.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/mjcf_text.h"
-#include "retarget/urdf_import.h"
-#include "tests/two_finger_hand.h"
+#include "robot/embodiment.h"
+#include "robot/hand_check.h"
+#include "robot/hand_mirror.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
+#include "robot/mjcf_text.h"
+#include "robot/urdf_import.h"
 #include "tests/test_util.h"
+#include "tests/two_finger_hand.h"
 
 namespace doasido::retarget {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "robot/embodiment.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {

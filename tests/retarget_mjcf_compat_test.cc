@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {

@@ -7,11 +7,11 @@
 #include <gtest/gtest.h>
 
 #include "core/mesh.h"
-#include "retarget/convex_decomposition.h"
-#include "retarget/mj_model.h"
-#include "retarget/mjcf_compat.h"
-#include "retarget/mug_mesh.h"
-#include "retarget/scene_builder.h"
+#include "eval/mug_mesh.h"
+#include "retarget/scene/convex_decomposition.h"
+#include "retarget/scene/scene_builder.h"
+#include "robot/mj_model.h"
+#include "robot/mjcf_compat.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {

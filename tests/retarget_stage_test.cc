@@ -9,9 +9,9 @@
 #include "recon/bundle.h"
 #include "recon/gravity.h"
 #include "recon/reconstruction.h"
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
+#include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"
+#include "robot/embodiment.h"
 #include "tests/test_util.h"
 
 namespace doasido::retarget {

@@ -3,7 +3,7 @@
 // retarget_grasp_test).
 #pragma once
 
-#include "retarget/dynamic_retarget.h"
+#include "retarget/dynamic/dynamic_retarget.h"
 #include "tests/test_util.h"
 
 namespace doasido::testing {

@@ -5,9 +5,9 @@
 
 #include <cmath>
 
+#include "eval/tracking_ablation.h"
 #include "recon/adaptive_guidance.h"
 #include "recon/silhouette.h"
-#include "synth/tracking_ablation.h"
 #include "synth/tracking_scene.h"
 
 namespace doasido::synth {

@@ -4,11 +4,11 @@
 
 #include <gtest/gtest.h>
 
-#include "retarget/embodiment.h"
-#include "retarget/kinematic_retarget.h"
+#include "eval/reconstruction_noise.h"
+#include "retarget/kinematic/kinematic_retarget.h"
+#include "robot/embodiment.h"
 #include "synth/episode.h"
 #include "synth/objects.h"
-#include "synth/reconstruction_noise.h"
 #include "tests/test_util.h"
 
 namespace doasido::testing {

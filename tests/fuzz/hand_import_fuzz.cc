@@ -17,8 +17,8 @@
 #include <string>
 
 #include "core/error.h"
-#include "retarget/embodiment.h"
-#include "retarget/urdf_import.h"
+#include "robot/embodiment.h"
+#include "robot/urdf_import.h"
 #include "tests/fuzz/fuzz_files.h"
 #include "tests/two_finger_hand.h"
 

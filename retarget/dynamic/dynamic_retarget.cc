@@ -1,0 +1,109 @@
+#include "retarget/dynamic/dynamic_retarget.h"
+
+#include "core/config_check.h"
+#include "core/error.h"
+#include "core/file_text.h"
+#include "retarget/config_checks.h"
+
+namespace doasido::retarget {
+
+Error NamingClip(const Error& e, const std::string& label) {
+  ErrorSite site = e.site();
+  if (site.clip.empty()) site.clip = label;
+  return Error(e.code(), e.message(), site);
+}
+
+HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
+                                   const DynamicResult& result, const HandTrajectory& kinematic) {
+  HandTrajectory out;
+  out.embodiment = kinematic.embodiment;
+  out.fps = kinematic.fps;
+  out.scale = kinematic.scale;
+  out.qpos_names = kinematic.qpos_names;
+  out.valid = kinematic.valid;
+  out.fingertip_error = kinematic.fingertip_error;
+  out.reference_keypoints = kinematic.reference_keypoints;
+  std::vector<int> adr;
+  for (const std::string& n : kinematic.qpos_names) {
+    adr.push_back(m->jnt_qposadr[NameToId(m, mjOBJ_JOINT, n)]);
+  }
+  for (int a = 0; a < m->nu; ++a) {
+    const char* n = mj_id2name(m, mjOBJ_ACTUATOR, a);
+    out.ctrl_names.push_back(n ? n : "actuator_" + std::to_string(a));
+  }
+  for (int f = 0; f < ref.frames; ++f) {
+    const int s = ref.StepOfFrame(f);
+    Eigen::VectorXd q(adr.size());
+    for (size_t i = 0; i < adr.size(); ++i) q[i] = result.qpos(s, adr[i]);
+    out.qpos.push_back(q);
+    out.ctrl.push_back(result.ctrl.row(s).transpose());
+    const double* o = result.qpos.row(s).data() + index.object_qpos;
+    out.object_poses.push_back({Quat(o[3], o[4], o[5], o[6]).normalized(), Vec3(o[0], o[1], o[2])});
+  }
+  return out;
+}
+
+void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
+  if (!c.preset.empty()) SamplerPreset(c.preset);  // throws on an unknown name
+  CheckHandName(c.hand, c.robots_dir, section, "hand");
+  CheckHandName(c.left_hand, c.robots_dir, section, "left_hand");
+  CheckConfig(c.sampler, section + ".sampler");
+  CheckConfig(c.kinematic, section + ".kinematic");
+  CheckConfig(c.scene, section + ".scene");
+}
+
+AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config) {
+  if (config.preset.empty()) return config.sampler;
+  AnnealedSamplerConfig s = SamplerPreset(config.preset);
+  s.threads = config.sampler.threads;
+  s.seed = config.sampler.seed;
+  return s;
+}
+
+DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const TriMesh& mesh,
+                                          const Embodiment& hand,
+                                          const DynamicRetargetConfig& config,
+                                          const std::filesystem::path& scene_dir,
+                                          const std::string& label,
+                                          const std::function<void(int, int)>& progress) {
+  const AnnealedSamplerConfig sampler = EffectiveSampler(config);
+  DynamicRetargetRun run;
+  try {
+    CheckReference(r, label);
+    const std::vector<Pose> object = FilledObjectPoses(r);
+    SceneConfig scene_config = config.scene;
+    scene_config.place_on_floor = false;  // the reconstruction's floor is z = 0 already
+    const ObjectScene scene = BuildObjectScene(mesh, object[0], scene_config, scene_dir);
+    const HandModel model = BuildHandModel(hand, TryReadFile(scene.xml_path).value_or(""), scene_dir);
+    run.robot_scene_xml = model.xml;
+    const mjModel* m = model.model.get();
+
+    KinematicRetargeter kinematic(model, config.kinematic);
+    run.kinematic = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &object, &run.grasp_contacts);
+    run.kinematic.object_poses = object;
+    const std::vector<bool> in_hand =
+        LabelInHand(r, object, mesh, sampler.reward.transition_epsilon);
+    const std::vector<bool> resting = LabelResting(object, mesh, sampler.reward.transition_rest_height);
+    for (size_t t = 0; t < in_hand.size(); ++t) run.in_hand_frames += in_hand[t] && !resting[t];
+
+    const SceneIndex index = IndexScene(m);
+    const DynamicReference ref =
+        BuildReference(m, run.kinematic, object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
+                       resting, WarmupSeconds(sampler));
+    const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
+    run.stats = result.stats;
+    run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);
+    std::vector<bool> valid(r.frames());
+    for (int t = 0; t < r.frames(); ++t) valid[t] = r.object_valid[t];
+    run.metrics = ObjectTrackingMetrics(run.trajectory.object_poses, object, valid);
+  } catch (const Error& e) {
+    throw NamingClip(e, label);
+  }
+  run.trajectory.metrics = {{"e_pos", run.metrics.e_pos},
+                            {"e_rot", run.metrics.e_rot},
+                            {"success", run.metrics.success},
+                            {"frames", run.metrics.frames}};
+  return run;
+}
+
+}  // namespace doasido::retarget

@@ -1,0 +1,225 @@
+#include "retarget/dynamic/planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/error.h"
+#include "core/stage_progress.h"
+#include "retarget/dynamic/sampler_rng.h"
+
+namespace doasido::retarget {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The warning count Load sets (see there): any other count after a step
+// means MuJoCo met a non-finite state.
+constexpr int kNoBadState = 1 << 20;
+
+void Save(const mjModel* m, const mjData* d, RolloutState& s) {
+  s.time = d->time;
+  s.qpos.assign(d->qpos, d->qpos + m->nq);
+  s.qvel.assign(d->qvel, d->qvel + m->nv);
+  s.act.assign(d->act, d->act + m->na);
+  s.warm.assign(d->qacc_warmstart, d->qacc_warmstart + m->nv);
+}
+
+void Load(const mjModel* m, const RolloutState& s, mjData* d) {
+  d->time = s.time;
+  std::copy(s.qpos.begin(), s.qpos.end(), d->qpos);
+  std::copy(s.qvel.begin(), s.qvel.end(), d->qvel);
+  std::copy(s.act.begin(), s.act.end(), d->act);
+  std::copy(s.warm.begin(), s.warm.end(), d->qacc_warmstart);
+  std::fill(d->xfrc_applied, d->xfrc_applied + 6 * m->nbody, 0.0);
+  std::fill(d->qfrc_applied, d->qfrc_applied + m->nv, 0.0);
+  // MuJoCo reacts to a non-finite state by printing a warning (only while
+  // its count is 0), resetting the data (count 0) and counting it (1). A
+  // sentinel count therefore silences the print and still shows the event.
+  for (int w : {mjWARN_BADQACC, mjWARN_BADQPOS, mjWARN_BADQVEL}) d->warning[w].number = kNoBadState;
+}
+
+bool BadState(const mjData* d) {
+  return d->warning[mjWARN_BADQACC].number != kNoBadState ||
+         d->warning[mjWARN_BADQPOS].number != kNoBadState ||
+         d->warning[mjWARN_BADQVEL].number != kNoBadState;
+}
+
+// Uniform direction, size uniform in [0, scale]: three values into `out`.
+void RandomWrench(Rng& rng, double scale, double* out) {
+  Vec3 dir(rng.Normal(), rng.Normal(), rng.Normal());
+  dir /= std::max(dir.norm(), 1e-12);
+  const double size = scale * rng.Uniform();
+  for (int i = 0; i < 3; ++i) out[i] = size * dir[i];
+}
+
+}  // namespace
+
+void Planner::HoldObject(mjData* d, int step) const {
+  if (step >= ref_.warmup_steps) return;
+  double* q = d->qpos + index_.object_qpos;
+  const Vec3& p = ref_.object_pos[0];
+  const Quat& r = ref_.object_quat[0];
+  q[0] = p.x(), q[1] = p.y(), q[2] = p.z(), q[3] = r.w(), q[4] = r.x(), q[5] = r.y(), q[6] = r.z();
+  std::fill(d->qvel + index_.object_dof, d->qvel + index_.object_dof + 6, 0.0);
+}
+
+double Planner::Rollout(int rollout, int thread, int start, int length, std::uint64_t key) {
+  mjData* d = pool_.data(thread);
+  Load(m_, state_, d);
+  const double* knots = buffer_.data() + static_cast<size_t>(rollout / group_) * knots_ * m_->nu;
+  // Common random numbers: perturbation k of every control sample draws
+  // the same stream.
+  Rng rng{Mix(key, static_cast<std::uint64_t>(rollout % group_), 0x5eed, 1)};
+  double* xfrc = d->xfrc_applied + 6 * index_.object_body;
+  bool active = false;
+  double total = 0;
+  for (int h = 0; h < length; ++h) {
+    EvaluateKnots(knots, knots_, m_->nu, c_.knot_dt, h * ref_.dt, d->ctrl);
+    if (group_ > 1) {
+      const bool was = active;
+      active = gate_[start + h] && rng.Uniform() < (was ? c_.perturb_continue_prob : c_.perturb_prob);
+      if (active && !was) {
+        RandomWrench(rng, c_.perturb_force_scale * weight_, xfrc);
+        RandomWrench(rng, c_.perturb_torque_scale * weight_ * 0.05, xfrc + 3);
+      } else if (!active) {
+        std::fill(xfrc, xfrc + 6, 0.0);
+      }
+    }
+    mj_step(m_, d);
+    const int s = start + h + 1;
+    HoldObject(d, s);
+    if (BadState(d)) return -std::numeric_limits<double>::infinity();
+    const double r = StepReward(m_, d, index_, ref_, s, c_.reward);
+    total += (h == length - 1 ? c_.reward.terminal_rew_scale : 1.0) * r;
+  }
+  return total / (length - 1 + c_.reward.terminal_rew_scale);
+}
+
+int Planner::Optimise(int start, int plan) {
+  const int nu = m_->nu, length = std::min(horizon_steps_, ref_.steps() - 1 - start);
+  const bool perturb = std::any_of(gate_.begin() + start, gate_.begin() + start + length,
+                                   [](uint8_t g) { return g != 0; });
+  group_ = perturb ? std::max(1, c_.num_perturb_samples) : 1;
+  samples_ = std::max(2, c_.num_samples / group_);
+  returns_.resize(samples_);  // within the capacity reserved: no allocation
+  weights_.resize(samples_);
+  const double beta = std::pow(c_.final_noise_scale, 1.0 / c_.max_num_iterations);
+  int it = 0;
+  while (it < c_.max_num_iterations) {
+    DrawSamples(nominal_, sigma_, std::pow(beta, it), Mix(c_.seed, plan, it, 0xa11), index_.ctrl_lo,
+                index_.ctrl_hi, samples_, buffer_);
+    const std::uint64_t key = Mix(c_.seed, plan, it, 0xf0);
+    const auto t0 = Clock::now();
+    pool_.Run(samples_ * group_, [&](int n, int thread) {
+      rollout_return_[n] = Rollout(n, thread, start, length, key);
+    });
+    stats_.rollout_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    stats_.rollouts += samples_ * group_;
+    ReportStageProgress();
+    stats_.sim_steps += static_cast<long long>(samples_) * group_ * length;
+    double worst = 0;
+    for (int n = 0; n < samples_ * group_; ++n) {
+      if (std::isfinite(rollout_return_[n])) worst = std::min(worst, rollout_return_[n]);
+    }
+    for (int c = 0; c < samples_; ++c) {  // failed rollouts score as the worst (SPIDER)
+      double sum = 0;
+      for (int g = 0; g < group_; ++g) {
+        const double r = rollout_return_[c * group_ + g];
+        sum += std::isfinite(r) ? r : worst - 1;
+      }
+      returns_[c] = sum / group_;
+    }
+    WeightSamples(returns_, c_.top_fraction, c_.temperature, weights_);
+    nominal_.setZero();
+    for (int c = 0; c < samples_; ++c) {
+      if (weights_[c] == 0) continue;
+      nominal_ += weights_[c] * Eigen::Map<const RowMatrix>(
+                                    buffer_.data() + static_cast<size_t>(c) * knots_ * nu, knots_, nu);
+    }
+    ++it;
+    const double best = *std::max_element(returns_.begin(), returns_.end());
+    if (best - returns_[0] < c_.improvement_threshold) break;
+  }
+  stats_.iterations += it;
+  return it;
+}
+
+void Planner::Shift(int start, int next_start) {
+  const int nu = m_->nu;
+  const RowMatrix old = nominal_;
+  const double shift = (next_start - start) * ref_.dt;
+  const double old_end = (knots_ - 1) * c_.knot_dt;
+  const int end_step = start + static_cast<int>(std::lround(old_end / ref_.dt));
+  for (int k = 0; k < knots_; ++k) {
+    const double t = shift + k * c_.knot_dt;
+    double* u = nominal_.row(k).data();
+    if (t <= old_end + 1e-9) {
+      EvaluateKnots(old.data(), knots_, nu, c_.knot_dt, t, u);
+    } else {
+      const double alpha = c_.blend_seconds > 0 ? std::min(1.0, (t - old_end) / c_.blend_seconds) : 1.0;
+      const int s = start + static_cast<int>(std::lround(t / ref_.dt));
+      for (int a = 0; a < nu; ++a) {
+        u[a] = RefCtrl(s, a) + (1 - alpha) * (old(knots_ - 1, a) - RefCtrl(end_step, a));
+      }
+    }
+    Clamp(u);
+  }
+}
+
+DynamicResult Planner::Run(const std::function<void(int, int)>& progress) {
+  const auto t0 = Clock::now();
+  const int steps = ref_.steps(), nu = m_->nu;
+  DataPtr d = MakeData(m_);
+  mj_resetData(m_, d.get());
+  for (int a = 0; a < nu; ++a) d->qpos[index_.act_qpos[a]] = ref_.ctrl(0, a);
+  {
+    double* q = d->qpos + index_.object_qpos;
+    const Vec3& p = ref_.object_pos[0];
+    const Quat& r = ref_.object_quat[0];
+    q[0] = p.x(), q[1] = p.y(), q[2] = p.z(), q[3] = r.w(), q[4] = r.x(), q[5] = r.y(), q[6] = r.z();
+  }
+  mj_forward(m_, d.get());
+  DynamicResult out;
+  out.qpos.resize(steps, m_->nq);
+  out.ctrl.resize(steps, nu);
+  out.qpos.row(0) = Eigen::Map<const Eigen::RowVectorXd>(d->qpos, m_->nq);
+  out.ctrl.row(0) = ref_.ctrl.row(0);
+  for (int k = 0; k < knots_; ++k) {
+    for (int a = 0; a < nu; ++a) {
+      nominal_(k, a) = RefCtrl(static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt)), a);
+    }
+    Clamp(nominal_.row(k).data());
+  }
+  const int ctrl_steps = std::max(1, static_cast<int>(std::lround(c_.ctrl_dt / ref_.dt)));
+  for (int start = 0, plan = 0; start < steps - 1; start += ctrl_steps, ++plan) {
+    Save(m_, d.get(), state_);
+    Optimise(start, plan);
+    ++stats_.plans;
+    Load(m_, state_, d.get());
+    const int run = std::min(ctrl_steps, steps - 1 - start);
+    for (int h = 0; h < run; ++h) {
+      EvaluateKnots(nominal_.data(), knots_, nu, c_.knot_dt, h * ref_.dt, d->ctrl);
+      mj_step(m_, d.get());
+      const int s = start + h + 1;
+      HoldObject(d.get(), s);
+      if (BadState(d.get()) || !Eigen::Map<const Eigen::VectorXd>(d->qpos, m_->nq).allFinite()) {
+        throw Error("unstable_simulation",
+                    "non-finite state at step " + std::to_string(s) + " (t = " +
+                        std::to_string((s - ref_.warmup_steps) * ref_.dt) + " s)",
+                    {.field = "qpos"});
+      }
+      out.qpos.row(s) = Eigen::Map<const Eigen::RowVectorXd>(d->qpos, m_->nq);
+      out.ctrl.row(s) = Eigen::Map<const Eigen::RowVectorXd>(d->ctrl, nu);
+    }
+    Shift(start, start + ctrl_steps);
+    if (progress) progress(start + run, steps - 1);
+  }
+  stats_.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.stats = stats_;
+  return out;
+}
+
+}  // namespace doasido::retarget

@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -159,12 +160,18 @@ void Real(std::int64_t frames) {
       AddJitter(t, r.result.intrinsics.K, r.detected.fps, jitter);
     for (Side side : {Side::kRight, Side::kLeft}) {
       std::vector<double> w;
+      // The wrist per side as the bundle holds it (hands.npz): a move between
+      // two tracks of one side on consecutive frames counts too.
+      std::vector<std::optional<Vec3>> wrist(r.detected.frames.size());
       for (const FittedTrack& t : r.result.tracks) {
         if (t.side != side) continue;
         for (size_t f = 0; f < t.joints.size(); ++f) {
           w.push_back(100 * PalmWidth(t.joints[f]));
-          if (f > 0) jump = std::max(jump, 100 * (t.joints[f][0] - t.joints[f - 1][0]).norm());
+          wrist[t.first_frame + f] = t.joints[f][0];
         }
+      }
+      for (size_t f = 1; f < wrist.size(); ++f) {
+        if (wrist[f] && wrist[f - 1]) jump = std::max(jump, 100 * (*wrist[f] - *wrist[f - 1]).norm());
       }
       char buf[64] = "-";
       if (!w.empty()) {

@@ -1,6 +1,7 @@
 #include "hands/hand_reconstruction.h"
 
 #include <algorithm>
+#include <optional>
 
 namespace doasido::hands {
 
@@ -31,6 +32,9 @@ Json Summarize(const DetectedFrames& detected, const HandsResult& result) {
   for (Side side : {Side::kLeft, Side::kRight}) {
     int valid = 0, filled = 0, tracks = 0;
     std::vector<double> palms, lengths;
+    // The side's wrist per frame as hands.npz holds it: a move between two
+    // tracks of one side on consecutive frames counts as a jump too.
+    std::vector<std::optional<Vec3>> wrist(detected.frames.size());
     for (const FittedTrack& t : result.tracks) {
       if (t.side != side) continue;
       ++tracks;
@@ -39,10 +43,15 @@ Json Summarize(const DetectedFrames& detected, const HandsResult& result) {
         lengths.push_back(HandLength(t.link_length));
         filled += t.filled[f] ? 1 : 0;
         palms.push_back(PalmWidth(t.joints[f]));
-        if (f > 0) max_jump = std::max(max_jump, (t.joints[f][0] - t.joints[f - 1][0]).norm());
+        const size_t frame = static_cast<size_t>(t.first_frame) + f;
+        if (frame < wrist.size()) wrist[frame] = t.joints[f][0];
       }
       reprojection += t.reprojection_rms_px * static_cast<double>(t.joints.size());
       fitted_frames += static_cast<int>(t.joints.size());
+    }
+    for (size_t f = 1; f < wrist.size(); ++f) {
+      if (wrist[f] && wrist[f - 1])
+        max_jump = std::max(max_jump, (*wrist[f] - *wrist[f - 1]).norm());
     }
     Json s = {{"frames", valid}, {"filled_frames", filled}, {"tracks", tracks}};
     if (!palms.empty()) {

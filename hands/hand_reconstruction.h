@@ -34,7 +34,8 @@ HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& i
 // Measurements of a result: frames, per side the frames with a valid hand,
 // filled frames, tracks, palm width (median over frames, metres) and hand
 // length (median over tracks' frames, metres), the size prior, the
-// largest frame-to-frame wrist move (metres), the mean reprojection error
+// largest frame-to-frame wrist move per side as hands.npz holds it (across
+// tracks too; metres), the mean reprojection error
 // (pixels), seconds.
 Json Summarize(const DetectedFrames& detected, const HandsResult& result);
 

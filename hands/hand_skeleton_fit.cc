@@ -124,6 +124,10 @@ int DropFlippedPoses(std::vector<std::optional<HandPose>>& poses, double max_tur
     }
     flipped[f] = disagree > agree;
   }
+  // Poses that all disagree (two frames, say) give no majority: keep them.
+  bool any_kept = false;
+  for (int f = 0; f < n; ++f) any_kept = any_kept || (poses[f] && !flipped[f]);
+  if (!any_kept) return 0;
   int dropped = 0;
   for (int f = 0; f < n; ++f) {
     if (flipped[f]) {

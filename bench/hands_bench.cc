@@ -14,6 +14,10 @@
 //                              the fit, with the true K and with the default
 //                              field of view, with the model's own size and
 //                              with the adult size prior (0 clips: tracks only).
+//   hands_bench labels         PCK at 0.1 and 0.2 of the hand box against the
+//                              hand-made labels in bench/hand_labels/*.json
+//                              (hands/hand_labels.h), for the models alone,
+//                              the tracker and the fit; the tracker's swaps.
 //   hands_bench jumps [frames] the largest wrist moves between frames on the
 //                              bundled positives and what PnP did there.
 // [frames] limits each video to its first frames (default: all).
@@ -27,6 +31,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -35,6 +40,7 @@
 
 #include "core/log.h"
 #include "hands/hand_detection.h"
+#include "hands/hand_labels.h"
 #include "hands/hand_reconstruction.h"
 #include "synth/generator.h"
 #include "tests/synthetic_hand_track.h"
@@ -171,7 +177,8 @@ void Real(std::int64_t frames) {
         }
       }
       for (size_t f = 1; f < wrist.size(); ++f) {
-        if (wrist[f] && wrist[f - 1]) jump = std::max(jump, 100 * (*wrist[f] - *wrist[f - 1]).norm());
+        if (wrist[f] && wrist[f - 1])
+          jump = std::max(jump, 100 * (*wrist[f] - *wrist[f - 1]).norm());
       }
       char buf[64] = "-";
       if (!w.empty()) {
@@ -436,6 +443,58 @@ void Jumps(std::int64_t frames) {
   }
 }
 
+// PCK against hand-made labels (bench/hand_labels/*.json, hands/hand_labels.h)
+// for the detector alone (every hand the models gave on the frame), the
+// tracker (the tracks' hands with their sides) and the fit (the fitted
+// joints' projection), per video; left/right swaps of the tracker.
+void Labels() {
+  const std::filesystem::path dir = std::filesystem::path(DOASIDO_SOURCE_DIR) / "bench/hand_labels";
+  std::vector<std::filesystem::path> files;
+  if (std::filesystem::is_directory(dir)) {
+    for (const auto& e : std::filesystem::directory_iterator(dir)) {
+      if (e.path().extension() == ".json") files.push_back(e.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) {
+    std::printf("no label files in %s (see hands/hand_labels.h for the format)\n", dir.c_str());
+    return;
+  }
+  std::printf("%-22s %6s %6s %15s %15s %15s %6s %6s\n", "video", "frames", "hands",
+              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed", "swaps");
+  for (const auto& file : files) {
+    const HandLabels labels = ReadHandLabels(file);
+    int last = 0;
+    for (const auto& f : labels.frames) last = std::max(last, f.frame);
+    const Run r = RunVideo(kData + "/" + labels.video, last + 1);
+    const Camera cam = Camera::FromK(r.result.intrinsics.K, 0, 0);
+    PckScore models, tracker, fit;
+    for (const LabelledFrame& l : labels.frames) {
+      const int f = l.frame - static_cast<int>(r.detected.first_frame);
+      if (f < 0 || f >= static_cast<int>(r.detected.frames.size())) continue;
+      std::vector<PredictedHand> raw, tracked, fitted;
+      for (const HandObservation& o : r.detected.frames[f]) {
+        raw.push_back({.side = o.p_right >= 0.5 ? Side::kRight : Side::kLeft, .uv = o.uv});
+      }
+      for (const FittedTrack& t : r.result.tracks) {
+        const int k = f - t.first_frame;
+        if (k < 0 || k >= static_cast<int>(t.joints.size())) continue;
+        if (t.observations[k]) tracked.push_back({.side = t.side, .uv = t.observations[k]->uv});
+        PredictedHand p{.side = t.side};
+        for (int j = 0; j < kJoints; ++j) p.uv[j] = cam.Project(t.joints[k][j]);
+        fitted.push_back(p);
+      }
+      models.Add(ScoreFrame(l, raw));
+      tracker.Add(ScoreFrame(l, tracked));
+      fit.Add(ScoreFrame(l, fitted));
+    }
+    std::printf("%-22s %6zu %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %6d %6d\n", file.stem().c_str(),
+                labels.frames.size(), fit.hands, models.Pck01(), models.Pck02(), tracker.Pck01(),
+                tracker.Pck02(), fit.Pck01(), fit.Pck02(), fit.missed, tracker.swaps);
+    std::fflush(stdout);
+  }
+}
+
 int main(int argc, char** argv) {
   InitLogging("warn");
   const std::string mode = argc > 1 ? argv[1] : "real";
@@ -446,10 +505,12 @@ int main(int argc, char** argv) {
     Dex(arg);
   else if (mode == "jumps")
     Jumps(arg);
+  else if (mode == "labels")
+    Labels();
   else if (mode == "synth")
     Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
-    std::fprintf(stderr, "usage: hands_bench real|dex|jumps|synth [frames|clips]\n");
+    std::fprintf(stderr, "usage: hands_bench real|dex|jumps|labels|synth [frames|clips]\n");
     return 2;
   }
   return 0;

@@ -10,7 +10,8 @@
 namespace doasido::hands {
 namespace {
 
-[[noreturn]] void Bad(const std::filesystem::path& file, const std::string& field, const std::string& why) {
+[[noreturn]] void Bad(const std::filesystem::path& file, const std::string& field,
+                      const std::string& why) {
   throw Error("bad_labels", why, {.file = file.string(), .field = field});
 }
 
@@ -44,7 +45,8 @@ HandLabels ReadHandLabels(const std::filesystem::path& file) {
       for (const Json& h : f.at("hands")) {
         LabelledHand hand;
         const std::string side = h.at("side").get<std::string>();
-        if (side != "right" && side != "left") Bad(file, "side", "side must be right or left: " + side);
+        if (side != "right" && side != "left")
+          Bad(file, "side", "side must be right or left: " + side);
         hand.side = side == "right" ? Side::kRight : Side::kLeft;
         const Json& kp = h.at("keypoints_2d");
         if (kp.size() != kJoints) Bad(file, "keypoints_2d", "21 keypoints expected");

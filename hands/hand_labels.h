@@ -14,13 +14,12 @@
 // times the labelled hand's box (the larger side of its keypoints' box).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "hands/hand_observation.h"
 
@@ -53,7 +52,7 @@ struct PredictedHand {
 };
 
 struct PckScore {
-  int keypoints = 0;         // labelled keypoints
+  int keypoints = 0;  // labelled keypoints
   int within_01 = 0, within_02 = 0;
   int hands = 0, missed = 0;  // labelled hands; those with no prediction near them
   int swaps = 0;              // labelled hands whose nearest prediction has the other side

@@ -13,8 +13,8 @@ namespace doasido::hands {
 namespace {
 
 const std::vector<Joints>& DexRows() {
-  static const auto rows =
-      testing::ReadDexKeypoints((testing::SharedData() / "retarget/human_hand_keypoints_right.csv").string());
+  static const auto rows = testing::ReadDexKeypoints(
+      (testing::SharedData() / "retarget/human_hand_keypoints_right.csv").string());
   return rows;
 }
 
@@ -63,14 +63,15 @@ TEST(HandsPck, ExactLabelsScoreTheFitTheModelsAndWrongPredictions) {
       hi_y = std::max(hi_y, labels.hands[0].uv[j].y());
     }
     const double box = std::max(hi - lo, hi_y - lo_y);
-    for (int j = 0; j < kJoints; ++j) moved[j] = labels.hands[0].uv[j] + Eigen::Vector2d(0.15 * box, 0);
+    for (int j = 0; j < kJoints; ++j)
+      moved[j] = labels.hands[0].uv[j] + Eigen::Vector2d(0.15 * box, 0);
     fitted.Add(ScoreFrame(labels, {Predicted(uv)}));
     shifted.Add(ScoreFrame(labels, {Predicted(moved)}));
     swapped.Add(ScoreFrame(labels, {Predicted(uv, Side::kLeft)}));
     missed.Add(ScoreFrame(labels, {}));
   }
-  std::printf("PCK@0.1 / @0.2: models %.3f / %.3f, fit %.3f / %.3f\n", models.Pck01(), models.Pck02(),
-              fitted.Pck01(), fitted.Pck02());
+  std::printf("PCK@0.1 / @0.2: models %.3f / %.3f, fit %.3f / %.3f\n", models.Pck01(),
+              models.Pck02(), fitted.Pck01(), fitted.Pck02());
   EXPECT_EQ(models.keypoints, 40 * kJoints);
   EXPECT_EQ(models.Pck02(), 1.0);  // 1.5 px noise on a hand of ~100-200 px
   EXPECT_GT(models.Pck01(), 0.95);
@@ -88,9 +89,10 @@ TEST(HandsPck, LabelFilesAreReadAndBadOnesNamed) {
   testing::TempDir tmp;
   Json kp = Json::array();
   for (int j = 0; j < kJoints; ++j) kp.push_back({10.0 * j, 5.0});
-  const Json file = {{"video", "videos/eyeliner.avi"},
-                     {"labeller", "a person"},
-                     {"frames", {{{"frame", 3}, {"hands", {{{"side", "left"}, {"keypoints_2d", kp}}}}}}}};
+  const Json file = {
+      {"video", "videos/eyeliner.avi"},
+      {"labeller", "a person"},
+      {"frames", {{{"frame", 3}, {"hands", {{{"side", "left"}, {"keypoints_2d", kp}}}}}}}};
   testing::WriteFile(tmp.path() / "eyeliner.json", file.dump());
   const HandLabels l = ReadHandLabels(tmp.path() / "eyeliner.json");
   EXPECT_EQ(l.video, "videos/eyeliner.avi");

@@ -9,28 +9,38 @@
 //                              made of it (a peer's output, not ground
 //                              truth): wrist-centred joint distance after the
 //                              best rotation, and after rotation and scale.
-//   hands_bench synth [clips]  rendered clips with exact hands: camera-frame
-//                              MPJPE and wrist error after the fit, with the
-//                              true K and with the default field of view.
+//   hands_bench synth [clips]  synthetic tracks and rendered clips with exact
+//                              hands: camera-frame MPJPE and wrist error after
+//                              the fit, with the true K and with the default
+//                              field of view, with the model's own size and
+//                              with the adult size prior (0 clips: tracks only).
+//   hands_bench labels         PCK at 0.1 and 0.2 of the hand box against the
+//                              hand-made labels in bench/hand_labels/*.json
+//                              (hands/hand_labels.h), for the models alone,
+//                              the tracker and the fit; the tracker's swaps.
+//   hands_bench jumps [frames] the largest wrist moves between frames on the
+//                              bundled positives and what PnP did there.
 // [frames] limits each video to its first frames (default: all).
 #include <dirent.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <Eigen/Dense>
-
 #include "core/log.h"
 #include "hands/hand_detection.h"
+#include "hands/hand_labels.h"
 #include "hands/hand_reconstruction.h"
 #include "synth/generator.h"
 #include "testing/synthetic_hand_track.h"
@@ -91,7 +101,8 @@ Run RunVideo(const std::string& path, std::int64_t frames, const Intrinsics* giv
   r.detected = DetectVideo(path, span, HandsConfig{}.max_side, Landmarker());
   const double c1 = CpuSeconds();
   const Intrinsics in = given ? *given
-                              : Intrinsics{.K = KFromFov(r.detected.width, r.detected.height, HandsConfig{}.default_fov_deg),
+                              : Intrinsics{.K = KFromFov(r.detected.width, r.detected.height,
+                                                         HandsConfig{}.default_fov_deg),
                                            .assumed = true,
                                            .source = kIntrinsicsFromDefault};
   r.result = ReconstructHands(r.detected, in, HandsConfig{});
@@ -115,8 +126,12 @@ void AddJitter(const FittedTrack& t, const Mat3& K, double fps, Jitter& j) {
     if ((t.joints[f + 1][0] - t.joints[f - 1][0]).norm() * fps / 2 > 0.05) continue;
     double raw = 0, fit = 0;
     for (int k = 0; k < kJoints; ++k) {
-      raw += (t.observations[f + 1]->uv[k] - 2 * t.observations[f]->uv[k] + t.observations[f - 1]->uv[k]).norm();
-      fit += (cam.Project(t.joints[f + 1][k]) - 2 * cam.Project(t.joints[f][k]) + cam.Project(t.joints[f - 1][k])).norm();
+      raw += (t.observations[f + 1]->uv[k] - 2 * t.observations[f]->uv[k] +
+              t.observations[f - 1]->uv[k])
+                 .norm();
+      fit += (cam.Project(t.joints[f + 1][k]) - 2 * cam.Project(t.joints[f][k]) +
+              cam.Project(t.joints[f - 1][k]))
+                 .norm();
     }
     j.raw += raw / kJoints;
     j.fit += fit / kJoints;
@@ -127,9 +142,10 @@ void AddJitter(const FittedTrack& t, const Mat3& K, double fps, Jitter& j) {
 void Real(std::int64_t frames) {
   const char* clips[] = {"02_cups.mp4", "03_blocks.mp4", "bass_guitar.mp4", "eyeliner.avi",
                          "laptop_trackpad.mp4"};
-  std::printf("%-20s %6s %6s %8s %8s %9s %28s %28s %8s %s\n", "clip", "frames", "hand%", "det cpu/s",
-              "fit cpu/s", "total/s", "right palm cm med [min,max]", "left palm cm med [min,max]",
-              "jump cm", "still: jitter px/f^2 models -> fit (frames); model's own palm cm");
+  std::printf("%-20s %6s %6s %8s %8s %9s %28s %28s %8s %s\n", "clip", "frames", "hand%",
+              "det cpu/s", "fit cpu/s", "total/s", "right palm cm med [min,max]",
+              "left palm cm med [min,max]", "jump cm",
+              "still: jitter px/f^2 models -> fit (frames); model's own palm cm");
   for (const char* clip : clips) {
     const Run r = RunVideo(kData + "/videos/" + clip, frames);
     const double video_s = r.detected.frames.size() / r.detected.fps;
@@ -146,28 +162,38 @@ void Real(std::int64_t frames) {
     std::string palms[2];
     double jump = 0;
     Jitter jitter;
-    for (const FittedTrack& t : r.result.tracks) AddJitter(t, r.result.intrinsics.K, r.detected.fps, jitter);
+    for (const FittedTrack& t : r.result.tracks)
+      AddJitter(t, r.result.intrinsics.K, r.detected.fps, jitter);
     for (Side side : {Side::kRight, Side::kLeft}) {
       std::vector<double> w;
+      // The wrist per side as the bundle holds it (hands.npz): a move between
+      // two tracks of one side on consecutive frames counts too.
+      std::vector<std::optional<Vec3>> wrist(r.detected.frames.size());
       for (const FittedTrack& t : r.result.tracks) {
         if (t.side != side) continue;
         for (size_t f = 0; f < t.joints.size(); ++f) {
           w.push_back(100 * PalmWidth(t.joints[f]));
-          if (f > 0) jump = std::max(jump, 100 * (t.joints[f][0] - t.joints[f - 1][0]).norm());
+          wrist[t.first_frame + f] = t.joints[f][0];
         }
+      }
+      for (size_t f = 1; f < wrist.size(); ++f) {
+        if (wrist[f] && wrist[f - 1])
+          jump = std::max(jump, 100 * (*wrist[f] - *wrist[f - 1]).norm());
       }
       char buf[64] = "-";
       if (!w.empty()) {
         std::sort(w.begin(), w.end());
-        std::snprintf(buf, sizeof buf, "%.1f [%.1f, %.1f] n=%zu", w[w.size() / 2], w.front(), w.back(), w.size());
+        std::snprintf(buf, sizeof buf, "%.1f [%.1f, %.1f] n=%zu", w[w.size() / 2], w.front(),
+                      w.back(), w.size());
       }
       palms[side == Side::kRight ? 0 : 1] = buf;
     }
-    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f\n", clip,
-                r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(), r.detect_cpu / video_s,
-                r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s, palms[0].c_str(), palms[1].c_str(),
-                jump, jitter.frames ? jitter.raw / jitter.frames : 0.0, jitter.frames ? jitter.fit / jitter.frames : 0.0,
-                jitter.frames, model_palm);
+    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f\n",
+                clip, r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(),
+                r.detect_cpu / video_s, r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s,
+                palms[0].c_str(), palms[1].c_str(), jump,
+                jitter.frames ? jitter.raw / jitter.frames : 0.0,
+                jitter.frames ? jitter.fit / jitter.frames : 0.0, jitter.frames, model_palm);
     std::fflush(stdout);
   }
 }
@@ -229,7 +255,8 @@ void Score(const FittedTrack& t, const recon::ClipBundle& b, SynthError& e) {
       const auto& hand = side == Side::kRight ? b.hand_right : b.hand_left;
       if (!hand || !hand->valid[g]) continue;
       double sum = 0;
-      for (int j = 0; j < kJoints; ++j) sum += (t.joints[f][j] - hand->joints[g].row(j).transpose()).norm();
+      for (int j = 0; j < kJoints; ++j)
+        sum += (t.joints[f][j] - hand->joints[g].row(j).transpose()).norm();
       if (sum / kJoints < best) {
         best = sum / kJoints;
         root = (t.joints[f][0] - hand->joints[g].row(0).transpose()).norm();
@@ -246,8 +273,8 @@ void Score(const FittedTrack& t, const recon::ClipBundle& b, SynthError& e) {
 
 void PrintError(const char* name, const SynthError& e) {
   std::printf("  %-28s MPJPE %.2f cm, wrist %.2f cm over %d frames; %d on the other side\n", name,
-              e.frames ? 100 * e.mpjpe / e.frames : 0.0, e.frames ? 100 * e.root / e.frames : 0.0, e.frames,
-              e.other_side);
+              e.frames ? 100 * e.mpjpe / e.frames : 0.0, e.frames ? 100 * e.root / e.frames : 0.0,
+              e.frames, e.other_side);
 }
 
 // Rendered clips (synth/): the models on the synthetic world's hands.
@@ -267,18 +294,23 @@ void SynthRendered(int clips) {
     Landmarker().Reset();
     for (const cv::Mat& bgr : clip.bgr) {
       FrameObservations hands;
-      for (const auto& h : Landmarker().Detect(bgr)) hands.push_back(FromLandmarked(h, 1.0, d.width, d.height));
+      for (const auto& h : Landmarker().Detect(bgr))
+        hands.push_back(FromLandmarked(h, 1.0, d.width, d.height));
       d.frames.push_back(hands);
     }
     for (const auto* hand : {&b.hand_right, &b.hand_left}) {
-      if (*hand) truth_hand_frames += static_cast<int>(std::count((*hand)->valid.begin(), (*hand)->valid.end(), true));
+      if (*hand)
+        truth_hand_frames +=
+            static_cast<int>(std::count((*hand)->valid.begin(), (*hand)->valid.end(), true));
     }
     const Intrinsics variants[2] = {
         {.K = b.KAt(0), .assumed = false, .source = "truth"},
-        {.K = KFromFov(b.width, b.height, HandsConfig{}.default_fov_deg), .assumed = true,
+        {.K = KFromFov(b.width, b.height, HandsConfig{}.default_fov_deg),
+         .assumed = true,
          .source = kIntrinsicsFromDefault}};
     for (int v = 0; v < 2; ++v) {
-      for (const FittedTrack& t : ReconstructHands(d, variants[v], HandsConfig{}).tracks) Score(t, b, errors[v]);
+      for (const FittedTrack& t : ReconstructHands(d, variants[v], HandsConfig{}).tracks)
+        Score(t, b, errors[v]);
     }
   }
   std::printf("rendered clips: %d clips, %d hand-frames in the truth\n", clips, truth_hand_frames);
@@ -288,27 +320,36 @@ void SynthRendered(int clips) {
 
 // Synthetic tracks (testing/synthetic_hand_track.h): a real hand's motion
 // seen through cameras of three focal lengths, keypoints with 1.5 px noise,
-// 3D landmarks with 3 mm noise; fitted with the true K and the default fov.
+// 3D landmarks with 3 mm noise; fitted with the true K and the default
+// fov, each with the model's own size (the synthetic landmarks have the
+// true size) and with the adult size prior (the default; the synthetic
+// hand is 0.190 m long, the prior's centre 0.182 m).
 void SynthTracks() {
   const auto rows = testing::ReadDexKeypoints(kData + "/retarget/human_hand_keypoints_right.csv");
   std::printf("synthetic tracks: 8 x 90 frames per camera, 1.5 px and 3 mm noise\n");
+  FitConfig model_size;
+  model_size.size_prior = "model";
+  const FitConfig fits[2] = {model_size, FitConfig{}};
+  const char* fit_names[2] = {"model size", "adult prior"};
   for (double fx : {400.0, 500.0, 700.0}) {
-    SynthError errors[3];
+    SynthError errors[5];  // [K][fit] as 2k+f; 4 = PnP only (true K, model size)
     for (int k = 0; k < 8; ++k) {
       const auto h = testing::MakeSyntheticHand(rows, 90, 60 * k, 1.5, 0.003, 0.9, 100 + k, fx);
       std::vector<FrameObservations> frames;
       for (const auto& o : h.seen) frames.push_back({o});
       const auto tracks = BuildTracks(frames, TrackerConfig{});
       const Mat3 Ks[2] = {h.K, KFromFov(h.width, h.height, HandsConfig{}.default_fov_deg)};
-      for (int v = 0; v < 2; ++v) {
+      for (int v = 0; v < 4; ++v) {
         for (const Track& tr : tracks) {
-          const FittedTrack fit = FitTrack(tr, Ks[v], h.fps, FitConfig{});
+          const FittedTrack fit = FitTrack(tr, Ks[v / 2], h.fps, fits[v % 2]);
           for (size_t f = 0; f < fit.joints.size(); ++f) {
             for (int pnp = 0; pnp < (v == 0 ? 2 : 1); ++pnp) {
-              SynthError& e = errors[pnp ? 2 : v];
+              if (pnp && !fit.has_pnp[f]) continue;
+              SynthError& e = errors[pnp ? 4 : v];
               const Joints& x = pnp ? fit.pnp_joints[f] : fit.joints[f];
               double sum = 0;
-              for (int j = 0; j < kJoints; ++j) sum += (x[j] - h.truth[fit.first_frame + f][j]).norm();
+              for (int j = 0; j < kJoints; ++j)
+                sum += (x[j] - h.truth[fit.first_frame + f][j]).norm();
               e.mpjpe += sum / kJoints;
               e.root += (x[0] - h.truth[fit.first_frame + f][0]).norm();
               ++e.frames;
@@ -317,33 +358,159 @@ void SynthTracks() {
         }
       }
     }
-    char name[3][64];
     const double fov = 2 * std::atan(320 / fx) * 180 / M_PI;
-    std::snprintf(name[0], 64, "fx %.0f (%.0f deg), true K", fx, fov);
-    std::snprintf(name[1], 64, "fx %.0f, default 65 deg", fx);
-    std::snprintf(name[2], 64, "fx %.0f, true K, PnP only", fx);
-    PrintError(name[2], errors[2]);
-    PrintError(name[0], errors[0]);
-    PrintError(name[1], errors[1]);
+    char name[64];
+    std::snprintf(name, 64, "fx %.0f (%.0f deg), true K, PnP only", fx, fov);
+    PrintError(name, errors[4]);
+    for (int v = 0; v < 4; ++v) {
+      std::snprintf(name, 64, "fx %.0f, %s, %s", fx, v / 2 ? "default 65 deg" : "true K",
+                    fit_names[v % 2]);
+      PrintError(name, errors[v]);
+    }
   }
 }
 
 void Synth(int clips) {
   SynthTracks();
-  SynthRendered(clips);
+  if (clips > 0) SynthRendered(clips);
 }
 
 }  // namespace
+
+// The largest wrist moves between frames of each bundled positive, with
+// what the models and PnP did there: the 2D wrist move and the keypoint
+// box's size change, PnP's wrist depth and turn between the two frames.
+double TurnDeg(const Joints& a, const Joints& b) {
+  Eigen::Matrix<double, 3, kJoints> A, B;
+  for (int j = 0; j < kJoints; ++j) {
+    A.col(j) = a[j] - a[0];
+    B.col(j) = b[j] - b[0];
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(A, B, false);
+  return Eigen::AngleAxisd(Mat3(T.topLeftCorner<3, 3>())).angle() * 180 / M_PI;
+}
+
+double BoxSize(const HandObservation& o) {
+  Eigen::Vector2d lo = o.uv[0], hi = o.uv[0];
+  for (const auto& p : o.uv) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return (hi - lo).norm();
+}
+
+void Jumps(std::int64_t frames) {
+  const char* clips[] = {"02_cups.mp4", "03_blocks.mp4", "bass_guitar.mp4", "eyeliner.avi",
+                         "laptop_trackpad.mp4"};
+  for (const char* clip : clips) {
+    const Run r = RunVideo(kData + "/videos/" + clip, frames);
+    struct J {
+      double cm;
+      int track, frame;
+    };
+    std::vector<J> jumps;
+    for (size_t k = 0; k < r.result.tracks.size(); ++k) {
+      const FittedTrack& t = r.result.tracks[k];
+      for (size_t f = 1; f < t.joints.size(); ++f) {
+        jumps.push_back({100 * (t.joints[f][0] - t.joints[f - 1][0]).norm(), static_cast<int>(k),
+                         static_cast<int>(f)});
+      }
+    }
+    std::sort(jumps.begin(), jumps.end(), [](const J& a, const J& b) { return a.cm > b.cm; });
+    std::printf("%s: %zu tracks\n", clip, r.result.tracks.size());
+    for (size_t i = 0; i < std::min<size_t>(4, jumps.size()); ++i) {
+      const FittedTrack& t = r.result.tracks[jumps[i].track];
+      const int f = jumps[i].frame;
+      const auto &a = t.observations[f - 1], &b = t.observations[f];
+      std::printf("  %.1f cm at %d->%d (track %d, %s, %zu frames):", jumps[i].cm,
+                  t.first_frame + f - 1, t.first_frame + f, jumps[i].track, SideName(t.side),
+                  t.joints.size());
+      std::printf(" fit z %.1f -> %.1f cm;", 100 * t.joints[f - 1][0].z(),
+                  100 * t.joints[f][0].z());
+      if (a && b) {
+        std::printf(" 2D wrist %.0f px, box %.0f -> %.0f px, score %.2f -> %.2f;",
+                    (b->uv[0] - a->uv[0]).norm(), BoxSize(*a), BoxSize(*b), a->score, b->score);
+      } else {
+        std::printf(" filled;");
+      }
+      if (t.has_pnp[f - 1] && t.has_pnp[f]) {
+        std::printf(" PnP z %.1f -> %.1f cm, turn %.0f deg", 100 * t.pnp_joints[f - 1][0].z(),
+                    100 * t.pnp_joints[f][0].z(), TurnDeg(t.pnp_joints[f - 1], t.pnp_joints[f]));
+      }
+      std::printf("\n");
+    }
+    std::fflush(stdout);
+  }
+}
+
+// PCK against hand-made labels (bench/hand_labels/*.json, hands/hand_labels.h)
+// for the detector alone (every hand the models gave on the frame), the
+// tracker (the tracks' hands with their sides) and the fit (the fitted
+// joints' projection), per video; left/right swaps of the tracker.
+void Labels() {
+  const std::filesystem::path dir = std::filesystem::path(DOASIDO_SOURCE_DIR) / "bench/hand_labels";
+  std::vector<std::filesystem::path> files;
+  if (std::filesystem::is_directory(dir)) {
+    for (const auto& e : std::filesystem::directory_iterator(dir)) {
+      if (e.path().extension() == ".json") files.push_back(e.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) {
+    std::printf("no label files in %s (see hands/hand_labels.h for the format)\n", dir.c_str());
+    return;
+  }
+  std::printf("%-22s %6s %6s %15s %15s %15s %6s %6s\n", "video", "frames", "hands",
+              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed", "swaps");
+  for (const auto& file : files) {
+    const HandLabels labels = ReadHandLabels(file);
+    int last = 0;
+    for (const auto& f : labels.frames) last = std::max(last, f.frame);
+    const Run r = RunVideo(kData + "/" + labels.video, last + 1);
+    const Camera cam = Camera::FromK(r.result.intrinsics.K, 0, 0);
+    PckScore models, tracker, fit;
+    for (const LabelledFrame& l : labels.frames) {
+      const int f = l.frame - static_cast<int>(r.detected.first_frame);
+      if (f < 0 || f >= static_cast<int>(r.detected.frames.size())) continue;
+      std::vector<PredictedHand> raw, tracked, fitted;
+      for (const HandObservation& o : r.detected.frames[f]) {
+        raw.push_back({.side = o.p_right >= 0.5 ? Side::kRight : Side::kLeft, .uv = o.uv});
+      }
+      for (const FittedTrack& t : r.result.tracks) {
+        const int k = f - t.first_frame;
+        if (k < 0 || k >= static_cast<int>(t.joints.size())) continue;
+        if (t.observations[k]) tracked.push_back({.side = t.side, .uv = t.observations[k]->uv});
+        PredictedHand p{.side = t.side};
+        for (int j = 0; j < kJoints; ++j) p.uv[j] = cam.Project(t.joints[k][j]);
+        fitted.push_back(p);
+      }
+      models.Add(ScoreFrame(l, raw));
+      tracker.Add(ScoreFrame(l, tracked));
+      fit.Add(ScoreFrame(l, fitted));
+    }
+    std::printf("%-22s %6zu %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %6d %6d\n", file.stem().c_str(),
+                labels.frames.size(), fit.hands, models.Pck01(), models.Pck02(), tracker.Pck01(),
+                tracker.Pck02(), fit.Pck01(), fit.Pck02(), fit.missed, tracker.swaps);
+    std::fflush(stdout);
+  }
+}
 
 int main(int argc, char** argv) {
   InitLogging("warn");
   const std::string mode = argc > 1 ? argv[1] : "real";
   const long arg = argc > 2 ? std::atol(argv[2]) : 0;
-  if (mode == "real") Real(arg);
-  else if (mode == "dex") Dex(arg);
-  else if (mode == "synth") Synth(arg > 0 ? static_cast<int>(arg) : 4);
+  if (mode == "real")
+    Real(arg);
+  else if (mode == "dex")
+    Dex(arg);
+  else if (mode == "jumps")
+    Jumps(arg);
+  else if (mode == "labels")
+    Labels();
+  else if (mode == "synth")
+    Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
-    std::fprintf(stderr, "usage: hands_bench real|dex|synth [frames|clips]\n");
+    std::fprintf(stderr, "usage: hands_bench real|dex|jumps|labels|synth [frames|clips]\n");
     return 2;
   }
   return 0;

@@ -50,9 +50,12 @@ Json KeypointsJson(const DetectedFrames& detected, const HandsResult& result) {
           {"height", detected.height},
           {"fps", detected.fps},
           {"first_frame", detected.first_frame},
-          {"K", {{K(0, 0), K(0, 1), K(0, 2)}, {K(1, 0), K(1, 1), K(1, 2)}, {K(2, 0), K(2, 1), K(2, 2)}}},
+          {"K",
+           {{K(0, 0), K(0, 1), K(0, 2)}, {K(1, 0), K(1, 1), K(1, 2)}, {K(2, 0), K(2, 1), K(2, 2)}}},
           {"intrinsics_source", result.intrinsics.source},
           {"intrinsics_assumed", result.intrinsics.assumed},
+          {"size_prior", result.size_prior},
+          {"size_assumed", result.size_prior == "adult"},
           {"joint_order", "mediapipe21"},
           {"frames", frames}};
 }

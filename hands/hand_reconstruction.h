@@ -3,6 +3,7 @@
 // numbers the stage records about them.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "core/config.h"
@@ -18,6 +19,10 @@ struct HandsResult {
   std::vector<FittedTrack> tracks;  // by first frame; tracks without any pose are left out
   TrackingSummary tracking;
   double fit_seconds = 0;
+  // The size the fit assumed (FitConfig): "adult" (the template under a
+  // prior on its length, recorded as assumed) or "model".
+  std::string size_prior;
+  double prior_hand_length_m = 0;  // the prior's centre, "adult" only
 };
 
 // `fps` <= 0 (an image) is taken as 30 (the acceleration term needs a rate;
@@ -27,8 +32,10 @@ HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& i
                              const HandsConfig& config);
 
 // Measurements of a result: frames, per side the frames with a valid hand,
-// filled frames, tracks, palm width (median over frames, metres), the
-// largest frame-to-frame wrist move (metres), the mean reprojection error
+// filled frames, tracks, palm width (median over frames, metres) and hand
+// length (median over tracks' frames, metres), the size prior, the
+// largest frame-to-frame wrist move per side as hands.npz holds it (across
+// tracks too; metres), the mean reprojection error
 // (pixels), seconds.
 Json Summarize(const DetectedFrames& detected, const HandsResult& result);
 

@@ -21,10 +21,28 @@
 //     landmarks turned into the camera by the frame's PnP pose (the depth
 //     of the fingers that one view does not show);
 //   - every joint's acceleration (x[t+1] - 2 x[t] + x[t-1]) * fps^2.
+// Size (FitConfig::size_prior). With "model" the link lengths are the
+// landmark model's medians as above. With "adult" (the default) they are
+// an adult template hand's, times one scale per track (a Ceres unknown
+// under a log-normal prior on the hand's length, wrist to middle fingertip
+// along the bones): on the bundled real clips the model's metric hands are
+// 0.5-0.95 of an adult's and their palms narrower still (3-5 cm between
+// the index and little fingers' bases), and a hand's size is what fixes
+// its depth. The model's 3D landmarks then give the shape residual its
+// directions at the template's size (scaled by the ratio of the template's
+// bone lengths to the model's, summed over the 20 bones). The template is
+// the right hand of HOT3D's participant P0003
+// (`hot3d_sample/.../umetrack_hand_user_profile.json`, a motion-capture
+// hand model; OpenPose-21 joints through eval/umetrack_hand.h at rest):
+// 189.55 mm long, 61.6 mm between the index and little fingers' bases (its
+// mesh is 82.6 mm wide there, skin to skin), scaled to the prior's length.
 // Initial values: the PnP pose of each observed frame (hands/hand_pnp.h),
 // gaps linearly interpolated between their neighbours. Frames of a gap have
 // no reprojection or shape residual: the bones and the acceleration carry
-// them across, and they are marked filled.
+// them across, and they are marked filled. A PnP pose that turns more than
+// `max_pnp_turn_deg` from most poses within 5 frames is a flip (a nearly
+// flat hand's mirror pose) and is dropped: that frame keeps its
+// reprojection, loses its shape residual and starts interpolated.
 #pragma once
 
 #include <array>
@@ -42,14 +60,18 @@ using Joints = std::array<Vec3, kJoints>;
 struct FittedTrack {
   Side side = Side::kRight;
   int first_frame = 0;
-  std::vector<Joints> joints;     // per frame of the track, camera frame, metres
-  std::vector<bool> filled;       // the frame had no observation (or no PnP pose)
+  std::vector<Joints> joints;  // per frame of the track, camera frame, metres
+  std::vector<bool> filled;    // the frame had no observation
   std::vector<std::optional<HandObservation>> observations;  // the track's, per frame
-  std::vector<bool> has_pnp;      // the frame's PnP pose exists (before the fit)
-  std::vector<Joints> pnp_joints;  // those poses' joints (zero where !has_pnp)
-  std::vector<double> link_length;  // metres, in SkeletonLinks() order
-  double reprojection_rms_px = 0;  // observed keypoints, after the fit
-  double seconds = 0;              // the solve
+  std::vector<bool> has_pnp;        // the frame's PnP pose exists and was kept (before the fit)
+  int flipped_poses = 0;            // PnP poses dropped as flips (FitConfig::max_pnp_turn_deg)
+  std::vector<Joints> pnp_joints;   // PnP's joints, flips too (zero where PnP found none)
+  std::vector<double> link_length;  // metres, in SkeletonLinks() order, after the fit
+  bool size_prior = false;          // the adult template and prior set the size
+  double scale = 1;                 // the template's scale after the fit (1 without the prior)
+  double model_hand_length_m = 0;   // the landmark model's own hand length (medians)
+  double reprojection_rms_px = 0;   // observed keypoints, after the fit
+  double seconds = 0;               // the solve
   int iterations = 0;
   int last_frame() const { return first_frame + static_cast<int>(joints.size()) - 1; }
 };
@@ -57,6 +79,13 @@ struct FittedTrack {
 // The links held at constant length: (child, parent) of the 20 bones, then
 // (17, 5) across the palm.
 std::vector<std::pair<int, int>> SkeletonLinks();
+
+// The adult template's link lengths (metres, SkeletonLinks() order) scaled
+// to a hand `hand_length_m` long; the template's own length and the
+// hand length of a set of link lengths (wrist - middle base - tip).
+inline constexpr double kTemplateHandLengthM = 0.18955;
+std::vector<double> TemplateLinkLengths(double hand_length_m);
+double HandLength(const std::vector<double>& link_length);
 
 // Fits `track` seen through `K` at `fps` frames per second. A track on which
 // no frame has a PnP pose returns with empty `joints`.

@@ -14,6 +14,7 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);
   RequireInRange(t, "max_jump", c.tracker.max_jump, 0.01, 100);
   RequireInRange(t, "min_track_frames", c.tracker.min_track_frames, 1, 100000);
+  RequireInRange(t, "duplicate_distance", c.tracker.duplicate_distance, 0, 10);
   const std::string f = section + ".fit";
   RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);
   RequireInRange(f, "huber", c.fit.huber, 0.1, 100);
@@ -21,6 +22,10 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(f, "shape_sigma_m", c.fit.shape_sigma_m, 1e-5, 1);
   RequireInRange(f, "acceleration_sigma_ms2", c.fit.acceleration_sigma_ms2, 1e-3, 1e4);
   RequireInRange(f, "max_iterations", c.fit.max_iterations, 1, 10000);
+  RequireInRange(f, "max_pnp_turn_deg", c.fit.max_pnp_turn_deg, 1, 180);
+  RequireOneOf(f, "size_prior", c.fit.size_prior, {"adult", "model"});
+  RequireInRange(f, "hand_length_m", c.fit.hand_length_m, 0.08, 0.3);
+  RequireInRange(f, "hand_length_sigma", c.fit.hand_length_sigma, 0.005, 1);
 }
 
 }  // namespace doasido::hands

@@ -17,31 +17,53 @@ inline constexpr const char* kHandsStageName = recon::kHandsStageFolder;
 inline constexpr const char* kKeypointsFile = "keypoints.json";
 // meta.json's extra key: true when K came from the default field of view.
 inline constexpr const char* kIntrinsicsAssumedKey = "intrinsics_assumed";
+// meta.json's extra key: the size prior, whether the size is assumed, and
+// per track the fitted hand length and palm width (hands/hand_skeleton_fit.h).
+inline constexpr const char* kHandSizeKey = "hand_size";
 
 // How the 2D keypoints of one clip become tracks (hands/hand_tracker.h).
 struct TrackerConfig {
-  double min_score = 0.5;    // hand presence below this is not a detection
-  int max_gap_frames = 5;    // a hand unseen this long or less is filled in; longer splits the track
-  double max_jump = 1.5;     // a detection continues a track when its centre moved less than
-                             // this many hand sizes since the track was last seen
-  int min_track_frames = 3;  // tracks with fewer observed frames are dropped (spurious)
+  double min_score = 0.5;  // hand presence below this is not a detection
+  int max_gap_frames = 5;  // a hand unseen this long or less is filled in; longer splits the track
+  double max_jump = 1.5;   // a detection continues a track when its centre moved less than
+                           // this many hand sizes since the track was last seen
+  int min_track_frames = 3;         // tracks with fewer observed frames are dropped (spurious)
+  double duplicate_distance = 0.5;  // hands this close (mean keypoint distance over the
+                                    // smaller's size) in one frame are one hand; 0: off
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrackerConfig, min_score, max_gap_frames, max_jump,
-                                                min_track_frames)
+                                                min_track_frames, duplicate_distance)
 
 // The skeleton fit of one track (hands/hand_skeleton_fit.h). Sigmas weigh
 // each residual: a residual of one sigma costs as much as any other.
 struct FitConfig {
-  double reprojection_sigma = 0.03;  // keypoint noise, fraction of the hand's size in the image
-  double huber = 2.0;                // robust loss: quadratic up to this many sigmas
-  double bone_sigma_m = 0.002;       // a bone's length against the track's constant length
-  double shape_sigma_m = 0.01;       // wrist-relative joints against the model's 3D landmarks
-  double acceleration_sigma_ms2 = 6;  // joint acceleration, m/s^2
+  double reprojection_sigma = 0.03;   // keypoint noise, fraction of the hand's size in the image
+  double huber = 2.0;                 // robust loss: quadratic up to this many sigmas
+  double bone_sigma_m = 0.002;        // a bone's length against the track's constant length
+  double shape_sigma_m = 0.01;        // wrist-relative joints against the model's 3D landmarks
+  double acceleration_sigma_ms2 = 4;  // joint acceleration, m/s^2
   int max_iterations = 50;
+  // A frame whose PnP pose turns more than this from most of the poses
+  // within 5 frames of it loses its pose (the mirror-pose ambiguity of a
+  // nearly flat hand: measured flips of 170-175 degrees on 02_cups and
+  // 03_blocks); its keypoints still count.
+  double max_pnp_turn_deg = 60;
+  // The hand's size, the one metric cue of a single view (docs/hands.md,
+  // "Size"). "adult": the skeleton is an adult template hand
+  // (hands/hand_skeleton_fit.h) times one scale per track, under a
+  // log-normal prior centred on `hand_length_m` (wrist to the middle
+  // fingertip along the bones) with relative spread `hand_length_sigma`;
+  // depth follows from the reprojection. "model": the landmark model's own
+  // median lengths, no prior (its metric size is 0.5-0.95 of an adult's on
+  // the bundled real clips).
+  std::string size_prior = "adult";
+  double hand_length_m = 0.182;     // adults: men ~0.19, women ~0.175
+  double hand_length_sigma = 0.06;  // the spread of adult hand lengths, relative
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber,
-                                                bone_sigma_m, shape_sigma_m,
-                                                acceleration_sigma_ms2, max_iterations)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber, bone_sigma_m,
+                                                shape_sigma_m, acceleration_sigma_ms2,
+                                                max_iterations, max_pnp_turn_deg, size_prior,
+                                                hand_length_m, hand_length_sigma)
 
 // The [hands] section.
 struct HandsConfig {
@@ -50,7 +72,7 @@ struct HandsConfig {
   // camera filming 16:9 video sees about 65 degrees across.
   double default_fov_deg = 65;
   int max_hands = 2;
-  int max_side = 640;  // frames are decoded at most this large for the models
+  int max_side = 640;              // frames are decoded at most this large for the models
   std::string backend = "native";  // runtime of the hand models: "native" or "wasm"
   TrackerConfig tracker;
   FitConfig fit;

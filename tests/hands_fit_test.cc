@@ -8,6 +8,7 @@
 
 #include "hands/hand_reconstruction.h"
 #include "hands/hand_tracker.h"
+#include "eval/umetrack_hand.h"
 #include "testing/synthetic_hand_track.h"
 #include "test_util.h"
 
@@ -18,8 +19,8 @@ using testing::MakeSyntheticHand;
 using testing::Mpjpe;
 
 const std::vector<Joints>& DexRows() {
-  static const auto rows =
-      testing::ReadDexKeypoints((testing::SharedData() / "retarget/human_hand_keypoints_right.csv").string());
+  static const auto rows = testing::ReadDexKeypoints(
+      (testing::SharedData() / "retarget/human_hand_keypoints_right.csv").string());
   return rows;
 }
 
@@ -29,9 +30,18 @@ std::vector<FrameObservations> OneHand(const testing::SyntheticHand& h) {
   return frames;
 }
 
+// The synthetic landmarks carry the true size: these tests fit with the
+// model's own size; the adult prior has tests of its own below.
+FitConfig ModelSize() {
+  FitConfig c;
+  c.size_prior = "model";
+  return c;
+}
+
 double RootError(const FittedTrack& fit, const std::vector<Joints>& truth) {
   double sum = 0;
-  for (size_t f = 0; f < fit.joints.size(); ++f) sum += (fit.joints[f][0] - truth[fit.first_frame + f][0]).norm();
+  for (size_t f = 0; f < fit.joints.size(); ++f)
+    sum += (fit.joints[f][0] - truth[fit.first_frame + f][0]).norm();
   return sum / fit.joints.size();
 }
 
@@ -40,7 +50,7 @@ TEST(HandsFit, NoisyKeypointsGiveTheTrueJointsWithinCentimetres) {
   const auto h = MakeSyntheticHand(DexRows(), 60, 100, 1.5, 0.003, 0.9, 7);
   const auto tracks = BuildTracks(OneHand(h), TrackerConfig{});
   ASSERT_EQ(tracks.size(), 1u);
-  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, FitConfig{});
+  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, ModelSize());
   ASSERT_EQ(fit.joints.size(), 60u);
   const auto all = [](size_t) { return true; };
   const double before = Mpjpe(fit, h.truth, true, all), after = Mpjpe(fit, h.truth, false, all);
@@ -71,7 +81,7 @@ TEST(HandsFit, ExactInputIsReproduced) {
   const auto h = MakeSyntheticHand(DexRows(), 20, 0, 0.0, 0.0, 0.9, 1);
   const auto tracks = BuildTracks(OneHand(h), TrackerConfig{});
   ASSERT_EQ(tracks.size(), 1u);
-  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, FitConfig{});
+  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, ModelSize());
   // Only the acceleration prior pulls away from the truth (the CSV's fingers move fast).
   EXPECT_LT(Mpjpe(fit, h.truth, false, [](size_t) { return true; }), 0.003);
   EXPECT_LT(Mpjpe(fit, h.truth, true, [](size_t) { return true; }), 1e-6);  // PnP on exact input
@@ -90,11 +100,141 @@ TEST(HandsFit, ShortGapsAreFilledAndMarkedLongGapsSplit) {
   EXPECT_EQ(tracks[0].last_frame(), 49);
   EXPECT_EQ(tracks[1].first_frame, 60);
   EXPECT_EQ(tracks[1].last_frame(), 79);
-  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, FitConfig{});
+  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, ModelSize());
   for (int f = 0; f < 50; ++f) EXPECT_EQ(fit.filled[f], f >= 20 && f < 23) << f;
   const double gap = Mpjpe(fit, h.truth, false, [](size_t f) { return f >= 20 && f < 23; });
   std::printf("MPJPE on filled frames %.2f cm\n", 100 * gap);
   EXPECT_LT(gap, 0.02);
+}
+
+// The rows scaled to a hand `length` long (wrist - middle base - tip).
+std::vector<Joints> RowsOfLength(double length) {
+  std::vector<Joints> rows = DexRows();
+  const Joints& r = rows[0];
+  const double own = (r[9] - r[0]).norm() + (r[10] - r[9]).norm() + (r[11] - r[10]).norm() +
+                     (r[12] - r[11]).norm();
+  for (Joints& row : rows) {
+    for (Vec3& j : row) j *= length / own;
+  }
+  return rows;
+}
+
+double MaxRootJump(const FittedTrack& fit) {
+  double jump = 0;
+  for (size_t f = 1; f < fit.joints.size(); ++f)
+    jump = std::max(jump, (fit.joints[f][0] - fit.joints[f - 1][0]).norm());
+  return jump;
+}
+
+TEST(HandsSize, TheAdultPriorRestoresTheDepthWhereTheModelsHandIsSmall) {
+  // An adult hand (0.182 m, the prior's centre) whose landmark model sees it
+  // at 0.6 of its size, as on the bundled real clips (0.5-0.95), over four
+  // stretches of its motion. The template (HOT3D's hand) is not this hand
+  // (dex-retargeting's): their proportions differ (palm 5.9 vs 6.4 cm at
+  // this length), which costs depth where the pose shows the palm most.
+  double model_root = 0, adult_root = 0, adult_mpjpe = 0;
+  const auto all = [](size_t) { return true; };
+  for (int k = 0; k < 4; ++k) {
+    auto h = MakeSyntheticHand(RowsOfLength(0.182), 45, 150 * k, 1.5, 0.003, 0.9, 21 + k);
+    for (auto& o : h.seen) {
+      for (auto& w : o.world) w *= 0.6;
+    }
+    const auto tracks = BuildTracks(OneHand(h), TrackerConfig{});
+    ASSERT_EQ(tracks.size(), 1u);
+    const FittedTrack model = FitTrack(tracks[0], h.K, h.fps, ModelSize());
+    const FittedTrack adult = FitTrack(tracks[0], h.K, h.fps, FitConfig{});
+    std::printf(
+        "rows from %d: model size root %.2f cm; adult prior root %.2f cm, MPJPE %.2f cm, length "
+        "%.3f m\n",
+        150 * k, 100 * RootError(model, h.truth), 100 * RootError(adult, h.truth),
+        100 * Mpjpe(adult, h.truth, false, all), HandLength(adult.link_length));
+    model_root += RootError(model, h.truth) / 4;
+    adult_root += RootError(adult, h.truth) / 4;
+    adult_mpjpe += Mpjpe(adult, h.truth, false, all) / 4;
+    EXPECT_TRUE(adult.size_prior);
+    EXPECT_NEAR(HandLength(adult.link_length), 0.182, 0.182 * 0.03);
+    EXPECT_NEAR(adult.model_hand_length_m, 0.6 * 0.182, 0.02);
+    // The template's palm at that length (61.6 / 189.6 of it).
+    EXPECT_NEAR(adult.link_length.back(), 0.182 * 61.59 / 189.55, 0.003);
+  }
+  EXPECT_GT(model_root, 0.15);  // 40 % too near
+  EXPECT_LT(adult_root, 0.03);
+  EXPECT_LT(adult_mpjpe, 0.03);
+}
+
+TEST(HandsSize, TheTemplateIsHot3dsMeasuredHand) {
+  // The template's links are those of HOT3D P0003's UmeTrack hand at rest.
+  const auto profile =
+      testing::SharedData() / "hot3d_sample/Aria/P0003_c701bd11/umetrack_hand_user_profile.json";
+  const recon::UmeTrackHand hand = recon::ReadUmeTrackHand(profile);
+  std::array<double, recon::kUmeTrackJoints> rest{};
+  const recon::Joints21 j =
+      recon::UmeTrackOpenPose21(hand, rest, Pose::Identity(), recon::HandSide::kRight);
+  const std::vector<double> links = TemplateLinkLengths(kTemplateHandLengthM);
+  const auto pairs = SkeletonLinks();
+  ASSERT_EQ(links.size(), pairs.size());
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    EXPECT_NEAR(links[k], (j.row(pairs[k].first) - j.row(pairs[k].second)).norm(), 5e-5) << k;
+  }
+  EXPECT_NEAR(HandLength(TemplateLinkLengths(0.18)), 0.18, 1e-12);
+}
+
+TEST(HandsFit, AFlippedPnPPoseIsDroppedAndTheWristDoesNotJump) {
+  // Two frames whose model landmarks are mirrored (the model's own
+  // palm/back confusion): PnP's best pose for them turns the hand over.
+  auto h = MakeSyntheticHand(DexRows(), 60, 300, 1.0, 0.002, 0.9, 13);
+  for (int f : {30, 31}) {
+    for (auto& w : h.seen[f].world) w.z() = -w.z();
+  }
+  const auto tracks = BuildTracks(OneHand(h), TrackerConfig{});
+  ASSERT_EQ(tracks.size(), 1u);
+  FitConfig keep = ModelSize();
+  keep.max_pnp_turn_deg = 180;  // nothing dropped
+  const FittedTrack kept = FitTrack(tracks[0], h.K, h.fps, keep);
+  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, ModelSize());
+  const auto flipped = [](size_t f) { return f == 30 || f == 31; };
+  std::printf(
+      "flips kept: jump %.2f cm, MPJPE there %.2f cm; dropped (%d): jump %.2f cm, MPJPE there %.2f "
+      "cm\n",
+      100 * MaxRootJump(kept), 100 * Mpjpe(kept, h.truth, false, flipped), fit.flipped_poses,
+      100 * MaxRootJump(fit), 100 * Mpjpe(fit, h.truth, false, flipped));
+  EXPECT_EQ(fit.flipped_poses, 2);
+  EXPECT_FALSE(fit.has_pnp[30]);
+  EXPECT_FALSE(fit.filled[30]);  // observed: its keypoints still count
+  EXPECT_LT(Mpjpe(fit, h.truth, false, flipped), 0.012);
+  EXPECT_LT(Mpjpe(fit, h.truth, false, flipped), Mpjpe(kept, h.truth, false, flipped));
+  double truth_jump = 0;
+  for (size_t f = 1; f < h.truth.size(); ++f)
+    truth_jump = std::max(truth_jump, (h.truth[f][0] - h.truth[f - 1][0]).norm());
+  EXPECT_LT(MaxRootJump(fit), truth_jump + 0.01);
+}
+
+TEST(HandsTracker, AHandFoundTwiceMakesOneTrackThatDoesNotAlternate) {
+  // The landmarker's second find of one hand, 0.15 hand sizes off and
+  // sometimes surer than the first: one track, always the find nearest it.
+  auto h = MakeSyntheticHand(DexRows(), 40, 0, 1.0, 0.002, 0.9, 17);
+  std::vector<FrameObservations> frames(40);
+  int twice = 0;
+  for (int f = 0; f < 40; ++f) {
+    frames[f] = {h.seen[f]};
+    if (f >= 10 && f < 30) {
+      HandObservation second = h.seen[f];
+      for (auto& p : second.uv) p.x() += 25;
+      second.score = f % 2 ? 0.99 : 0.6;
+      second.p_right = 0.2;
+      frames[f].push_back(second);
+      ++twice;
+    }
+  }
+  TrackingSummary summary;
+  const auto tracks = BuildTracks(frames, TrackerConfig{}, &summary);
+  ASSERT_EQ(tracks.size(), 1u);
+  EXPECT_EQ(summary.duplicates, twice);
+  EXPECT_EQ(tracks[0].observed(), 40);
+  for (int f = 0; f < 40; ++f) EXPECT_EQ(tracks[0].frames[f]->uv[0].x(), h.seen[f].uv[0].x()) << f;
+  TrackerConfig off;
+  off.duplicate_distance = 0;
+  EXPECT_EQ(BuildTracks(frames, off).size(), 2u);
 }
 
 TEST(HandsTracker, EachTrackKeepsOneSideThroughHandednessFlips) {
@@ -104,7 +244,7 @@ TEST(HandsTracker, EachTrackKeepsOneSideThroughHandednessFlips) {
   std::vector<FrameObservations> frames(60);
   for (int f = 0; f < 60; ++f) {
     HandObservation r = right.seen[f], l = left.seen[f];
-    for (auto& p : l.uv) p.x() -= 250;  // the left hand stays left in the image
+    for (auto& p : l.uv) p.x() -= 250;                // the left hand stays left in the image
     if (f % 7 == 3) std::swap(r.p_right, l.p_right);  // the model's occasional swap
     // Detection order changes too: the tracker must not care.
     frames[f] = f % 2 ? FrameObservations{r, l} : FrameObservations{l, r};
@@ -176,6 +316,30 @@ TEST(HandsConfig, OutOfRangeValuesAreRefusedByName) {
   c = HandsConfig{};
   c.fit.bone_sigma_m = 0;
   EXPECT_THROW(CheckConfig(c, "hands"), Error);
+  const auto refused = [](HandsConfig bad, const std::string& key) {
+    try {
+      CheckConfig(bad, "hands");
+      ADD_FAILURE() << key << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), "bad_config");
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  };
+  c = HandsConfig{};
+  c.fit.size_prior = "child";
+  refused(c, "hands.fit.size_prior");
+  c = HandsConfig{};
+  c.fit.hand_length_m = 1.8;  // centimetres for metres
+  refused(c, "hands.fit.hand_length_m");
+  c = HandsConfig{};
+  c.fit.hand_length_sigma = 0;
+  refused(c, "hands.fit.hand_length_sigma");
+  c = HandsConfig{};
+  c.fit.max_pnp_turn_deg = 0;
+  refused(c, "hands.fit.max_pnp_turn_deg");
+  c = HandsConfig{};
+  c.tracker.duplicate_distance = -1;
+  refused(c, "hands.tracker.duplicate_distance");
 }
 
 TEST(HandsIntrinsics, ListColumnsAndFieldOfView) {

@@ -1,6 +1,8 @@
 // The hands queue stage on a few frames of a real clip: MediaPipe's models
 // (Node + WebAssembly, or whatever backend filters/hand_landmarker.h runs),
 // the fit, and a bundle that recon's reader accepts.
+#include "hands/hands_stage.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -8,7 +10,6 @@
 #include "core/error.h"
 #include "filters/hand_landmarker.h"
 #include "hands/hand_observation.h"
-#include "hands/hands_stage.h"
 #include "recon/bundle.h"
 #include "test_util.h"
 
@@ -93,6 +94,56 @@ TEST_F(HandsStageTest, ARightHandIsRight) {
   const StageResult r = stage.Run(c);
   EXPECT_EQ(r.measurements.at("sides").at("right").at("frames"), 8) << r.measurements.dump();
   EXPECT_EQ(r.measurements.at("sides").at("left").at("frames"), 0) << r.measurements.dump();
+}
+
+TEST_F(HandsStageTest, BundledPositivesGetAdultHandsAndNoWristJumpOver5cm) {
+  // The whole of each bundled positive (issue 38): the fitted palm, between
+  // the index and little fingers' bases, is an adult's (hand breadth 7-10
+  // cm skin to skin; the template's joint centres are 61.6 of its 82.6 mm
+  // breadth, so 5.2-7.5 cm), and the wrist never moves over 5 cm between
+  // frames.
+  constexpr double kSkin = 82.6 / 61.59;  // the template's breadth / joint-centre width
+  HandsStage stage;
+  for (const char* video : {"videos/02_cups.mp4", "videos/03_blocks.mp4", "videos/bass_guitar.mp4",
+                            "videos/eyeliner.avi", "videos/laptop_trackpad.mp4"}) {
+    SCOPED_TRACE(video);
+    ClipContext c = Context(video, 0, -1);
+    const StageResult r = stage.Run(c);
+    EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
+    EXPECT_LE(r.measurements.at("max_root_jump_m").get<double>(), 0.05) << r.measurements.dump();
+    EXPECT_EQ(r.measurements.at("size_prior"), "adult");
+    const recon::ClipBundle b = recon::ReadBundle(c.artifact_dir);
+    int valid = 0;
+    for (const auto* hand : {&*b.hand_right, &*b.hand_left}) {
+      std::vector<double> palms;
+      for (int t = 0; t < b.frames; ++t) {
+        if (!hand->valid[t]) continue;
+        ++valid;
+        palms.push_back((hand->joints[t].row(5) - hand->joints[t].row(17)).norm());
+        // A palm cups and the fit bends it a little; never below 4.5 cm.
+        EXPECT_GE(palms.back(), 0.045) << "frame " << t;
+        // Per side, as recon reads it: no jump inside a track or between two.
+        if (t > 0 && hand->valid[t - 1]) {
+          EXPECT_LE((hand->joints[t].row(0) - hand->joints[t - 1].row(0)).norm(), 0.05)
+              << "frame " << t;
+        }
+      }
+      if (palms.empty()) continue;
+      std::nth_element(palms.begin(), palms.begin() + palms.size() / 2, palms.end());
+      EXPECT_GE(palms[palms.size() / 2] * kSkin, 0.07);
+      EXPECT_LE(palms[palms.size() / 2] * kSkin, 0.10);
+    }
+    EXPECT_GT(valid, b.frames / 2);
+    const Json meta = Json::parse(testing::ReadFile(c.artifact_dir / "meta.json"));
+    EXPECT_EQ(meta.at(kHandSizeKey).at("prior"), "adult");
+    EXPECT_EQ(meta.at(kHandSizeKey).at("assumed"), true);
+    EXPECT_EQ(meta.at(kHandSizeKey).at("hand_length_m"), 0.182);
+    for (const Json& t : meta.at(kHandSizeKey).at("tracks")) {
+      EXPECT_NEAR(t.at("hand_length_m").get<double>(), 0.182, 0.182 * 0.1) << t.dump();
+      EXPECT_GE(t.at("palm_width_m").get<double>() * kSkin, 0.07) << t.dump();
+      EXPECT_LE(t.at("palm_width_m").get<double>() * kSkin, 0.10) << t.dump();
+    }
+  }
 }
 
 TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {

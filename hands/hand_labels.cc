@@ -1,0 +1,115 @@
+#include "hands/hand_labels.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "core/config.h"
+#include "core/error.h"
+#include "core/file_text.h"
+
+namespace doasido::hands {
+namespace {
+
+[[noreturn]] void Bad(const std::filesystem::path& file, const std::string& field,
+                      const std::string& why) {
+  throw Error("bad_labels", why, {.file = file.string(), .field = field});
+}
+
+double BoxSize(const LabelledHand& h) {
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (int j = 0; j < kJoints; ++j) {
+    if (!h.visible[j]) continue;
+    lo = lo.cwiseMin(h.uv[j]);
+    hi = hi.cwiseMax(h.uv[j]);
+  }
+  return std::max(1.0, (hi - lo).maxCoeff());
+}
+
+}  // namespace
+
+HandLabels ReadHandLabels(const std::filesystem::path& file) {
+  Json j;
+  try {
+    j = Json::parse(ReadFileOrThrow(file, "bad_labels", "cannot read the label file"));
+  } catch (const Json::exception& e) {
+    Bad(file, "", std::string("not JSON: ") + e.what());
+  }
+  HandLabels out;
+  try {
+    out.video = j.at("video").get<std::string>();
+    out.labeller = j.value("labeller", "");
+    for (const Json& f : j.at("frames")) {
+      LabelledFrame frame;
+      frame.frame = f.at("frame").get<int>();
+      for (const Json& h : f.at("hands")) {
+        LabelledHand hand;
+        const std::string side = h.at("side").get<std::string>();
+        if (side != "right" && side != "left")
+          Bad(file, "side", "side must be right or left: " + side);
+        hand.side = side == "right" ? Side::kRight : Side::kLeft;
+        const Json& kp = h.at("keypoints_2d");
+        if (kp.size() != kJoints) Bad(file, "keypoints_2d", "21 keypoints expected");
+        for (int k = 0; k < kJoints; ++k) {
+          hand.uv[k] = {kp[k].at(0).get<double>(), kp[k].at(1).get<double>()};
+          hand.visible[k] = h.contains("visible") ? h["visible"].at(k).get<bool>() : true;
+        }
+        frame.hands.push_back(hand);
+      }
+      out.frames.push_back(std::move(frame));
+    }
+  } catch (const Json::exception& e) {
+    Bad(file, "frames", e.what());
+  }
+  return out;
+}
+
+void PckScore::Add(const PckScore& o) {
+  keypoints += o.keypoints;
+  within_01 += o.within_01;
+  within_02 += o.within_02;
+  hands += o.hands;
+  missed += o.missed;
+  swaps += o.swaps;
+}
+
+PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand>& predicted) {
+  PckScore s;
+  std::vector<bool> used(predicted.size(), false);
+  for (const LabelledHand& l : labels.hands) {
+    ++s.hands;
+    const double box = BoxSize(l);
+    int visible = 0;
+    for (int j = 0; j < kJoints; ++j) visible += l.visible[j] ? 1 : 0;
+    s.keypoints += visible;
+    if (!visible) continue;
+    double best = std::numeric_limits<double>::infinity();
+    int best_k = -1;
+    for (size_t k = 0; k < predicted.size(); ++k) {
+      if (used[k]) continue;
+      double sum = 0;
+      for (int j = 0; j < kJoints; ++j) {
+        if (l.visible[j]) sum += (predicted[k].uv[j] - l.uv[j]).norm();
+      }
+      if (sum / visible < best) {
+        best = sum / visible;
+        best_k = static_cast<int>(k);
+      }
+    }
+    if (best_k < 0 || best > box) {
+      ++s.missed;
+      continue;
+    }
+    used[best_k] = true;
+    if (predicted[best_k].side != l.side) ++s.swaps;
+    for (int j = 0; j < kJoints; ++j) {
+      if (!l.visible[j]) continue;
+      const double d = (predicted[best_k].uv[j] - l.uv[j]).norm();
+      s.within_01 += d <= 0.1 * box ? 1 : 0;
+      s.within_02 += d <= 0.2 * box ? 1 : 0;
+    }
+  }
+  return s;
+}
+
+}  // namespace doasido::hands

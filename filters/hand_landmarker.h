@@ -12,7 +12,9 @@
 //
 // Contract: Detect() sends one frame and waits for its hands; hands are
 // tracked from one call to the next (the next frame is searched around the
-// last keypoints first), Reset() forgets them. Keypoint order is
+// last keypoints first; the palm detector looks for the others, see
+// HandLandmarkerOptions::palm_every; a palm where a tracked hand already is
+// gets no landmark run, as in MediaPipe), Reset() forgets them. Keypoint order is
 // MediaPipe's (= OpenPose-21): 0 wrist, 1-4 thumb, 5-8 index, 9-12 middle,
 // 13-16 ring, 17-20 little finger, tips at 4, 8, 12, 16, 20.
 #pragma once
@@ -48,6 +50,12 @@ struct HandLandmarkerOptions {
   // Which runtime runs the models: "native" or "wasm" (kBackendNative,
   // kBackendWasm in filters/hand_models.h).
   std::string backend = "native";
+  // MediaPipe's VIDEO mode runs the palm detector on every frame where
+  // fewer than max_hands hands are tracked. Here, while at least one hand is
+  // tracked and none was lost on this frame, it runs on every palm_every-th
+  // frame only (1: every frame, as MediaPipe); with no hand tracked, or when
+  // a tracked hand's presence drops below 0.5, it runs on that frame.
+  int palm_every = 1;
 };
 
 // A square crop of the frame, rotated: where the landmark model looks.
@@ -99,6 +107,7 @@ class HandLandmarker {
   std::string note_;
   std::vector<cv::Point2d> anchors_;
   std::vector<HandCrop> tracked_;  // where to look first in the next frame
+  int since_palms_ = 0;            // frames since the palm detector last ran
   std::vector<float> input_;
   double last_ms_ = 0;
 };

@@ -193,6 +193,7 @@ const char* HandLandmarker::backend() const { return models_->backend(); }
 void HandLandmarker::Reset() {
   tracked_.clear();
   since_palms_ = 0;
+  searching_ = 0;
 }
 
 std::vector<DetectedPalm> HandLandmarker::Palms(const cv::Mat& rgb) {
@@ -296,10 +297,12 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
     hands.push_back(hand);
   };
   for (const HandCrop& crop : tracked_) consider(crop);
-  const bool lost = hands.size() < tracked_.size();
+  // A hand lost on this frame is looked for on this frame and the next
+  // palm_every - 1 (until max_hands hands are tracked).
+  if (hands.size() < tracked_.size()) searching_ = options_.palm_every;
   ++since_palms_;
   if (static_cast<int>(hands.size()) < options_.max_hands &&
-      (hands.empty() || lost || since_palms_ >= options_.palm_every)) {
+      (hands.empty() || searching_ > 0 || since_palms_ >= options_.palm_every)) {
     since_palms_ = 0;
     const auto square = [](const HandCrop& c) {
       return cv::Rect2d(c.cx - c.side / 2, c.cy - c.side / 2, c.side, c.side);
@@ -318,6 +321,8 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
       if (!known) consider(crop);
     }
   }
+  if (searching_ > 0) --searching_;
+  if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = 0;
   tracked_.clear();
   for (const LandmarkedHand& h : hands) tracked_.push_back(CropFromHand(h));
   last_ms_ = models_->TakeModelMs();

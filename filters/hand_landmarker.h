@@ -52,9 +52,10 @@ struct HandLandmarkerOptions {
   std::string backend = "native";
   // MediaPipe's VIDEO mode runs the palm detector on every frame where
   // fewer than max_hands hands are tracked. Here, while at least one hand is
-  // tracked and none was lost on this frame, it runs on every palm_every-th
-  // frame only (1: every frame, as MediaPipe); with no hand tracked, or when
-  // a tracked hand's presence drops below 0.5, it runs on that frame.
+  // tracked, it runs on every palm_every-th frame only (1: every frame, as
+  // MediaPipe), except that with no hand tracked it runs on every frame, and
+  // when a tracked hand's presence drops below 0.5 it runs on that frame and
+  // the next palm_every - 1 (fewer when max_hands hands are tracked again).
   int palm_every = 1;
 };
 
@@ -108,6 +109,7 @@ class HandLandmarker {
   std::vector<cv::Point2d> anchors_;
   std::vector<HandCrop> tracked_;  // where to look first in the next frame
   int since_palms_ = 0;            // frames since the palm detector last ran
+  int searching_ = 0;              // frames left to look for a lost hand on every frame
   std::vector<float> input_;
   double last_ms_ = 0;
 };

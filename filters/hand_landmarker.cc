@@ -298,8 +298,8 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
   };
   for (const HandCrop& crop : tracked_) consider(crop);
   // A hand lost on this frame is looked for on this frame and the next
-  // palm_every - 1 (until max_hands hands are tracked).
-  if (hands.size() < tracked_.size()) searching_ = options_.palm_every;
+  // lost_search - 1 (until max_hands hands are tracked).
+  if (hands.size() < tracked_.size()) searching_ = options_.lost_search;
   ++since_palms_;
   if (static_cast<int>(hands.size()) < options_.max_hands &&
       (hands.empty() || searching_ > 0 || since_palms_ >= options_.palm_every)) {

@@ -55,8 +55,9 @@ struct HandLandmarkerOptions {
   // tracked, it runs on every palm_every-th frame only (1: every frame, as
   // MediaPipe), except that with no hand tracked it runs on every frame, and
   // when a tracked hand's presence drops below 0.5 it runs on that frame and
-  // the next palm_every - 1 (fewer when max_hands hands are tracked again).
+  // the next lost_search - 1 (fewer when max_hands hands are tracked again).
   int palm_every = 1;
+  int lost_search = 1;
 };
 
 // A square crop of the frame, rotated: where the landmark model looks.

@@ -63,7 +63,9 @@ struct LearnedDetectorConfig {
   // While a hand is tracked, the palm detector looks for the others on
   // every palm_every-th sample the models see (HandLandmarkerOptions::
   // palm_every; 1: every sample, as MediaPipe's VIDEO mode). With no hand
-  // tracked, or a tracked one lost, it runs on that sample.
+  // tracked, or a tracked one lost, it runs on that sample (lost_search 1:
+  // the filters' verdicts measured the same with a longer search, and paid
+  // for it).
   int palm_every = 5;
   // Sampling that follows the motion. A sample where, since the last sample
   // the models saw, at most still_changed_fraction of the pixels around

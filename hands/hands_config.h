@@ -54,7 +54,8 @@ struct HandsConfig {
   std::string backend = "native";  // runtime of the hand models: "native" or "wasm"
   // While a hand is tracked, the palm detector looks for the others on every
   // palm_every-th frame (1: every frame, as MediaPipe's VIDEO mode); with no
-  // hand tracked, or one lost, on that frame (filters::HandLandmarkerOptions).
+  // hand tracked on every frame; after a hand is lost on every frame for
+  // palm_every frames (filters::HandLandmarkerOptions).
   int palm_every = 10;
   TrackerConfig tracker;
   FitConfig fit;

@@ -84,7 +84,10 @@ double CpuSeconds() {
 }
 
 filters::HandLandmarker& Landmarker() {
-  static filters::HandLandmarker landmarker;
+  static filters::HandLandmarker landmarker({.max_hands = HandsConfig{}.max_hands,
+                                             .max_side = HandsConfig{}.max_side,
+                                             .palm_every = HandsConfig{}.palm_every,
+                                             .lost_search = HandsConfig{}.palm_every});
   return landmarker;
 }
 

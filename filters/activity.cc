@@ -35,6 +35,27 @@ ActivitySignals ActivitySignalsFromJson(const Json& j) {
   return s;
 }
 
+double MovingFraction(const cv::Mat& a, const cv::Mat& b, const std::vector<cv::Rect2d>& hands,
+                      const ActivitySignalConfig& config) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  const cv::Mat moved = diff > config.pixel_threshold;
+  if (hands.empty()) return cv::countNonZero(moved) / (static_cast<double>(a.rows) * a.cols);
+  cv::Mat region = cv::Mat::zeros(a.size(), CV_8U);
+  const cv::Rect frame(0, 0, a.cols, a.rows);
+  for (const cv::Rect2d& box : hands) {
+    const double mx = box.width * config.box_margin, my = box.height * config.box_margin;
+    const cv::Rect grown(cv::Point(static_cast<int>(std::floor(box.x - mx)),
+                                   static_cast<int>(std::floor(box.y - my))),
+                         cv::Point(static_cast<int>(std::ceil(box.x + box.width + mx)),
+                                   static_cast<int>(std::ceil(box.y + box.height + my))));
+    region(grown & frame).setTo(255);
+  }
+  const int area = cv::countNonZero(region);
+  if (area == 0) return cv::countNonZero(moved) / (static_cast<double>(a.rows) * a.cols);
+  return cv::countNonZero(moved & region) / static_cast<double>(area);
+}
+
 void ActivityExtractor::Consume(FrameContext& context) {
   const cv::Mat& gray = context.gray;
   double energy = 0, moving = 0;

@@ -49,6 +49,15 @@ struct ActivitySignals {
 Json ToJson(const ActivitySignals& s);
 ActivitySignals ActivitySignalsFromJson(const Json& j);  // throws Error("bad_measurements")
 
+// The fraction of pixels where the gray images `a` and `b` (same size)
+// differ by more than config.pixel_threshold levels, over the union of
+// `hands` grown by config.box_margin per side (the whole frame when there
+// are none): the `moving` signal above between any two frames. The learned
+// detector's motion-following sampling (filters/learned_hand_detector.h)
+// measures it between a sample and the last one the models saw.
+double MovingFraction(const cv::Mat& a, const cv::Mat& b, const std::vector<cv::Rect2d>& hands,
+                      const ActivitySignalConfig& config);
+
 class ActivityExtractor : public FrameConsumer {
  public:
   explicit ActivityExtractor(ActivitySignalConfig config = {}) : config_(config) {}

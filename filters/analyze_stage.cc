@@ -32,7 +32,8 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
     } else if (config.learned_detector.after_cheap_verdicts) {
       deferred = true;
     } else {
-      learned = std::make_unique<LearnedHandDetector>(config.learned_detector, options.clip);
+      learned = std::make_unique<LearnedHandDetector>(config.learned_detector, options.clip,
+                                                        config.activity);
     }
   }
   const bool builtin = detect && !learned;

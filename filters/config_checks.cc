@@ -165,6 +165,16 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
   RequireFraction(section, "border_reach", c.border_reach);
   RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
   RequireInRange(section, "keep_mb", c.keep_mb, 1, 1e6);
+  RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
+  RequireInRange(section, "still_sample_fps", c.still_sample_fps, 0.01, 1000);
+  if (c.still_sample_fps > c.sample_fps) {
+    throw Error("bad_config",
+                section + ".still_sample_fps (" + std::to_string(c.still_sample_fps) +
+                    ") must not exceed sample_fps (" + std::to_string(c.sample_fps) +
+                    "): it is the rate where nothing moves; equal turns the thinning off",
+                {.field = section + ".still_sample_fps"});
+  }
+  RequireFraction(section, "still_changed_fraction", c.still_changed_fraction);
 }
 
 }  // namespace doasido::filters

@@ -53,7 +53,7 @@ std::string CheapVerdictRejection(const Json& analysis, const CheapVerdictConfig
 void RunHandModelsOnKeptShot(const SampleKeeper& keeper, const ShotSpan& kept,
                              const VideoGeometry& geometry, const AnalyzeConfig& config,
                              const std::string& clip, ClipAnalysis* out) {
-  LearnedHandDetector learned(config.learned_detector, clip);
+  LearnedHandDetector learned(config.learned_detector, clip, config.activity);
   InteractionExtractor interaction;
   OutOfFrameExtractor out_of_frame(config.out_of_frame);
   ActivityExtractor activity(config.activity);

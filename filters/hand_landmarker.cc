@@ -17,6 +17,9 @@ constexpr double kPalmCropScale = 2.6, kPalmCropShift = -0.5;    // palm -> hand
 constexpr double kTrackCropScale = 2.0, kTrackCropShift = -0.1;  // keypoints -> next crop
 constexpr int kPalmWrist = 0, kPalmMiddleBase = 2;  // palm detector keypoints
 constexpr int kWrist = 0, kMiddleBase = 9;
+// A palm whose hand crop overlaps a tracked hand's crop by more than this
+// (IoU, unrotated) is that hand (MediaPipe's association threshold).
+constexpr double kSameHandIou = 0.5;
 
 using Palm = DetectedPalm;
 
@@ -47,26 +50,46 @@ std::vector<cv::Point2d> PalmAnchors() {
 // Bilinear sample of an RGB frame into a size x size float tensor in [0, 1]
 // through an affine map from output pixel centres to frame coordinates
 // (frame pixel centres at +0.5); taps outside the frame count as black.
+// Single precision, the source position stepped along each row (the
+// models' input is fp32; this runs once per model run).
 void SampleRgb(const cv::Mat& rgb, int size, const cv::Matx23d& map, std::vector<float>* out) {
-  out->assign(static_cast<std::size_t>(size) * size * 3, 0.f);
+  out->resize(static_cast<std::size_t>(size) * size * 3);
+  const int cols = rgb.cols, rows = rgb.rows;
+  const float du_x = static_cast<float>(map(0, 0)), du_y = static_cast<float>(map(1, 0));
+  constexpr float kScale = 1.0f / 255;
   for (int v = 0; v < size; ++v) {
-    for (int u = 0; u < size; ++u) {
-      const double fx = map(0, 0) * (u + 0.5) + map(0, 1) * (v + 0.5) + map(0, 2) - 0.5;
-      const double fy = map(1, 0) * (u + 0.5) + map(1, 1) * (v + 0.5) + map(1, 2) - 0.5;
-      const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
-      const double ax = fx - x0, ay = fy - y0;
-      float* o = out->data() + (static_cast<std::size_t>(v) * size + u) * 3;
+    // Row start in double (no drift from one row to the next).
+    const double row_x = map(0, 0) * 0.5 + map(0, 1) * (v + 0.5) + map(0, 2) - 0.5;
+    const double row_y = map(1, 0) * 0.5 + map(1, 1) * (v + 0.5) + map(1, 2) - 0.5;
+    float* o = out->data() + static_cast<std::size_t>(v) * size * 3;
+    for (int u = 0; u < size; ++u, o += 3) {
+      const float fx = static_cast<float>(row_x) + du_x * u;
+      const float fy = static_cast<float>(row_y) + du_y * u;
+      const float flx = std::floor(fx), fly = std::floor(fy);
+      const int x0 = static_cast<int>(flx), y0 = static_cast<int>(fly);
+      const float ax = fx - flx, ay = fy - fly;
+      o[0] = o[1] = o[2] = 0.f;
+      if (x0 >= 0 && y0 >= 0 && x0 + 1 < cols && y0 + 1 < rows) {
+        const std::uint8_t* p0 = rgb.ptr<std::uint8_t>(y0) + 3 * x0;
+        const std::uint8_t* p1 = rgb.ptr<std::uint8_t>(y0 + 1) + 3 * x0;
+        const float w00 = (1 - ay) * (1 - ax) * kScale, w01 = (1 - ay) * ax * kScale;
+        const float w10 = ay * (1 - ax) * kScale, w11 = ay * ax * kScale;
+        for (int c = 0; c < 3; ++c) {
+          o[c] = w00 * p0[c] + w01 * p0[3 + c] + w10 * p1[c] + w11 * p1[3 + c];
+        }
+        continue;
+      }
       for (int dy = 0; dy < 2; ++dy) {
         const int y = y0 + dy;
-        if (y < 0 || y >= rgb.rows) continue;
-        const double wy = dy ? ay : 1 - ay;
+        if (y < 0 || y >= rows) continue;
+        const float wy = dy ? ay : 1 - ay;
         const std::uint8_t* row = rgb.ptr<std::uint8_t>(y);
         for (int dx = 0; dx < 2; ++dx) {
           const int x = x0 + dx;
-          if (x < 0 || x >= rgb.cols) continue;
-          const double w = wy * (dx ? ax : 1 - ax) / 255;
+          if (x < 0 || x >= cols) continue;
+          const float w = wy * (dx ? ax : 1 - ax) * kScale;
           const std::uint8_t* p = row + 3 * x;
-          for (int c = 0; c < 3; ++c) o[c] += static_cast<float>(w * p[c]);
+          for (int c = 0; c < 3; ++c) o[c] += w * p[c];
         }
       }
     }
@@ -167,7 +190,11 @@ HandLandmarker::~HandLandmarker() = default;
 
 const char* HandLandmarker::backend() const { return models_->backend(); }
 
-void HandLandmarker::Reset() { tracked_.clear(); }
+void HandLandmarker::Reset() {
+  tracked_.clear();
+  since_palms_ = 0;
+  searching_ = 0;
+}
 
 std::vector<DetectedPalm> HandLandmarker::Palms(const cv::Mat& rgb) {
   const double scale = std::min(static_cast<double>(kPalmInputSize) / rgb.cols,
@@ -270,15 +297,32 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
     hands.push_back(hand);
   };
   for (const HandCrop& crop : tracked_) consider(crop);
-  if (static_cast<int>(hands.size()) < options_.max_hands) {
+  // A hand lost on this frame is looked for on this frame and the next
+  // lost_search - 1 (until max_hands hands are tracked).
+  if (hands.size() < tracked_.size()) searching_ = options_.lost_search;
+  ++since_palms_;
+  if (static_cast<int>(hands.size()) < options_.max_hands &&
+      (hands.empty() || searching_ > 0 || since_palms_ >= options_.palm_every)) {
+    since_palms_ = 0;
+    const auto square = [](const HandCrop& c) {
+      return cv::Rect2d(c.cx - c.side / 2, c.cy - c.side / 2, c.side, c.side);
+    };
     for (const Palm& p : Palms(rgb)) {
       if (static_cast<int>(hands.size()) >= options_.max_hands) break;
-      consider(CropFrom(p.box.x + p.box.width / 2, p.box.y + p.box.height / 2, p.box.width,
-                        p.box.height,
-                        UprightAngle(p.keypoints[kPalmWrist], p.keypoints[kPalmMiddleBase]),
-                        kPalmCropScale, kPalmCropShift));
+      const HandCrop crop =
+          CropFrom(p.box.x + p.box.width / 2, p.box.y + p.box.height / 2, p.box.width,
+                   p.box.height, UprightAngle(p.keypoints[kPalmWrist], p.keypoints[kPalmMiddleBase]),
+                   kPalmCropScale, kPalmCropShift);
+      // A palm of a hand already found: no landmark run (MediaPipe's association).
+      bool known = false;
+      for (const LandmarkedHand& h : hands) {
+        known |= IoU(square(CropFromHand(h)), square(crop)) > kSameHandIou;
+      }
+      if (!known) consider(crop);
     }
   }
+  if (searching_ > 0) --searching_;
+  if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = 0;
   tracked_.clear();
   for (const LandmarkedHand& h : hands) tracked_.push_back(CropFromHand(h));
   last_ms_ = models_->TakeModelMs();

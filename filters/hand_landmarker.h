@@ -12,7 +12,9 @@
 //
 // Contract: Detect() sends one frame and waits for its hands; hands are
 // tracked from one call to the next (the next frame is searched around the
-// last keypoints first), Reset() forgets them. Keypoint order is
+// last keypoints first; the palm detector looks for the others, see
+// HandLandmarkerOptions::palm_every; a palm where a tracked hand already is
+// gets no landmark run, as in MediaPipe), Reset() forgets them. Keypoint order is
 // MediaPipe's (= OpenPose-21): 0 wrist, 1-4 thumb, 5-8 index, 9-12 middle,
 // 13-16 ring, 17-20 little finger, tips at 4, 8, 12, 16, 20.
 #pragma once
@@ -48,6 +50,14 @@ struct HandLandmarkerOptions {
   // Which runtime runs the models: "native" or "wasm" (kBackendNative,
   // kBackendWasm in filters/hand_models.h).
   std::string backend = "native";
+  // MediaPipe's VIDEO mode runs the palm detector on every frame where
+  // fewer than max_hands hands are tracked. Here, while at least one hand is
+  // tracked, it runs on every palm_every-th frame only (1: every frame, as
+  // MediaPipe), except that with no hand tracked it runs on every frame, and
+  // when a tracked hand's presence drops below 0.5 it runs on that frame and
+  // the next lost_search - 1 (fewer when max_hands hands are tracked again).
+  int palm_every = 1;
+  int lost_search = 1;
 };
 
 // A square crop of the frame, rotated: where the landmark model looks.
@@ -99,6 +109,8 @@ class HandLandmarker {
   std::string note_;
   std::vector<cv::Point2d> anchors_;
   std::vector<HandCrop> tracked_;  // where to look first in the next frame
+  int since_palms_ = 0;            // frames since the palm detector last ran
+  int searching_ = 0;              // frames left to look for a lost hand on every frame
   std::vector<float> input_;
   double last_ms_ = 0;
 };

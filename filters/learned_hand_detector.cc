@@ -64,20 +64,46 @@ FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedH
   return evidence;
 }
 
-LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip)
+LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip,
+                                         ActivitySignalConfig activity)
     : config_(config),
-      landmarker_(HandLandmarkerOptions{
-          .max_hands = config.max_hands, .clip = clip, .backend = config.backend}) {}
+      activity_(activity),
+      landmarker_(HandLandmarkerOptions{.max_hands = config.max_hands,
+                                        .clip = clip,
+                                        .backend = config.backend,
+                                        .palm_every = config.palm_every}) {}
 
 std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config) {
   const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
   return std::max<std::int64_t>(1, std::llround(fps / config.sample_fps));
 }
 
+std::int64_t StillEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config) {
+  const std::int64_t every = SampleEvery(geometry, config);
+  if (config.still_sample_fps >= config.sample_fps) return every;
+  const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
+  const std::int64_t samples = std::llround(fps / config.still_sample_fps / every);
+  return every * std::max<std::int64_t>(1, samples);
+}
+
 void LearnedHandDetector::Begin(const VideoGeometry& geometry) {
   geometry_ = geometry;
   every_ = SampleEvery(geometry, config_);
+  still_every_ = StillEvery(geometry, config_);
+  seen_gray_.release();
   landmarker_.Reset();
+}
+
+// Still: nothing moved around the hands of the last sample the models saw
+// (or anywhere, when it had none), and that sample is recent enough.
+bool LearnedHandDetector::Still(const FrameContext& context) const {
+  if (still_every_ <= every_ || seen_gray_.empty() || context.gray.empty() ||
+      context.gray.size() != seen_gray_.size() ||
+      context.ordinal - seen_ordinal_ >= still_every_) {
+    return false;
+  }
+  return MovingFraction(context.gray, seen_gray_, last_.hands, activity_) <=
+         config_.still_changed_fraction;
 }
 
 void LearnedHandDetector::Consume(FrameContext& context) {
@@ -85,7 +111,28 @@ void LearnedHandDetector::Consume(FrameContext& context) {
     context.boxes = last_;
     return;
   }
+  if (Still(context)) {
+    // As if the models found what they found last time: those hands again,
+    // and the ones held since then held one sample longer.
+    samples_.push_back({{"frame", context.frame->index},
+                        {"ms", 0.0},
+                        {"held_from", seen_frame_},
+                        {"hands", seen_hands_}});
+    FrameBoxes found = seen_found_;
+    std::vector<int> age(found.hands.size(), 0);
+    for (Detection d : seen_detections_) {
+      d.frame = context.frame->index;
+      detections_.push_back(d);
+    }
+    HoldMissedHands(&found, &age);
+    last_ = found;
+    last_age_ = age;
+    context.boxes = found;
+    return;
+  }
   const std::vector<LandmarkedHand> hands = landmarker_.Detect(context.frame->bgr);
+  ++model_samples_;
+  const std::size_t detections_before = detections_.size();
   total_ms_ += landmarker_.last_ms();
   FrameBoxes found;
   found.known = true;
@@ -111,6 +158,15 @@ void LearnedHandDetector::Consume(FrameContext& context) {
                                      Round(hand.box.br().y * s, 0.1)}},
                             {"keypoints", PointsJson(hand.keypoints, s, 0.1)},
                             {"world", PointsJson(hand.world, 1.0, 1e-4)}});
+  }
+  if (still_every_ > every_) {
+    context.gray.copyTo(seen_gray_);
+    seen_ordinal_ = context.ordinal;
+    seen_frame_ = context.frame->index;
+    seen_hands_ = sample_hands;
+    seen_found_ = found;
+    seen_detections_.assign(
+        detections_.begin() + static_cast<std::ptrdiff_t>(detections_before), detections_.end());
   }
   HoldMissedHands(&found, &age);
   samples_.push_back({{"frame", context.frame->index},
@@ -174,6 +230,7 @@ Json LearnedHandDetector::Measurements() const {
   return {{"model", "mediapipe_hands_full"},
           {"sample_every", every_},
           {"ms_per_sample", n > 0 ? Round(total_ms_ / n, 0.1) : 0.0},
+          {"model_samples", model_samples_},
           {"samples", samples_}};
 }
 

@@ -35,6 +35,7 @@
 
 #include "core/config.h"
 #include "db/records.h"
+#include "filters/activity.h"
 #include "filters/frame_analyzer.h"
 #include "filters/hand_landmarker.h"
 
@@ -59,11 +60,29 @@ struct LearnedDetectorConfig {
   bool after_cheap_verdicts = true;
   // Memory for the frames kept meanwhile (megabytes; see there).
   double keep_mb = 1024;
+  // While a hand is tracked, the palm detector looks for the others on
+  // every palm_every-th sample the models see (HandLandmarkerOptions::
+  // palm_every; 1: every sample, as MediaPipe's VIDEO mode). With no hand
+  // tracked, or a tracked one lost, it runs on that sample (lost_search 1:
+  // the filters' verdicts measured the same with a longer search, and paid
+  // for it).
+  int palm_every = 5;
+  // Sampling that follows the motion. A sample where, since the last sample
+  // the models saw, at most still_changed_fraction of the pixels around
+  // that sample's hands moved (the activity signal between the two frames:
+  // hand boxes grown by activity.box_margin, the whole frame when it had
+  // none, pixels changed by more than activity.pixel_threshold gray levels)
+  // is still: it keeps the models' last hands without running them, for at
+  // most 1 / still_sample_fps seconds. still_sample_fps = sample_fps: every
+  // sample runs the models.
+  double still_sample_fps = 1;
+  double still_changed_fraction = 0.01;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
                                                 min_score, fingertip_reach, hand_thickness,
                                                 min_object_edges, hold_samples, border_reach, backend,
-                                                after_cheap_verdicts, keep_mb)
+                                                after_cheap_verdicts, keep_mb, palm_every,
+                                                still_sample_fps, still_changed_fraction)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const LearnedDetectorConfig& c, const std::string& section);
 
@@ -80,18 +99,26 @@ FingertipEvidence ObjectEdgesAtFingertips(const cv::Mat& gray, const LandmarkedH
 
 // Frames between two samples (>= 1) at the clip's frame rate.
 std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config);
+// The most frames a still sample may hold the models' last hands for
+// (a multiple of SampleEvery; equal to it when thinning is off).
+std::int64_t StillEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config);
 
 class LearnedHandDetector : public FrameConsumer {
  public:
-  // Starts the landmarker (throws what HandLandmarker throws).
-  LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip);
+  // Starts the landmarker (throws what HandLandmarker throws). `activity`:
+  // the activity signal's settings, for the motion-following sampling.
+  LearnedHandDetector(LearnedDetectorConfig config, const std::string& clip,
+                      ActivitySignalConfig activity = {});
   void Begin(const VideoGeometry& geometry) override;
   void Consume(FrameContext& context) override;
 
   const std::vector<Detection>& detections() const { return detections_; }
   // {"sample_every", "samples": [{"frame", "ms", "hands": [{"score",
   //  "right", "object_edges", "box", "keypoints", "world"}]}],
-  //  "ms_per_sample"}: pixels at full resolution.
+  //  "ms_per_sample", "model_samples"}: pixels at full resolution. A still
+  // sample (no model run) has "held_from": the frame whose hands it repeats,
+  // and ms 0; ms_per_sample is over all samples, model_samples counts the
+  // ones the models saw.
   Json Measurements() const;
 
  private:
@@ -99,10 +126,22 @@ class LearnedHandDetector : public FrameConsumer {
   void AddDetection(const cv::Rect2d& box, const char* kind, double score, int contact,
                     std::int64_t frame);
 
+  bool Still(const FrameContext& context) const;
+
   LearnedDetectorConfig config_;
+  ActivitySignalConfig activity_;
   HandLandmarker landmarker_;
   VideoGeometry geometry_;
   std::int64_t every_ = 1;
+  std::int64_t still_every_ = 1;
+  // The last sample the models saw: its gray frame, position, the hands
+  // the models found (before held ones are added) and their detections.
+  cv::Mat seen_gray_;
+  std::int64_t seen_ordinal_ = 0, seen_frame_ = 0;
+  Json seen_hands_ = Json::array();
+  FrameBoxes seen_found_;
+  std::vector<Detection> seen_detections_;
+  int model_samples_ = 0;
   FrameBoxes last_;
   std::vector<int> last_age_;  // samples since each of last_'s hands was seen
   std::vector<Detection> detections_;

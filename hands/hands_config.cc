@@ -9,6 +9,7 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(section, "max_hands", c.max_hands, 1, 2);
   RequireInRange(section, "max_side", c.max_side, 128, 4096);
   RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
+  RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
   const std::string t = section + ".tracker";
   RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);
   RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);

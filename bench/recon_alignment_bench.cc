@@ -1,4 +1,4 @@
-// Accuracy of the seed's hand-object alignment (recon/hand_object_alignment.h)
+// Accuracy of the seed's hand-object alignment (recon/align/hand_object_alignment.h)
 // on synthetic clips with MoGe-like per-frame depth-scale error: the object
 // translation as the pose model hands it in (in the point map's scale,
 // t_model = s_t t_true: "unaligned", the peer) against the aligned
@@ -24,7 +24,7 @@
 
 #include "core/mesh.h"
 #include "eval/hot3d_recording.h"
-#include "recon/hand_object_alignment.h"
+#include "recon/align/hand_object_alignment.h"
 #include "recon/ray_caster.h"
 #include "synth/generator.h"
 #include "synth/model_noise.h"

@@ -10,7 +10,7 @@
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>
 
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 
 namespace doasido::recon {
 namespace {

@@ -1,5 +1,5 @@
 // The bundle stage per clip: a model command started for every clip against
-// a model server started once per worker (recon/model_server.h), both the
+// a model server started once per worker (recon/bundle/model_server.h), both the
 // same stand-in (tools/bundle_server.py) with a simulated model load.
 //
 //   recon_model_server_bench [clips] [load_s] [jobs]

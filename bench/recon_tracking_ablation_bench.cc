@@ -22,9 +22,9 @@
 
 #include "eval/mixture_file.h"
 #include "eval/tracking_ablation.h"
-#include "recon/object_tracker.h"
-#include "recon/silhouette.h"
-#include "recon/velocity_server.h"
+#include "recon/track/object_tracker.h"
+#include "recon/track/silhouette.h"
+#include "recon/track/velocity_server.h"
 
 namespace {
 

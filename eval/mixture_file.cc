@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "recon/npy.h"
+#include "recon/bundle/npy.h"
 
 namespace doasido::recon {
 

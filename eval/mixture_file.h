@@ -1,4 +1,4 @@
-// The Gaussian-mixture stand-in (recon/gaussian_mixture_flow.h) as an .npz
+// The Gaussian-mixture stand-in (recon/track/gaussian_mixture_flow.h) as an .npz
 // file, the form tools/velocity_server.py reads:
 //   weights (F, K) f8 (0 marks an unused mode slot), means (F, K, D) f8,
 //   sigmas (F, K) f8, shape_dim () i8.
@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "recon/gaussian_mixture_flow.h"
+#include "recon/track/gaussian_mixture_flow.h"
 
 namespace doasido::recon {
 

@@ -1,9 +1,9 @@
 #include "eval/tracking_ablation.h"
 
-#include "recon/adaptive_guidance.h"
-#include "recon/object_tracker.h"
+#include "recon/track/adaptive_guidance.h"
+#include "recon/track/object_tracker.h"
 #include "recon/recon_metrics.h"
-#include "recon/silhouette.h"
+#include "recon/track/silhouette.h"
 
 namespace doasido::synth {
 namespace {

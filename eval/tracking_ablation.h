@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "recon/guided_flow.h"
-#include "recon/pose_selection.h"
+#include "recon/track/guided_flow.h"
+#include "recon/track/pose_selection.h"
 #include "synth/tracking_scene.h"
 
 namespace doasido::synth {

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "core/geometry.h"
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 
 namespace doasido::recon {
 

@@ -1,4 +1,4 @@
-// The hands stage's output: the hand part of a clip bundle (recon/bundle.h,
+// The hands stage's output: the hand part of a clip bundle (recon/bundle/bundle.h,
 // docs/clip_bundle.md), which recon's ReadBundle reads like any other:
 //   meta.json       width, height, frames (the span's), fps, units "m",
 //                   producers {"hands", "hand_fit", "K"}, and
@@ -16,7 +16,7 @@
 #include <filesystem>
 
 #include "hands/hand_reconstruction.h"
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 
 namespace doasido::hands {
 

@@ -6,14 +6,14 @@
 #include <string>
 
 #include "core/config.h"
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle_location.h"
 
 namespace doasido::hands {
 
 inline constexpr const char* kHandsStageName = recon::kHandsStageFolder;
 // Per frame and hand: the models' 2D keypoints, confidences and the fitted
 // metric joints (hands/hand_keypoints_json.h). The bundle files beside it
-// (meta.json, K.npz, hands.npz) are recon/bundle.h's.
+// (meta.json, K.npz, hands.npz) are recon/bundle/bundle.h's.
 inline constexpr const char* kKeypointsFile = "keypoints.json";
 // meta.json's extra key: true when K came from the default field of view.
 inline constexpr const char* kIntrinsicsAssumedKey = "intrinsics_assumed";

@@ -10,7 +10,7 @@
 #include "hands/hand_bundle_writer.h"
 #include "hands/hand_detection.h"
 #include "hands/hand_reconstruction.h"
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle_location.h"
 
 namespace doasido::hands {
 namespace {

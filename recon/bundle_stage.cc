@@ -12,8 +12,8 @@
 #include "core/error.h"
 #include "core/permanent_error.h"
 #include "core/shell_words.h"
-#include "recon/bundle.h"
-#include "recon/model_command.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/model_command.h"
 
 namespace doasido::recon {
 namespace {

@@ -13,7 +13,7 @@
 //     {output}/command.log (ignored by the bundle reader).
 //   - Server mode (`server` instead of `command`): the worker starts that
 //     command once and sends it one request line per clip carrying the same
-//     values (recon/model_server.h has the protocol); its stderr goes to
+//     values (recon/bundle/model_server.h has the protocol); its stderr goes to
 //     <database folder>/logs/bundle-server-<worker pid>.log and the part
 //     written while a clip was served to {output}/command.log. A server that
 //     dies, hangs past timeout_s or breaks the protocol is killed with its
@@ -42,8 +42,8 @@
 
 #include "core/config.h"
 #include "db/stage.h"
-#include "recon/bundle_location.h"
-#include "recon/model_server.h"
+#include "recon/bundle/bundle_location.h"
+#include "recon/bundle/model_server.h"
 
 namespace doasido::recon {
 

@@ -7,8 +7,8 @@
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/permanent_error.h"
-#include "recon/bundle_location.h"
-#include "recon/npy.h"
+#include "recon/bundle/bundle_location.h"
+#include "recon/bundle/npy.h"
 
 namespace doasido::recon {
 

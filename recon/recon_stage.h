@@ -1,7 +1,7 @@
 // The `recon` queue stage: a clip bundle becomes the metric, gravity-aligned
 // hand-object trajectory of recon/reconstruction.h (seed §3.1).
 //
-// Input: the clip bundle (recon/bundle_location.h BundleDir). Object poses:
+// Input: the clip bundle (recon/bundle/bundle_location.h BundleDir). Object poses:
 // when <artifacts>/<clip>/track/object_poses.npz exists (written by the
 // `track` stage, recon/track_stage.h) its `poses` (T,7) f8, object->camera,
 // t xyz + quaternion wxyz, point-map units, NaN rows = no pose; else the
@@ -32,10 +32,10 @@
 
 #include "core/config.h"
 #include "db/stage.h"
-#include "recon/bundle.h"
-#include "recon/bundle_location.h"
-#include "recon/gravity.h"
-#include "recon/hand_object_alignment.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/bundle_location.h"
+#include "recon/align/gravity.h"
+#include "recon/align/hand_object_alignment.h"
 #include "recon/reconstruction.h"
 #include "recon/track_stage.h"
 

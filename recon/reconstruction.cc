@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "recon/npy.h"
+#include "recon/bundle/npy.h"
 
 namespace doasido::recon {
 namespace {

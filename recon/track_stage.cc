@@ -8,14 +8,14 @@
 #include "core/error.h"
 #include "core/permanent_error.h"
 #include "core/shell_words.h"
-#include "recon/bundle.h"
-#include "recon/bundle_location.h"
-#include "recon/gaussian_mixture_flow.h"
-#include "recon/lucas_kanade_follower.h"
-#include "recon/npy.h"
-#include "recon/object_tracker.h"
-#include "recon/silhouette.h"
-#include "recon/velocity_server.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/bundle_location.h"
+#include "recon/track/gaussian_mixture_flow.h"
+#include "recon/track/lucas_kanade_follower.h"
+#include "recon/bundle/npy.h"
+#include "recon/track/object_tracker.h"
+#include "recon/track/silhouette.h"
+#include "recon/track/velocity_server.h"
 
 namespace doasido::recon {
 namespace {

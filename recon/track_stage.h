@@ -1,10 +1,10 @@
 // The `track` queue stage, between `bundle` and `recon`: tracks the object
-// frame by frame with guided flow sampling (recon/object_tracker.h) and
+// frame by frame with guided flow sampling (recon/track/object_tracker.h) and
 // writes the poses the recon stage uses instead of the bundle's.
 //
 // The object model, first found of:
 //   server       track.server, a velocity-server command
-//                (recon/velocity_server.h; {bundle} and {clip} are replaced
+//                (recon/track/velocity_server.h; {bundle} and {clip} are replaced
 //                by the bundle folder and the clip's name), e.g.
 //                "/usr/bin/python3 tools/velocity_server.py {bundle}/object/flow_modes.npz"
 //   candidates   the bundle's object/candidates.npz, pose samples a model
@@ -14,9 +14,9 @@
 // track_source "none"); recon then uses the bundle's own poses. A bundle
 // without any object part (a hand-only bundle, e.g. the hands stage's) is
 // passed at once, even with a server configured (track_source "no_object").
-// Pose guidance: adaptive (recon/adaptive_guidance.h) from the bundle's
+// Pose guidance: adaptive (recon/track/adaptive_guidance.h) from the bundle's
 // point tracks (guidance_source "tracks"), else from OpenCV's Lucas-Kanade
-// on the clip's video ("lucas_kanade", recon/lucas_kanade_follower.h),
+// on the clip's video ("lucas_kanade", recon/track/lucas_kanade_follower.h),
 // else the fixed `pose_guidance` ("fixed"). Selection per `selection.method`; clustering
 // needs the object mesh and masks (the hands' masks count as occluders).
 //
@@ -31,9 +31,9 @@
 
 #include "core/config.h"
 #include "db/stage.h"
-#include "recon/adaptive_guidance.h"
-#include "recon/guided_flow.h"
-#include "recon/pose_selection.h"
+#include "recon/track/adaptive_guidance.h"
+#include "recon/track/guided_flow.h"
+#include "recon/track/pose_selection.h"
 
 namespace doasido::recon {
 

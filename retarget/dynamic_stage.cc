@@ -5,7 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle_location.h"
 #include "retarget/dynamic/bimanual_retarget.h"
 #include "retarget/kinematic_stage.h"
 

@@ -5,7 +5,7 @@
 // Input: the `recon` stage's artifact <artifacts>/<clip>/recon/
 // (recon/reconstruction.h: metric, gravity-aligned hands and object, or the
 // hands alone; frames without an object pose hold the previous one) when it
-// exists, else the clip bundle (recon/bundle_location.h LoadClipBundle):
+// exists, else the clip bundle (recon/bundle/bundle_location.h LoadClipBundle):
 // hands.npz, object/poses.npz, object/mesh.obj, gravity.npz, meta.json fps,
 // put in a world frame whose +z is up (mean of gravity.npz, else the
 // camera's -y) with the floor z = 0 touching the object's lowest point in

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "synth/defects.h"
 #include "synth/episode.h"
 #include "synth/model_noise.h"

@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "recon/recon_metrics.h"
-#include "recon/silhouette.h"
+#include "recon/track/silhouette.h"
 #include "synth/objects.h"
 
 namespace doasido::synth {

@@ -1,4 +1,4 @@
-// Synthetic sequences for the guided object tracker (recon/object_tracker.h)
+// Synthetic sequences for the guided object tracker (recon/track/object_tracker.h)
 // with exact answers: a mug (its handle breaks the symmetry of a 180-degree
 // turn about its axis) moving and turning in front of a pinhole camera, at
 // rest for some frames and turning fast for others; its true masks
@@ -18,8 +18,8 @@
 
 #include "core/geometry.h"
 #include "core/mesh.h"
-#include "recon/adaptive_guidance.h"
-#include "recon/gaussian_mixture_flow.h"
+#include "recon/track/adaptive_guidance.h"
+#include "recon/track/gaussian_mixture_flow.h"
 
 namespace doasido::synth {
 

@@ -30,7 +30,7 @@
 #include "dataset/version.h"
 #include "db/database.h"
 #include "pipeline/stage_registry.h"
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle_location.h"
 #include "recon/recon_stage.h"
 #include "retarget/kinematic_stage.h"
 #include "review/server.h"

@@ -1,4 +1,4 @@
-// The bundle stage in server mode through `doasido run` (recon/model_server.h,
+// The bundle stage in server mode through `doasido run` (recon/bundle/model_server.h,
 // tools/bundle_server.py as the model): 20 synthetic clips, two workers.
 // Each worker starts its server once (counted in the server logs); every
 // bundle equals the one the same stand-in writes as a per-clip command; a

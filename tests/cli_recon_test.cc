@@ -14,7 +14,7 @@
 
 #include "core/config.h"
 #include "db/database.h"
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "recon/reconstruction.h"
 #include "tests/test_util.h"
 

@@ -15,7 +15,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "robot/trajectory/format.h"
 #include "tests/test_util.h"
 

@@ -10,7 +10,7 @@
 #include "core/error.h"
 #include "filters/hand_landmarker.h"
 #include "hands/hand_observation.h"
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "test_util.h"
 
 namespace doasido::hands {

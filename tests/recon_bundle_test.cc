@@ -1,7 +1,7 @@
 // The clip bundle round-trips through WriteBundle/ReadBundle with every field
 // equal, and each kind of bad input is rejected with an error that names the
 // file and the field.
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 
 #include <cmath>
 #include <fstream>
@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "recon/exr_io.h"
-#include "recon/npy.h"
+#include "recon/bundle/exr_io.h"
+#include "recon/bundle/npy.h"
 #include "tests/test_util.h"
 
 namespace doasido::recon {

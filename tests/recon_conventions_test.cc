@@ -2,7 +2,7 @@
 // construction of what the convention means (a row-vector product, a
 // field-of-view camera, a pitched camera under gravity, joints labelled by
 // finger and segment), not against the conversion's own formula.
-#include "recon/conventions.h"
+#include "recon/bundle/conventions.h"
 
 #include <cmath>
 #include <random>

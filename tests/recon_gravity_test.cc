@@ -1,7 +1,7 @@
 // Gravity from a synthetic tilted camera over a table, within 2 degrees, by
 // both sources: the bundle's (noisy) up vectors and the RANSAC support-plane
 // fit of a noisy point map with a hand above the table and a wall behind.
-#include "recon/gravity.h"
+#include "recon/align/gravity.h"
 
 #include <cmath>
 #include <limits>

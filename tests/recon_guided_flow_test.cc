@@ -13,12 +13,12 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "recon/adaptive_guidance.h"
-#include "recon/gaussian_mixture_flow.h"
-#include "recon/guided_flow.h"
-#include "recon/object_tracker.h"
-#include "recon/pose_selection.h"
-#include "recon/silhouette.h"
+#include "recon/track/adaptive_guidance.h"
+#include "recon/track/gaussian_mixture_flow.h"
+#include "recon/track/guided_flow.h"
+#include "recon/track/object_tracker.h"
+#include "recon/track/pose_selection.h"
+#include "recon/track/silhouette.h"
 #include "synth/objects.h"
 
 namespace doasido::recon {

@@ -3,7 +3,7 @@
 // through a point map with a known per-frame scale error, the alignment
 // recovers exactly that scale; frames without evidence are skipped and
 // short gaps interpolated.
-#include "recon/hand_object_alignment.h"
+#include "recon/align/hand_object_alignment.h"
 
 #include <cmath>
 #include <limits>
@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "recon/ray_caster.h"
-#include "recon/visible_centroid.h"
+#include "recon/align/visible_centroid.h"
 
 namespace doasido::recon {
 namespace {

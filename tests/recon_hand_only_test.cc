@@ -9,8 +9,8 @@
 #include <algorithm>
 
 #include "core/permanent_error.h"
-#include "recon/bundle.h"
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/bundle_location.h"
 #include "recon/bundle_stage.h"
 #include "recon/recon_stage.h"
 #include "recon/reconstruction.h"

@@ -11,8 +11,8 @@
 
 #include "core/mesh.h"
 #include "eval/hot3d_recording.h"
-#include "recon/bundle.h"
-#include "recon/conventions.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/conventions.h"
 #include "recon/recon_metrics.h"
 #include "synth/objects.h"
 #include "tests/test_util.h"

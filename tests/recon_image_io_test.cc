@@ -16,8 +16,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
-#include "recon/exr_io.h"
-#include "recon/mask_io.h"
+#include "recon/bundle/exr_io.h"
+#include "recon/bundle/mask_io.h"
 #include "tests/test_util.h"
 
 namespace doasido::recon {

@@ -2,7 +2,7 @@
 // (numpy/lib/format.py documentation; PKWARE APPNOTE for zip) parse to the
 // values they hold, the writer produces exactly what numpy writes, and
 // unsupported or damaged input is rejected with the file and key named.
-#include "recon/npy.h"
+#include "recon/bundle/npy.h"
 
 #include <cstring>
 #include <random>

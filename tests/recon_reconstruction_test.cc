@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "recon/npy.h"
+#include "recon/bundle/npy.h"
 #include "recon/reconstruction.h"
 #include "tests/test_util.h"
 

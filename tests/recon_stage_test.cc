@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "recon/bundle.h"
-#include "recon/npy.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/npy.h"
 #include "tests/small_clip.h"
 #include "tests/test_util.h"
 

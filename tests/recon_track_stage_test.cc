@@ -12,10 +12,10 @@
 #include <opencv2/videoio.hpp>
 
 #include "eval/mixture_file.h"
-#include "recon/bundle.h"
-#include "recon/npy.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/npy.h"
 #include "recon/recon_stage.h"
-#include "recon/velocity_server.h"
+#include "recon/track/velocity_server.h"
 #include "synth/tracking_scene.h"
 #include "tests/small_clip.h"
 #include "tests/test_util.h"

@@ -10,9 +10,9 @@
 
 #include "core/error.h"
 #include "eval/mixture_file.h"
-#include "recon/object_tracker.h"
-#include "recon/silhouette.h"
-#include "recon/velocity_server.h"
+#include "recon/track/object_tracker.h"
+#include "recon/track/silhouette.h"
+#include "recon/track/velocity_server.h"
 #include "synth/tracking_scene.h"
 #include "tests/test_util.h"
 

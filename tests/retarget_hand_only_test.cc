@@ -6,7 +6,7 @@
 // error and no object; the dynamics `retarget` stage says no_object.
 #include <gtest/gtest.h>
 
-#include "recon/bundle_location.h"
+#include "recon/bundle/bundle_location.h"
 #include "recon/recon_stage.h"
 #include "retarget/dynamic_stage.h"
 #include "retarget/kinematic_stage.h"

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "recon/bundle.h"
-#include "recon/gravity.h"
+#include "recon/bundle/bundle.h"
+#include "recon/align/gravity.h"
 #include "recon/reconstruction.h"
 #include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/kinematic_stage.h"

@@ -9,7 +9,7 @@
 #include <regex>
 #include <sstream>
 
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "synth/generator.h"
 #include "tests/test_util.h"
 

@@ -13,7 +13,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "recon/bundle.h"
+#include "recon/bundle/bundle.h"
 #include "synth/generator.h"
 #include "tests/test_util.h"
 

@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "eval/tracking_ablation.h"
-#include "recon/adaptive_guidance.h"
-#include "recon/silhouette.h"
+#include "recon/track/adaptive_guidance.h"
+#include "recon/track/silhouette.h"
 #include "synth/tracking_scene.h"
 
 namespace doasido::synth {

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Reference model server for doasido's `bundle` stage (server mode).
 
-Speaks the line protocol of recon/model_server.h on stdin/stdout: after
+Speaks the line protocol of recon/bundle/model_server.h on stdin/stdout: after
 loading its "model" it prints {"type": "ready"}, then answers each request
 line {"type": "clip", "clip", "video", "first_frame", "last_frame", "fps",
 "output"} with {"type": "done", "clip", "bundle"} or {"type": "error",

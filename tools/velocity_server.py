@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Reference velocity-field server for doasido's guided tracker.
 
-Speaks the protocol of recon/velocity_server.h over stdin/stdout and answers
-with the Gaussian-mixture stand-in (recon/gaussian_mixture_flow.h), read
+Speaks the protocol of recon/track/velocity_server.h over stdin/stdout and answers
+with the Gaussian-mixture stand-in (recon/track/gaussian_mixture_flow.h), read
 from an .npz file that `doasido` writes (recon/mixture_file.h):
   weights (F, K)  float64, 0 for an unused mode slot
   means   (F, K, D) float64

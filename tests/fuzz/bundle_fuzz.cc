@@ -1,6 +1,6 @@
-// The clip bundle reader (recon/bundle.h) on arbitrary bytes: models write
+// The clip bundle reader (recon/bundle/bundle.h) on arbitrary bytes: models write
 // these folders, and a broken model must not crash the recon stage. With
-// the first byte even, the rest is one .npy file (recon/npy.h ParseNpy);
+// the first byte even, the rest is one .npy file (recon/bundle/npy.h ParseNpy);
 // otherwise it is split at "\n===\n" into meta.json, K.npz, hands.npz,
 // object/poses.npz, gravity.npz and tracks.npz of one bundle folder. Only
 // doasido::Error may come out.
@@ -9,8 +9,8 @@
 #include <string>
 
 #include "core/error.h"
-#include "recon/bundle.h"
-#include "recon/npy.h"
+#include "recon/bundle/bundle.h"
+#include "recon/bundle/npy.h"
 #include "tests/fuzz/fuzz_files.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -18,7 +18,7 @@
 #include "dataset/robomimic_export.h"
 #include "dataset/version_store.h"
 #include "db/database.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/trajectory/format.h"
 
 namespace fs = std::filesystem;

@@ -14,7 +14,7 @@
 //
 // Retargeting is the slow part (~20 s a 10-s clip on 2 threads), so the
 // trajectories are cached in --cache (trajectory.json + scene/ per
-// reference, retarget/dynamic_stage.h's layout) and made only when
+// reference, stages/dynamic_stage.h's layout) and made only when
 // missing; --make_only stops after making them, --plan_only plans the ones
 // made so far without making more.
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]

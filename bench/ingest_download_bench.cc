@@ -20,8 +20,8 @@
 #include "core/file_text.h"
 #include "core/log.h"
 #include "db/database.h"
-#include "ingest/download_stage.h"
-#include "video/probe.h"
+#include "ingest/download.h"
+#include "stages/probe_stage.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

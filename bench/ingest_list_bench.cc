@@ -13,7 +13,7 @@
 #include "core/log.h"
 #include "db/database.h"
 #include "ingest/ingest.h"
-#include "video/probe.h"
+#include "stages/probe_stage.h"
 
 namespace fs = std::filesystem;
 

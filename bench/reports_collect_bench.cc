@@ -25,7 +25,7 @@
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
 #include "filters/stage_support.h"
-#include "video/probe.h"
+#include "stages/probe_stage.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

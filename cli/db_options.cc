@@ -2,7 +2,7 @@
 
 #include "cli/commands.h"
 #include "core/config_check.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "reports/report_data.h"
 
 namespace doasido::cli {

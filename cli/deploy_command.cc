@@ -18,7 +18,7 @@
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
 #include "deploy/stream.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/embodiment.h"
 #include "robot/trajectory/format.h"
 #include "robot/trajectory/source.h"

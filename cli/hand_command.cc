@@ -9,7 +9,7 @@
 #include "cli/hand_render.h"
 #include "cli/output_options.h"
 #include "core/error.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/hand_check.h"
 #include "robot/hand_mirror.h"
 #include "robot/urdf_import.h"

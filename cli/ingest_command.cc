@@ -3,7 +3,7 @@
 #include "cli/commands.h"
 #include "cli/option_checks.h"
 #include "cli/ingest_options.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "db/database.h"
 #include "ingest/ingest.h"
 

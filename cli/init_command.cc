@@ -1,7 +1,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "db/database.h"
 
 namespace doasido::cli {

@@ -10,7 +10,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "retarget/kinematic/kinematic_retarget.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/embodiment.h"
 
 namespace doasido::cli {

@@ -5,6 +5,7 @@
 #include "db/database.h"
 #include "review/server.h"
 #include "review/study.h"
+#include "stages/stage_registry.h"
 
 namespace doasido::cli {
 namespace {
@@ -65,6 +66,11 @@ void AddReviewCommand(CLI::App& app) {
       "Example:\n"
       "  doasido review serve --db work/doasido.db --reviewer alice --port 8470");
   srv->callback([serve] {
+    // The page offers every reason code a stage can give (the registry's).
+    for (const auto& r : pipeline::StageReasons()) {
+      serve->serve.stage_reasons.push_back({r.code, r.label});
+    }
+    serve->serve.default_reasons = pipeline::ReviewDefaultReasons();
     review::ReviewServer server(serve->db.db, serve->serve);
     // Ctrl-C ends the process: every decision is its own committed
     // transaction, so there is nothing to flush.

@@ -14,7 +14,7 @@
 #include "db/database.h"
 #include "pipeline/shard.h"
 #include "pipeline/slurm.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 
 namespace doasido::cli {
 namespace {

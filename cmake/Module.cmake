@@ -60,3 +60,14 @@ function(doasido_module)
   endif()
   add_library(doasido::${M_NAME} ALIAS ${target})
 endfunction()
+
+# A test or benchmark of a module's queue stage (its source includes
+# "stages/...") links the stages library too; the source is a configure
+# dependency so that adding such an include takes effect.
+function(doasido_link_stages_if_included target source)
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${source})
+  file(READ ${source} text)
+  if(text MATCHES "#include \"stages/")
+    target_link_libraries(${target} PRIVATE doasido::stages)
+  endif()
+endfunction()

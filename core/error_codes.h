@@ -19,7 +19,7 @@ inline constexpr const char* kNotARegularFile = "not_a_regular_file";
 // A video no stage can judge: too small to show a hand, an absurd size or
 // rate, no frames, audio only, a still image under a video's name.
 inline constexpr const char* kUnsupportedVideo = "unsupported_video";
-// A stage run went past its wall-clock limit (pipeline/stage_timeouts.h).
+// A stage run went past its wall-clock limit (stages/stage_timeouts.h).
 inline constexpr const char* kStageTimeout = "stage_timeout";
 
 // True for codes a retry cannot fix: the same input gives the same error.

@@ -5,7 +5,7 @@
 // watch renews its lease only while the count keeps moving: a run whose
 // count stands still for longer than [timeouts] no_progress is failed as a
 // stage timeout. A run that never reports is held to its wall-clock limit
-// alone (pipeline/stage_timeouts.h).
+// alone (stages/stage_timeouts.h).
 #pragma once
 
 #include <cstdint>

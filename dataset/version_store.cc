@@ -17,7 +17,7 @@
 #include "dataset/episode_selection.h"
 #include "dataset/settled_runs.h"
 #include "dataset/version_files.h"
-#include "recon/recon_stage.h"
+#include "recon/reconstruction.h"
 #include "reports/report.h"
 #include "robot/trajectory/format.h"
 

@@ -24,7 +24,7 @@
 
 #include "core/output_path.h"
 #include "db/records.h"
-#include "db/stage.h"
+#include "db/stage_records.h"
 
 struct sqlite3;
 

@@ -128,7 +128,7 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
                                      {ScoreEntry("active_fraction", active, false,
                                                  c.min_active_fraction)}}};
   if (active < c.min_active_fraction) {
-    SetVerdict(result, Verdict::kReject, "no_activity");
+    SetVerdict(result, Verdict::kReject, kReasonNoActivity);
   }
   return result;
 }

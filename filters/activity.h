@@ -32,6 +32,8 @@ namespace doasido::filters {
 // The stage's name: also its config section and its section of the
 // analysis stage's measurements.
 inline constexpr const char* kActivityStageName = "activity";
+// Reason code: reject, too little motion in the hand region.
+inline constexpr const char* kReasonNoActivity = "no_activity";
 
 struct ActivitySignalConfig {
   double box_margin = 0.25;  // grow hand boxes by this fraction per side

@@ -253,11 +253,11 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
   const bool flag = m.translation_rate >= c.flag_translation_rate ||
                     m.rotation_rate >= c.flag_rotation_rate || m.scale_rate >= c.flag_scale_rate;
   if (reject) {
-    SetVerdict(result, Verdict::kReject, "camera_motion");
+    SetVerdict(result, Verdict::kReject, kReasonCameraMotion);
   } else if (m.pairs > 0 && m.valid_fraction < c.min_valid_fraction) {
-    SetVerdict(result, Verdict::kFlag, "camera_motion_unknown");
+    SetVerdict(result, Verdict::kFlag, kReasonCameraMotionUnknown);
   } else if (flag) {
-    SetVerdict(result, Verdict::kFlag, "camera_motion");
+    SetVerdict(result, Verdict::kFlag, kReasonCameraMotion);
   }
   return result;
 }

@@ -46,6 +46,10 @@ namespace doasido::filters {
 // The stage's name: also its config section and its section of the
 // analysis stage's measurements.
 inline constexpr const char* kCameraMotionStageName = "camera_motion";
+// Reason codes: reject or flag for camera motion; flag when too little of
+// the background could be tracked to tell.
+inline constexpr const char* kReasonCameraMotion = "camera_motion";
+inline constexpr const char* kReasonCameraMotionUnknown = "camera_motion_unknown";
 
 struct CameraMotionSignalConfig {
   double sample_fps = 10.0;

@@ -257,9 +257,9 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
        {ScoreEntry("interaction_fraction", fraction, false, c.min_interaction_fraction),
         ScoreEntry("covered_fraction", covered_fraction, false, c.min_covered_fraction)}}};
   if (covered_fraction < c.min_covered_fraction) {
-    SetVerdict(result, Verdict::kFlag, "no_detections");
+    SetVerdict(result, Verdict::kFlag, kReasonNoDetections);
   } else if (fraction < c.min_interaction_fraction) {
-    SetVerdict(result, Verdict::kReject, "no_interaction");
+    SetVerdict(result, Verdict::kReject, kReasonNoInteraction);
   }
   return result;
 }
@@ -370,7 +370,7 @@ std::vector<Detection> RunExternalDetector(const ExternalDetectorConfig& config,
 StageResult ExternalDetectorStage::Run(const ClipContext& context) {
   StageResult result;
   if (config_.command.empty()) {
-    result.reason = "no_detector";
+    result.reason = kReasonNoDetector;
     result.measurements = {{"ran", false}};
     return result;
   }

@@ -64,6 +64,9 @@ namespace doasido::filters {
 // The stage's name: also its config section and its section of the
 // analysis stage's measurements.
 inline constexpr const char* kInteractionStageName = "interaction";
+// Reason codes: reject without hand-object contact (no_detections, flag:
+// filters/stage_support.h).
+inline constexpr const char* kReasonNoInteraction = "no_interaction";
 
 struct BuiltinDetectorConfig {
   // Skin in YCrCb (8-bit), a common range for many skin tones.
@@ -154,6 +157,8 @@ class InteractionStage : public MeasuredVerdictStage<InteractionConfig> {
 };
 
 inline constexpr const char* kExternalDetectorStageName = "hand_object_detector";
+// Reason code: flag, no detector command is configured.
+inline constexpr const char* kReasonNoDetector = "no_detector";
 
 struct ExternalDetectorConfig {
   std::string command;  // empty: the stage passes without running anything

@@ -160,13 +160,13 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
                                       ScoreEntry("cut_fraction", m.cut_fraction, true,
                                                  c.reject_cut_fraction, c.flag_cut_fraction)}}};
   if (m.covered_fraction < c.min_covered_fraction) {
-    SetVerdict(result, Verdict::kFlag, "no_detections");
+    SetVerdict(result, Verdict::kFlag, kReasonNoDetections);
   } else if (m.missing_fraction >= c.reject_missing_fraction ||
              m.cut_fraction >= c.reject_cut_fraction) {
-    SetVerdict(result, Verdict::kReject, "out_of_frame");
+    SetVerdict(result, Verdict::kReject, kReasonOutOfFrame);
   } else if (m.missing_fraction >= c.flag_missing_fraction ||
              m.cut_fraction >= c.flag_cut_fraction) {
-    SetVerdict(result, Verdict::kFlag, "out_of_frame");
+    SetVerdict(result, Verdict::kFlag, kReasonOutOfFrame);
   }
   return result;
 }

@@ -52,6 +52,9 @@ namespace doasido::filters {
 // The stage's name: also its config section and its section of the
 // analysis stage's measurements.
 inline constexpr const char* kOutOfFrameStageName = "out_of_frame";
+// Reason code: reject or flag, the hand or touched object leaves the frame
+// (no_detections, flag: filters/stage_support.h).
+inline constexpr const char* kReasonOutOfFrame = "out_of_frame";
 
 struct OutOfFrameSignalConfig {
   double border_margin = 0.005;

@@ -506,11 +506,11 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
     result.verdict = Verdict::kPass;
   } else if (segment_s >= config.min_segment_s) {
     result.verdict = Verdict::kPass;
-    result.reason = "trimmed";
+    result.reason = kReasonTrimmed;
     summary["trim"] = {{"start_frame", first + best_start}, {"end_frame", first + best_end - 1}};
   } else {
     result.verdict = Verdict::kReject;
-    result.reason = "shot_boundary";
+    result.reason = kReasonShotBoundary;
   }
   result.measurements = measurements;
   result.measurements["summary"] = summary;

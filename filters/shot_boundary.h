@@ -98,6 +98,9 @@ namespace doasido::filters {
 // The stage's name: also its config section and its section of the
 // analysis stage's measurements.
 inline constexpr const char* kShotBoundaryStageName = "shot_boundary";
+// Reason codes: pass trimmed to the longest shot; reject across a cut.
+inline constexpr const char* kReasonTrimmed = "trimmed";
+inline constexpr const char* kReasonShotBoundary = "shot_boundary";
 
 struct ShotBoundaryConfig {
   // ContentDetector (PySceneDetect defaults; edges are not computed, so

@@ -26,6 +26,9 @@ inline constexpr const char* kAnalyzeStageName = "filters_analyze";
 // Its section with the learned hand detector's samples and keypoints
 // (filters/learned_hand_detector.h).
 inline constexpr const char* kHandsMeasurement = "hands";
+// Reason code of the verdicts that need detections (interaction,
+// out_of_frame): flag, the clip has none to judge by.
+inline constexpr const char* kReasonNoDetections = "no_detections";
 
 // {"clip": analysis["clip"], "signals": analysis[section], "shot": ...} from
 // the analysis stage's measurements in `context` (and the shot-boundary

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "pipeline/stage_run.h"
 
 namespace doasido::pipeline {

@@ -20,8 +20,8 @@
 #include "core/log.h"
 #include "core/stage_progress.h"
 #include "db/database.h"
-#include "pipeline/stage_registry.h"
-#include "pipeline/stage_timeouts.h"
+#include "stages/stage_registry.h"
+#include "stages/stage_timeouts.h"
 
 namespace doasido::pipeline {
 namespace {

@@ -37,7 +37,7 @@ struct WorkerStats {
 };
 
 // The exit code of a worker process whose stage run went past its limit
-// (pipeline/stage_timeouts.h): the run is recorded as failed, the
+// (stages/stage_timeouts.h): the run is recorded as failed, the
 // supervisor starts another worker.
 inline constexpr int kTimedOutExitCode = 75;
 

@@ -28,6 +28,11 @@
 
 namespace doasido::recon {
 
+// The `recon` stage's name (stages/recon_stage.h): its queue name, config
+// section and the artifact folder that holds this reconstruction, here so
+// that its readers (dataset, review) need not the stages.
+inline constexpr const char* kReconStageName = "recon";
+
 struct Reconstruction {
   double fps = 30;
   std::vector<bool> right_valid;          // (T)

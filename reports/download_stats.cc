@@ -1,6 +1,6 @@
 #include "reports/download_stats.h"
 
-#include "ingest/download_stage.h"
+#include "ingest/download.h"
 
 namespace doasido::reports {
 

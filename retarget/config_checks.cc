@@ -3,7 +3,6 @@
 #include <numbers>
 
 #include "core/config_check.h"
-#include "retarget/kinematic_stage.h"
 #include "robot/embodiment.h"
 
 namespace doasido::retarget {
@@ -56,13 +55,6 @@ void CheckHandName(const std::string& name, const std::string& robots_dir,
     throw Error("bad_config", "no hand '" + name + "': " + e.message(),
                 {.file = e.site().file, .field = section + "." + field});
   }
-}
-
-void CheckConfig(const KinematicStageConfig& c, const std::string& section) {
-  RequireInRange(section, "flag_fingertip_error", c.flag_fingertip_error, 0, 1);  // m
-  CheckHandName(c.hand, c.robots_dir, section, "hand");
-  CheckConfig(c.kinematic, section + ".kinematic");
-  CheckConfig(c.scene, section + ".scene");
 }
 
 }  // namespace doasido::retarget

@@ -4,9 +4,11 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/config.h"
 #include "core/html_escape.h"
+#include "review/server.h"
 #include "review/study.h"
 
 namespace doasido::review {
@@ -26,8 +28,18 @@ std::string ScriptedPage(const std::string& title, const std::string& nonce,
 // header bar, form controls, accept and reject buttons.
 extern const char* const kDecisionPageStyle;
 
-// The flagged-clip queue page; `config` holds token and reviewer.
-std::string ReviewPage(const std::string& nonce, const Json& config);
+// Reasons only a reviewer gives (no stage does): the flag was wrong, the
+// video is poor, something else.
+inline constexpr const char* kReasonFalseFlag = "false_flag";
+inline constexpr const char* kReasonPoorQuality = "poor_quality";
+inline constexpr const char* kReasonOther = "other";
+std::vector<ReasonChoice> ReviewOnlyReasons();
+
+// The flagged-clip queue page; `config` holds token, reviewer and
+// reason_for_stage (stage -> default reason code). Its reason list is
+// `stage_reasons` then ReviewOnlyReasons(), in that order.
+std::string ReviewPage(const std::string& nonce, const Json& config,
+                       const std::vector<ReasonChoice>& stage_reasons);
 // One rater's trials of a study; `config` holds token, study and rater.
 std::string StudyPage(const std::string& nonce, const Json& config);
 // The study's results, rendered on the server (no script).

@@ -65,16 +65,7 @@ const char* kBody = R"html(
       <div id="decision">
         <select id="reason" title="reason code">
           <option value="">— reason —</option>
-          <option value="no_interaction">no hand-object interaction</option>
-          <option value="out_of_frame">hand or object out of frame</option>
-          <option value="shot_boundary">shot boundary / cut</option>
-          <option value="no_activity">no activity</option>
-          <option value="camera_motion">camera motion</option>
-          <option value="no_detections">no detections</option>
-          <option value="poor_quality">poor video quality</option>
-          <option value="false_flag">flag was wrong (clip is fine)</option>
-          <option value="other">other</option>
-        </select>
+@REASONS@        </select>
         <label for="note" class="hint">free-text reason (optional), stored after the code</label>
         <textarea id="note" aria-label="free-text reason"></textarea>
         <button id="accept" class="accept">Accept <kbd>a</kbd></button>
@@ -143,8 +134,7 @@ function renderQueue() {
   $('player').classList.toggle('hidden', state.queue.length === 0);
 }
 
-const reasonForStage = { interaction: 'no_interaction', out_of_frame: 'out_of_frame',
-  shot_boundary: 'shot_boundary', activity: 'no_activity', camera_motion: 'camera_motion' };
+const reasonForStage = cfg.reason_for_stage || {};
 
 function fmt(v) {
   if (typeof v === 'number') return Number.isInteger(v) ? String(v) : v.toPrecision(4);
@@ -401,8 +391,27 @@ reloadQueue().then(() => {
 
 }  // namespace
 
-std::string ReviewPage(const std::string& nonce, const Json& config) {
-  return ScriptedPage("doasido review", nonce, std::string(kDecisionPageStyle) + kStyle, kBody,
+std::vector<ReasonChoice> ReviewOnlyReasons() {
+  return {{kReasonPoorQuality, "poor video quality"},
+          {kReasonFalseFlag, "flag was wrong (clip is fine)"},
+          {kReasonOther, "other"}};
+}
+
+std::string ReviewPage(const std::string& nonce, const Json& config,
+                       const std::vector<ReasonChoice>& stage_reasons) {
+  // The reason list comes from the stages' own codes, so a renamed reason
+  // cannot leave a stale choice on the page.
+  std::string options;
+  std::vector<ReasonChoice> reasons = stage_reasons;
+  for (auto& r : ReviewOnlyReasons()) reasons.push_back(std::move(r));
+  for (const auto& r : reasons) {
+    options += "          <option value=\"" + HtmlEscape(r.code) + "\">" + HtmlEscape(r.label) +
+               "</option>\n";
+  }
+  std::string body = kBody;
+  const std::string marker = "@REASONS@";
+  body.replace(body.find(marker), marker.size(), options);
+  return ScriptedPage("doasido review", nonce, std::string(kDecisionPageStyle) + kStyle, body,
                       config, kScript);
 }
 

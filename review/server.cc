@@ -402,7 +402,10 @@ void ReviewServer::Impl::GuardRoutes() {
 void ReviewServer::Impl::ReviewRoutes() {
   http.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     const std::string nonce = RandomHex(16);
-    SendPage(res, nonce, ReviewPage(nonce, {{"token", token}, {"reviewer", options.reviewer}}));
+    const Json config = {{"token", token},
+                         {"reviewer", options.reviewer},
+                         {"reason_for_stage", options.default_reasons}};
+    SendPage(res, nonce, ReviewPage(nonce, config, options.stage_reasons));
   });
 
   http.Get("/api/queue", [this](const httplib::Request&, httplib::Response& res) {

@@ -11,16 +11,30 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace doasido::review {
+
+// A reason code a reviewer can give, with the words shown for it.
+struct ReasonChoice {
+  std::string code;
+  std::string label;
+};
 
 struct ServeOptions {
   std::string host = "127.0.0.1";
   int port = 8470;             // 0: any free port
   bool allow_remote = false;   // permit a non-loopback host
   std::string reviewer;        // default reviewer name shown on the page
+  // The stages' reason codes (`doasido review serve` passes the stage
+  // registry's, stages/stage_registry.h), offered before the review's own
+  // (ReviewOnlyReasons), and for each filter stage the reason a rejection
+  // of a clip it flagged takes by default.
+  std::vector<ReasonChoice> stage_reasons;
+  std::map<std::string, std::string> default_reasons;
 };
 
 // True for 127.0.0.0/8, ::1 and "localhost".

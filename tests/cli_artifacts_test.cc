@@ -29,7 +29,7 @@
 #include "dataset/version.h"
 #include "db/database.h"
 #include "ingest/file_sha256.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "testing/db_dump.h"
 #include "tests/test_util.h"
 

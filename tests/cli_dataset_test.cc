@@ -25,7 +25,7 @@
 #include "dataset/version_store.h"
 #include "db/database.h"
 #include "ingest/file_sha256.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/trajectory/format.h"
 #include "tests/test_util.h"
 

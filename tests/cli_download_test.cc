@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "db/database.h"
-#include "ingest/download_stage.h"
+#include "ingest/download.h"
 #include "tests/test_util.h"
 
 namespace doasido {

@@ -9,7 +9,7 @@
 #include <map>
 #include <set>
 
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "db/database.h"
 #include "review/fleiss_kappa.h"
 #include "review/server.h"

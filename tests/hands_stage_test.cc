@@ -1,7 +1,7 @@
 // The hands queue stage on a few frames of a real clip: MediaPipe's models
 // (Node + WebAssembly, or whatever backend filters/hand_landmarker.h runs),
 // the fit, and a bundle that recon's reader accepts.
-#include "hands/hands_stage.h"
+#include "stages/hands_stage.h"
 
 #include <gtest/gtest.h>
 

@@ -9,7 +9,7 @@
 
 #include "core/permanent_error.h"
 #include "ingest/download_command.h"
-#include "ingest/download_stage.h"
+#include "stages/download_stage.h"
 #include "ingest/host_slots.h"
 #include "ingest/http_fetch.h"
 #include "tests/test_util.h"

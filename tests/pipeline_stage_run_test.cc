@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "db/database.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 #include "tests/test_util.h"
 
 namespace doasido::pipeline {

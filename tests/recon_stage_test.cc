@@ -2,7 +2,7 @@
 // a readable reconstruction; the tracker's poses are used when present;
 // verdicts reject a clip without an object or without alignment evidence
 // and flag inconsistent scales on re-decision.
-#include "recon/recon_stage.h"
+#include "stages/recon_stage.h"
 
 #include <cmath>
 #include <optional>

@@ -2,7 +2,7 @@
 // candidates as the model, guidance from its point tracks, clustering by
 // silhouette -> poses near the true ones, which recon then uses; a velocity
 // server through the stage; a bundle without a model is passed on.
-#include "recon/track_stage.h"
+#include "stages/track_stage.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@
 #include "eval/mixture_file.h"
 #include "recon/bundle/bundle.h"
 #include "recon/bundle/npy.h"
-#include "recon/recon_stage.h"
+#include "stages/recon_stage.h"
 #include "recon/track/velocity_server.h"
 #include "synth/tracking_scene.h"
 #include "tests/small_clip.h"

@@ -6,10 +6,10 @@
 // error and no object; the dynamics `retarget` stage says no_object.
 #include <gtest/gtest.h>
 
-#include "recon/bundle/bundle_location.h"
-#include "recon/recon_stage.h"
-#include "retarget/dynamic_stage.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/clip_inputs.h"
+#include "stages/recon_stage.h"
+#include "stages/dynamic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "tests/hand_only_bundle.h"
 #include "tests/test_util.h"
 

@@ -10,7 +10,7 @@
 #include "recon/align/gravity.h"
 #include "recon/reconstruction.h"
 #include "retarget/kinematic/kinematic_retarget.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 #include "robot/embodiment.h"
 #include "tests/test_util.h"
 

@@ -4,7 +4,7 @@
 # video (<synth out>/videos/NAME.mp4 -> <synth out>/bundles/NAME/) into
 # the stage's output folder. For any other video it writes nothing and
 # exits 0: no model output for that clip, so the `hands` stage's hand-only
-# bundle stands in (recon/bundle_stage.h).
+# bundle stands in (stages/bundle_stage.h).
 #   [bundle]
 #   command = "sh tools/ground_truth_bundle.sh {video} {output}"
 set -eu

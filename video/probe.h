@@ -1,17 +1,15 @@
 // Probing a video from its container (libavformat), without decoding: size,
 // frame rate, frame count (the video packets), duration, variable frame rate
-// (from the packets' presentation times), display rotation and codec.
+// (from the packets' presentation times), display rotation and codec. The
+// `probe` queue stage that runs it on each clip is stages/probe_stage.h.
 #pragma once
 
 #include <filesystem>
 
 #include "core/config.h"
 #include "db/records.h"
-#include "db/stage.h"
 
 namespace doasido::video {
-
-inline constexpr const char* kProbeStageName = "probe";
 
 struct ProbeConfig {
   // Read every video packet to count the frames (exact, catches truncated
@@ -39,18 +37,5 @@ void CheckConfig(const ProbeConfig& c, const std::string& section);
 // fewer than 2 frames, audio only, a still image), kVideoTruncated (holds
 // fewer frames than declared, beyond the allowance).
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config = {});
-
-// The first queue stage: probes the clip's video and checks that the clip's
-// span lies inside it.
-class ProbeStage : public Stage {
- public:
-  explicit ProbeStage(ProbeConfig config = {}) : config_(config) {}
-  std::string Name() const override { return kProbeStageName; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-
- private:
-  ProbeConfig config_;
-};
 
 }  // namespace doasido::video

@@ -1,9 +1,9 @@
-// ReconstructHandOnly (declared in recon/recon_stage.h): a bundle with hands
+// ReconstructHandOnly (declared in recon/align/reconstruct.h): a bundle with hands
 // and no object becomes a reconstruction of the hands alone.
 #include <algorithm>
 #include <cmath>
 
-#include "recon/recon_stage.h"
+#include "recon/align/reconstruct.h"
 
 namespace doasido::recon {
 namespace {

@@ -1,10 +1,10 @@
-// Reconstruct (declared in recon/recon_stage.h): alignment, gravity, floor
+// Reconstruct (declared in recon/align/reconstruct.h): alignment, gravity, floor
 // and the quality measurements of one bundle.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "recon/recon_stage.h"
+#include "recon/align/reconstruct.h"
 
 namespace doasido::recon {
 namespace {

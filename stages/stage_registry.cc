@@ -1,25 +1,25 @@
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 
 #include <algorithm>
 #include <type_traits>
 
 #include "core/config_check.h"
-#include "pipeline/stage_timeouts.h"
 #include "filters/activity.h"
 #include "filters/analyze_stage.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
-#include "hands/hands_stage.h"
-#include "ingest/download_stage.h"
-#include "video/probe.h"
-#include "pipeline/noop_stage.h"
-#include "recon/bundle_stage.h"
-#include "recon/recon_stage.h"
-#include "recon/track_stage.h"
-#include "retarget/dynamic_stage.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/bundle_stage.h"
+#include "stages/download_stage.h"
+#include "stages/dynamic_stage.h"
+#include "stages/hands_stage.h"
+#include "stages/kinematic_stage.h"
+#include "stages/noop_stage.h"
+#include "stages/probe_stage.h"
+#include "stages/recon_stage.h"
+#include "stages/stage_timeouts.h"
+#include "stages/track_stage.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -27,11 +27,13 @@ namespace {
 // The table entry of a stage `StageT` configured by `ConfigT` from section
 // `name`.
 template <typename StageT, typename ConfigT>
-StageEntry Entry(const std::string& name, std::string summary, bool in_default_pipeline,
-                 double timeout_s, bool decides_from_measurements = false) {
+StageEntry Entry(const std::string& name, std::string summary, std::vector<StageReason> reasons,
+                 bool in_default_pipeline, double timeout_s,
+                 bool decides_from_measurements = false) {
   static_assert(HasConfigCheck<ConfigT>, "every stage config states its valid ranges");
   return {.name = name,
           .summary = std::move(summary),
+          .reasons = std::move(reasons),
           .in_default_pipeline = in_default_pipeline,
           .make = [name](const Json& config) -> std::unique_ptr<Stage> {
             ConfigT c;
@@ -63,36 +65,50 @@ const std::vector<StageEntry>& StageTable() {
           ingest::kDownloadStageName,
           "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
           "template for sites); local videos pass at once",
+          {},
           true, 4 * kHour),
       Entry<video::ProbeStage, video::ProbeConfig>(
           video::kProbeStageName,
-          "size, fps, frame count, rotation and codec; rejects spans outside the video", true,
+          "size, fps, frame count, rotation and codec; rejects spans outside the video",
+          {{video::kReasonSpanOutsideVideo, "clip span outside the video"}}, true,
           kMinute),
       Entry<ExternalDetectorStage, ExternalDetectorConfig>(
           kExternalDetectorStageName,
           "runs an external hand-object detector command and stores its 100DOH-format boxes",
+          {{kReasonNoDetector, "no detector command"}},
           false, kHour),
       Entry<AnalyzeStage, AnalyzeConfig>(
           kAnalyzeStageName,
-          "decodes the clip once at ~256 px and records every filter's per-frame signals", true,
+          "decodes the clip once at ~256 px and records every filter's per-frame signals", {}, true,
           kHour),
       Entry<ShotBoundaryStage, ShotBoundaryConfig>(
           kShotBoundaryStageName, "trims a clip to its longest shot, or rejects it across a cut",
+          {{kReasonShotBoundary, "shot boundary / cut"},
+           {kReasonTrimmed, "trimmed to its longest shot"}},
           true, kMinute, true),
       Entry<InteractionStage, InteractionConfig>(
-          kInteractionStageName, "rejects clips without hand-object contact", true, kMinute, true),
+          kInteractionStageName, "rejects clips without hand-object contact",
+          {{kReasonNoInteraction, "no hand-object interaction"},
+           {kReasonNoDetections, "no detections"}},
+          true, kMinute, true),
       Entry<OutOfFrameStage, OutOfFrameConfig>(
           kOutOfFrameStageName, "rejects clips whose hand or touched object leaves the frame",
+          {{kReasonOutOfFrame, "hand or object out of frame"},
+           {kReasonNoDetections, "no detections"}},
           true, kMinute, true),
       Entry<ActivityStage, ActivityConfig>(
-          kActivityStageName, "rejects clips with no motion in the hand region", true, kMinute, true),
+          kActivityStageName, "rejects clips with no motion in the hand region",
+          {{kReasonNoActivity, "no activity"}}, true, kMinute, true),
       Entry<CameraMotionStage, CameraMotionConfig>(
           kCameraMotionStageName, "rejects (or flags) clips whose camera pans, shakes or zooms",
+          {{kReasonCameraMotion, "camera motion"},
+           {kReasonCameraMotionUnknown, "camera motion unknown"}},
           true, kMinute, true),
       Entry<hands::HandsStage, hands::HandsConfig>(
           hands::kHandsStageName,
           "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
           "fit: the hand part of a clip bundle",
+          {{hands::kReasonNoHands, "no hands found"}},
           // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
           // and suites run the default list on hundreds of synthetic clips.
           false, kHour),
@@ -100,27 +116,39 @@ const std::vector<StageEntry>& StageTable() {
           recon::kBundleStageName,
           "runs the model command (per clip, or a server started once per worker) that writes "
           "the clip bundle (or checks the bundle the list names)",
+          {},
           false, 2 * kHour),
       Entry<recon::TrackStage, recon::TrackStageConfig>(
           recon::kTrackStageName,
           "tracks the object frame by frame by guided flow sampling (seed 3.1): a velocity "
           "server, or the bundle's pose candidates as the model",
+          {},
           false, kHour),
       Entry<recon::ReconStage, recon::ReconStageConfig>(
           recon::kReconStageName,
           "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction",
+          {{recon::kReasonNoObject, "no object"},
+           {recon::kReasonNoHands, "no hands found"},
+           {recon::kReasonTooFewAlignedFrames, "too few aligned frames"},
+           {recon::kReasonScaleInconsistent, "object scale inconsistent"}},
           false, 30 * kMinute),
       Entry<retarget::KinematicStage, retarget::KinematicStageConfig>(
           retarget::kKinematicStageName,
           "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)",
+          {{retarget::kReasonNoHand, "no hand to retarget"},
+           {retarget::kReasonNoRightHand, "no right hand (with an object)"},
+           {retarget::kReasonKinematicError, "large fingertip error"}},
           false, 30 * kMinute),
       Entry<retarget::DynamicRetargetStage, retarget::DynamicRetargetConfig>(
           retarget::kRetargetStageName,
           "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed "
           "3.2)",
+          {{retarget::kReasonTrackingFailed, "the robot does not track the motion"},
+           {retarget::kReasonNoRightHand, "no right hand (with an object)"},
+           {retarget::kReasonNoObject, "no object"}},
           false, 2 * kHour),
       Entry<NoopStage, NoopConfig>(kNoopStageName,
-                                   "does nothing for work_ms milliseconds (queue diagnostics)",
+                                   "does nothing for work_ms milliseconds (queue diagnostics)", {},
                                    false, kMinute),
     };
     table[0].deterministic = false;  // the download stage: the network may answer next time
@@ -145,6 +173,33 @@ std::vector<std::string> DefaultPipeline() {
     if (entry.in_default_pipeline) names.push_back(entry.name);
   }
   return names;
+}
+
+std::vector<StageReason> StageReasons() {
+  // The filters' reasons first: those are the flags a person reviews, and
+  // the page's number keys pick the first nine.
+  std::vector<StageReason> out;
+  for (const bool filters_pass : {true, false}) {
+    for (const auto& entry : StageTable()) {
+      if (entry.decides_from_measurements != filters_pass) continue;
+      for (const auto& reason : entry.reasons) {
+        const bool seen = std::any_of(out.begin(), out.end(),
+                                      [&](const StageReason& r) { return r.code == reason.code; });
+        if (!seen) out.push_back(reason);
+      }
+    }
+  }
+  return out;
+}
+
+std::map<std::string, std::string> ReviewDefaultReasons() {
+  std::map<std::string, std::string> out;
+  for (const auto& entry : StageTable()) {
+    if (entry.decides_from_measurements && !entry.reasons.empty()) {
+      out[entry.name] = entry.reasons.front().code;
+    }
+  }
+  return out;
 }
 
 std::set<std::string> FlagContinuingStages(const std::vector<std::string>& pipeline) {

@@ -32,7 +32,7 @@
 //     writes nothing has no output for the clip): the hands stage's hand-only bundle
 //     (<artifacts>/<clip>/hands/) is the clip's bundle. A list or command
 //     bundle without hands gets the hands stage's hands
-//     (bundle_location.h LoadClipBundle, which every later stage uses).
+//     (stages/clip_inputs.h LoadClipBundle, which every later stage uses).
 // Measurements: source ("list", "command" or "hands"), hands_source
 // ("bundle", "hands" or "none"), producers, seconds, frames, parts found.
 #pragma once
@@ -42,7 +42,7 @@
 
 #include "core/config.h"
 #include "db/stage.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 #include "recon/bundle/model_server.h"
 
 namespace doasido::recon {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -14,9 +15,19 @@
 
 namespace doasido::pipeline {
 
+// A reason code a stage can give its verdict (the constants of its header),
+// with the words a reviewer reads for it.
+struct StageReason {
+  std::string code;
+  std::string label;
+};
+
 struct StageEntry {
   std::string name;  // the stage's name constant: also its config section
   std::string summary;
+  // Every reason code the stage can give, its reject reason first (the one
+  // a reviewer's rejection of a clip it flagged takes by default).
+  std::vector<StageReason> reasons;
   bool in_default_pipeline;
   // Builds the stage from the whole config (the stage reads and checks its
   // section).
@@ -27,7 +38,7 @@ struct StageEntry {
   // rethreshold` may re-decide and re-run it in process.
   bool decides_from_measurements = false;
   // Wall-clock limit of one run unless the config's [timeouts] says
-  // otherwise (pipeline/stage_timeouts.h).
+  // otherwise (stages/stage_timeouts.h).
   double timeout_s = 600;
   // The same input gives the same outcome: a timeout is not retried. The
   // network stage is the one that is not.
@@ -38,6 +49,13 @@ const std::vector<StageEntry>& StageTable();
 // Throws Error("unknown_stage") listing the known names.
 std::unique_ptr<Stage> MakeStage(const std::string& name, const Json& config);
 std::vector<std::string> DefaultPipeline();
+// Every reason code of the table, each once: the stages that decide from
+// stored measurements (the filters) first, then the others, in table order
+// (the review page's list).
+std::vector<StageReason> StageReasons();
+// For each stage that decides from stored measurements (the filters, whose
+// flags a person reviews): its reject reason, by stage name.
+std::map<std::string, std::string> ReviewDefaultReasons();
 // The stages of `pipeline` where a flag lets the clip go on: those followed
 // by a stage that decides from stored measurements (the filters), so that
 // a flagged clip is judged by every filter before a person sees it.

@@ -1,10 +1,10 @@
-#include "pipeline/stage_timeouts.h"
+#include "stages/stage_timeouts.h"
 
 #include <algorithm>
 #include <optional>
 
 #include "core/config_check.h"
-#include "pipeline/stage_registry.h"
+#include "stages/stage_registry.h"
 
 namespace doasido::pipeline {
 namespace {

@@ -1,4 +1,4 @@
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,16 +7,17 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/config_check.h"
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "core/file_text.h"
 #include "core/permanent_error.h"
 #include "recon/bundle/bundle.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 #include "recon/align/gravity.h"
-#include "recon/recon_stage.h"
+#include "stages/recon_stage.h"
 #include "recon/reconstruction.h"
-#include "retarget/dynamic_stage.h"
+#include "stages/dynamic_stage.h"
 #include "robot/embodiment.h"
 
 namespace doasido::retarget {
@@ -251,9 +252,16 @@ std::optional<StageResult> KinematicStage::Redecide(const Json& measurements) co
   r.measurements = measurements;
   if (measurements["fingertip_error_mean"].get<double>() > config_.flag_fingertip_error) {
     r.verdict = Verdict::kFlag;
-    r.reason = "kinematic_error";
+    r.reason = kReasonKinematicError;
   }
   return r;
+}
+
+void CheckConfig(const KinematicStageConfig& c, const std::string& section) {
+  RequireInRange(section, "flag_fingertip_error", c.flag_fingertip_error, 0, 1);  // m
+  CheckHandName(c.hand, c.robots_dir, section, "hand");
+  CheckConfig(c.kinematic, section + ".kinematic");
+  CheckConfig(c.scene, section + ".scene");
 }
 
 }  // namespace doasido::retarget

@@ -1,4 +1,4 @@
-#include "recon/recon_stage.h"
+#include "stages/recon_stage.h"
 
 #include <cmath>
 
@@ -7,7 +7,7 @@
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/permanent_error.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 #include "recon/bundle/npy.h"
 
 namespace doasido::recon {

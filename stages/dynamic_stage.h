@@ -29,7 +29,7 @@
 #include <string>
 
 #include "db/stage.h"
-#include "recon/recon_stage.h"
+#include "stages/recon_stage.h"
 #include "retarget/dynamic/dynamic_retarget.h"
 
 namespace doasido::retarget {

@@ -1,53 +1,22 @@
-// The `recon` queue stage: a clip bundle becomes the metric, gravity-aligned
-// hand-object trajectory of recon/reconstruction.h (seed §3.1).
-//
-// Input: the clip bundle (recon/bundle/bundle_location.h BundleDir). Object poses:
-// when <artifacts>/<clip>/track/object_poses.npz exists (written by the
-// `track` stage, recon/track_stage.h) its `poses` (T,7) f8, object->camera,
-// t xyz + quaternion wxyz, point-map units, NaN rows = no pose; else the
-// bundle's object/poses.npz.
-// Steps: hand-object alignment (hand_object_alignment.h) rescales each
-// frame's object translation to the hand's metric scale; gravity
-// (gravity.h) rotates camera coordinates so up is +z; the floor z = 0 is
-// put under the object's resting pose (the lowest point of the posed mesh in
-// the first frame where the object moves less than rest_speed, else in the
-// slowest frame). The right hand's joints are taken as metric (HaWoR).
-// Output in artifact_dir: reconstruction.npz, object.obj, reconstruction.json
-// (gravity source and inlier share, per-frame scales and how each frame was
-// filled, skipped frames with reasons, object pose source).
-// A hand-only bundle (IsHandOnly: hands, no object part) is reconstructed
-// without object (ReconstructHandOnly; no object.obj), passed, or rejected
-// kReasonNoHands when no frame holds a hand.
-// Measurements (keys below) and verdict: reject kReasonNoObject (an object
-// part without mesh, poses or object mask, or neither object nor hands), kReasonTooFewAlignedFrames (aligned share of
-// the frames with a pose below min_aligned_fraction, or fewer than
-// min_aligned_frames); flag kReasonScaleInconsistent when the robust spread
-// of log s over aligned frames exceeds max_scale_spread.
+// The reconstruction of one clip bundle, queue-independent (seed §3.1):
+// hand-object alignment (hand_object_alignment.h) rescales each frame's
+// object translation to the hand's metric scale; gravity (gravity.h)
+// rotates camera coordinates so up is +z; the floor z = 0 is put under the
+// object's resting pose. A hand-only bundle is reconstructed without
+// object. The `recon` queue stage (stages/recon_stage.h) runs it on a
+// clip's bundle and records the measurements named below.
 #pragma once
 
-#include <filesystem>
-#include <optional>
-#include <string>
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
-#include "recon/bundle/bundle.h"
-#include "recon/bundle/bundle_location.h"
+#include "core/geometry.h"
 #include "recon/align/gravity.h"
 #include "recon/align/hand_object_alignment.h"
+#include "recon/bundle/bundle.h"
 #include "recon/reconstruction.h"
-#include "recon/track_stage.h"
 
 namespace doasido::recon {
-
-inline constexpr const char* kReconStageName = "recon";
-
-// Reason codes.
-inline constexpr const char* kReasonNoObject = "no_object";
-inline constexpr const char* kReasonNoHands = "no_hands";  // hand-only bundle, no valid frame
-inline constexpr const char* kReasonTooFewAlignedFrames = "too_few_aligned_frames";
-inline constexpr const char* kReasonScaleInconsistent = "scale_inconsistent";
 
 // Measurement keys.
 inline constexpr const char* kMeasureFrames = "frames";
@@ -87,7 +56,6 @@ struct ReconStageConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ReconStageConfig, alignment, gravity,
                                                 min_aligned_fraction, min_aligned_frames,
                                                 max_scale_spread, rest_speed)
-void CheckConfig(const ReconStageConfig& c, const std::string& section);
 
 struct ReconOutput {
   Reconstruction reconstruction;  // object_mesh left empty (the caller writes the mesh)
@@ -113,23 +81,5 @@ bool IsHandOnly(const ClipBundle& bundle);
 // object (object_valid all false, no mesh). Measurements kMeasureObject,
 // kMeasureGravity*, kMeasureRight/LeftFrames, kMeasureWristJumpMax.
 ReconOutput ReconstructHandOnly(const ClipBundle& bundle, const ReconStageConfig& config);
-
-// Reads a tracker's object_poses.npz (format in the file comment). Throws
-// Error("bad_track") naming the file and field.
-void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<Pose>& poses,
-                    std::vector<bool>& valid);
-
-class ReconStage : public Stage {
- public:
-  explicit ReconStage(ReconStageConfig config = {});
-  std::string Name() const override { return kReconStageName; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-  std::optional<StageResult> Redecide(const Json& measurements) const override;
-
- private:
-  StageResult RunHandOnly(const ClipContext& context, const ResolvedBundle& resolved) const;
-  ReconStageConfig config_;
-};
 
 }  // namespace doasido::recon

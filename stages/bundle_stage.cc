@@ -1,4 +1,4 @@
-#include "recon/bundle_stage.h"
+#include "stages/bundle_stage.h"
 
 #include <unistd.h>
 

@@ -5,7 +5,7 @@
 // Input: the `recon` stage's artifact <artifacts>/<clip>/recon/
 // (recon/reconstruction.h: metric, gravity-aligned hands and object, or the
 // hands alone; frames without an object pose hold the previous one) when it
-// exists, else the clip bundle (recon/bundle/bundle_location.h LoadClipBundle):
+// exists, else the clip bundle (stages/clip_inputs.h LoadClipBundle):
 // hands.npz, object/poses.npz, object/mesh.obj, gravity.npz, meta.json fps,
 // put in a world frame whose +z is up (mean of gravity.npz, else the
 // camera's -y) with the floor z = 0 touching the object's lowest point in
@@ -42,6 +42,8 @@ namespace doasido::retarget {
 // trajectory file names) is its queue name, config section and artifact folder.
 inline constexpr const char* kLeftTrajectoryFile = "trajectory_left.json";
 inline constexpr const char* kReasonNoHand = "no_hand";
+// Flag: the mean fingertip error exceeds flag_fingertip_error.
+inline constexpr const char* kReasonKinematicError = "kinematic_error";
 inline constexpr const char* kMeasureRetargetedHand = "retargeted_hand";
 inline constexpr const char* kHandRight = "right";
 inline constexpr const char* kHandLeftMirrored = "left_mirrored";

@@ -1,13 +1,13 @@
-#include "retarget/dynamic_stage.h"
+#include "stages/dynamic_stage.h"
 
 #include <fstream>
 
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 #include "retarget/dynamic/bimanual_retarget.h"
-#include "retarget/kinematic_stage.h"
+#include "stages/kinematic_stage.h"
 
 namespace doasido::retarget {
 

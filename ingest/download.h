@@ -1,5 +1,6 @@
-// The `download` stage: a clip whose video is a URL gets the video fetched
-// into the database's media folder before `probe` reads it.
+// Downloading a clip's video, what the `download` queue stage
+// (stages/download_stage.h) does for a clip whose video is a URL: the video
+// is fetched into the database's media folder before `probe` reads it.
 //
 //  - A clip whose video is a local file passes at once (nothing to do).
 //  - http(s) URLs of hosts not in `command_hosts` are fetched with libcurl
@@ -20,10 +21,6 @@
 //    of one video share one videos row; whichever clip comes first
 //    downloads, the others find the finished file (a per-file lock keeps
 //    two workers from fetching it twice at once).
-//  - The result hands the file to the worker in the measurements member
-//    Database::kVideoFileKey, so the videos row records local_path,
-//    size_bytes, sha256 and downloaded_at, and later stages (probe first)
-//    see the local path in their ClipContext.
 #pragma once
 
 #include <cstdint>
@@ -32,10 +29,11 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 
 namespace doasido::ingest {
 
+// The `download` stage's name (its queue name, config section and artifact
+// folder), here so that `report` reads its summaries without the stages.
 inline constexpr const char* kDownloadStageName = "download";
 
 // Error codes of the stage (besides those of http_fetch.h).
@@ -98,18 +96,10 @@ struct DownloadOutcome {
   std::int64_t resumed_from = 0;
   int tries = 0;
 };
+// Whether a clip's video is a URL (anything with "://") rather than a file.
+bool IsUrl(const std::string& s);
+
 DownloadOutcome DownloadVideo(const std::string& url, const std::filesystem::path& media_dir,
                               const std::filesystem::path& log_dir, const DownloadConfig& config);
-
-class DownloadStage : public Stage {
- public:
-  explicit DownloadStage(DownloadConfig config = {});
-  std::string Name() const override { return kDownloadStageName; }
-  Json Params() const override;
-  StageResult Run(const ClipContext& context) override;
-
- private:
-  DownloadConfig config_;
-};
 
 }  // namespace doasido::ingest

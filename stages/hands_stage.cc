@@ -1,4 +1,4 @@
-#include "hands/hands_stage.h"
+#include "stages/hands_stage.h"
 
 #include <spdlog/spdlog.h>
 
@@ -10,7 +10,7 @@
 #include "hands/hand_bundle_writer.h"
 #include "hands/hand_detection.h"
 #include "hands/hand_reconstruction.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 
 namespace doasido::hands {
 namespace {

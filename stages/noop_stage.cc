@@ -1,4 +1,4 @@
-#include "pipeline/noop_stage.h"
+#include "stages/noop_stage.h"
 
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-#include "recon/track_stage.h"
+#include "stages/track_stage.h"
 
 #include <spdlog/spdlog.h>
 
@@ -9,7 +9,7 @@
 #include "core/permanent_error.h"
 #include "core/shell_words.h"
 #include "recon/bundle/bundle.h"
-#include "recon/bundle/bundle_location.h"
+#include "stages/clip_inputs.h"
 #include "recon/track/gaussian_mixture_flow.h"
 #include "recon/track/lucas_kanade_follower.h"
 #include "recon/bundle/npy.h"

@@ -1,0 +1,30 @@
+// The `download` queue stage: a clip whose video is a URL gets the video
+// fetched into the database's media folder before `probe` reads it
+// (ingest/download.h DownloadVideo: how, with which error codes); a local
+// video passes at once. The result hands the file to the worker in the
+// measurements member Database::kVideoFileKey, so the videos row records
+// local_path, size_bytes, sha256 and downloaded_at, and later stages
+// (probe first) see the local path in their ClipContext. Measurements: url,
+// tries, resumed_from, summary (ingest::DownloadSummary).
+#pragma once
+
+#include <string>
+
+#include "core/config.h"
+#include "db/stage.h"
+#include "ingest/download.h"
+
+namespace doasido::ingest {
+
+class DownloadStage : public Stage {
+ public:
+  explicit DownloadStage(DownloadConfig config = {});
+  std::string Name() const override { return kDownloadStageName; }
+  Json Params() const override;
+  StageResult Run(const ClipContext& context) override;
+
+ private:
+  DownloadConfig config_;
+};
+
+}  // namespace doasido::ingest

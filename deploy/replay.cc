@@ -126,8 +126,8 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory, const re
   mj_forward(m, d);
 
   ReplayReport r;
-  if (trajectory.metrics.is_object() && trajectory.metrics.contains("success")) {
-    r.reference_success = trajectory.metrics.at("success").get<bool>();
+  if (trajectory.metrics.is_object() && trajectory.metrics.contains(retarget::kMetricSuccess)) {
+    r.reference_success = trajectory.metrics.at(retarget::kMetricSuccess).get<bool>();
   }
   std::vector<double>& object_position = r.object_position_error;
   std::vector<double>& object_rotation = r.object_rotation_error;

@@ -74,9 +74,9 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
                                                      {"kinematic_reference", "kinematic_reference.json"},
                                                      {"scene", std::string(kSceneFolder) + "/" + kSceneFile},
                                                      {"robot_scene", kRobotSceneFile}});
-  m["e_pos"] = run.metrics.e_pos;
-  m["e_rot"] = run.metrics.e_rot;
-  m["success"] = run.metrics.success;
+  m[kMetricPositionError] = run.metrics.e_pos;
+  m[kMetricRotationError] = run.metrics.e_rot;
+  m[kMetricSuccess] = run.metrics.success;
   m["frames"] = r.frames();
   m["in_hand_frames"] = run.in_hand_frames;
   m["plans"] = run.stats.plans;
@@ -97,11 +97,15 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
 }
 
 std::optional<StageResult> DynamicRetargetStage::Redecide(const Json& measurements) const {
-  if (!measurements.contains("e_pos") || !measurements.contains("e_rot")) return std::nullopt;
+  if (!measurements.contains(kMetricPositionError) || !measurements.contains(kMetricRotationError)) {
+    return std::nullopt;
+  }
   StageResult r;
   r.measurements = measurements;
-  const double e_pos = measurements["e_pos"].is_number() ? measurements["e_pos"].get<double>() : 1e9;
-  const double e_rot = measurements["e_rot"].is_number() ? measurements["e_rot"].get<double>() : 1e9;
+  const Json& pos = measurements[kMetricPositionError];
+  const Json& rot = measurements[kMetricRotationError];
+  const double e_pos = pos.is_number() ? pos.get<double>() : 1e9;
+  const double e_rot = rot.is_number() ? rot.get<double>() : 1e9;
   if (!(e_pos < kSuccessPosition && e_rot < kSuccessRotation)) {
     r.verdict = Verdict::kReject;
     r.reason = kReasonTrackingFailed;

@@ -116,9 +116,9 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
   } catch (const Error& e) {
     throw NamingClip(e, label);
   }
-  run.trajectory.metrics = {{"e_pos", run.metrics.e_pos},
-                            {"e_rot", run.metrics.e_rot},
-                            {"success", run.metrics.success},
+  run.trajectory.metrics = {{kMetricPositionError, run.metrics.e_pos},
+                            {kMetricRotationError, run.metrics.e_rot},
+                            {kMetricSuccess, run.metrics.success},
                             {"frames", run.metrics.frames},
                             {"left_wrist_error", run.left_wrist_error},
                             {"right_wrist_error", run.right_wrist_error}};

@@ -99,9 +99,9 @@ DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const 
   } catch (const Error& e) {
     throw NamingClip(e, label);
   }
-  run.trajectory.metrics = {{"e_pos", run.metrics.e_pos},
-                            {"e_rot", run.metrics.e_rot},
-                            {"success", run.metrics.success},
+  run.trajectory.metrics = {{kMetricPositionError, run.metrics.e_pos},
+                            {kMetricRotationError, run.metrics.e_rot},
+                            {kMetricSuccess, run.metrics.success},
                             {"frames", run.metrics.frames}};
   return run;
 }

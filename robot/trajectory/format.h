@@ -24,7 +24,7 @@
 namespace doasido::retarget {
 
 // The two stages that write a trajectory (their adapters are
-// retarget/kinematic_stage.h and retarget/dynamic_stage.h); the names are
+// stages/kinematic_stage.h and stages/dynamic_stage.h); the names are
 // here so that a reader of trajectories needs no solver.
 inline constexpr const char* kKinematicStageName = "retarget_kinematic";
 inline constexpr const char* kRetargetStageName = "retarget";
@@ -43,6 +43,14 @@ inline constexpr const char* kTrajectoryCsvFile = "trajectory.csv";
 inline constexpr const char* kRobotSceneFile = "robot_scene.xml";  // hand(s) + object scene
 inline constexpr const char* kSceneFolder = "scene";               // the object scene's folder
 inline constexpr const char* kSceneFile = "scene.xml";             // in kSceneFolder
+
+// Keys of HandTrajectory::metrics (the dynamics-aware stage's tracking
+// errors, also its measurements): object position error E_pos (m),
+// rotation error E_rot (rad), and whether both are under the success
+// thresholds.
+inline constexpr const char* kMetricPositionError = "e_pos";
+inline constexpr const char* kMetricRotationError = "e_rot";
+inline constexpr const char* kMetricSuccess = "success";
 
 using Keypoints21 = Eigen::Matrix<double, 21, 3, Eigen::RowMajor>;
 
@@ -63,7 +71,7 @@ struct HandTrajectory {
   // Written by the dynamics-aware `retarget` stage; empty from retarget_kinematic.
   std::vector<std::string> ctrl_names;     // (nu) actuator names
   std::vector<Eigen::VectorXd> ctrl;       // (T, nu) position targets, or empty
-  Json metrics = Json::object();           // e.g. {"e_pos", "e_rot", "success"}
+  Json metrics = Json::object();           // kMetric* keys above
 };
 
 // JSON: {"embodiment", "fps", "scale", "qpos_names", "qpos": [[...]], "valid",

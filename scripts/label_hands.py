@@ -14,19 +14,21 @@ Needs numpy and ffmpeg/ffprobe only (no OpenCV or PIL on the Debian image).
           per frame: frame_<F>.png (the whole frame, grid every 100 px) and,
           with --region, frame_<F>_crop.png (the region enlarged Z times, grid
           lines and pixel-coordinate ticks every STEP px of the video).
-  check   LABELS.json --out DIR [--zoom Z]
-          validates the file (fields, 21 points per hand inside the frame,
-          joint-order sanity) and draws the labels back as a skeleton on a
-          zoomed, gridded crop per hand (check_<F>_<side>.png) and one
-          montage of them all (check_all.png). Exit 1 on an error.
+  check   LABELS.json... [--out DIR] [--zoom Z]
+          validates each file (fields, 21 points per hand, visible ones inside
+          the frame, joint-order sanity: warnings) and, with --out, draws the
+          labels back as a skeleton on a zoomed, gridded crop per hand
+          (DIR/<stem>/check_<F>_<side>.png) and a montage (check_all.png).
+          Exit 1 on an error.
   import  NOTES.txt --video VIDEO --labeller WHO --out LABELS.json
           the labeller's notes as a label file: a line "frame F right|left"
           starts a hand, then 21 lines "J U V" (joint J in MediaPipe order,
           pixels), "J U V h" for a keypoint hidden and guessed (visible false);
           "#" starts a comment.
-  compare A.json B.json
-          two labelling passes of the same frames: the distance per keypoint
-          between them, mean and 90th percentile, in px and in hand boxes.
+  compare A.json B.json [A2.json B2.json ...]
+          pairs of labelling passes of the same frames: the distance per
+          keypoint (both passes visible) between them, mean and 90th
+          percentile, in px and in hand boxes, per hand and over all pairs.
 
 Coordinates are pixels of the video as displayed (ffmpeg applies the
 rotation), frame numbers the decoded frame index from 0.
@@ -325,26 +327,37 @@ def load_labels(file):
 
 
 def cmd_check(a):
-    labels = load_labels(a.labels)
+    failed = False
+    for file in a.labels:
+        failed |= not check_file(file, a)
+    if failed:
+        sys.exit(1)
+
+
+def check_file(file, a):
+    """Validates one label file and, with --out, draws it; False on an error."""
+    labels = load_labels(file)
     for field in ("video", "labeller", "frames"):
         if field not in labels:
-            fail(f"{a.labels}: field {field} is missing")
+            print(f"error: {file}: field {field} is missing")
+            return False
     path = os.path.join(DATA, labels["video"])
     if not os.path.exists(path):
-        fail(f"{a.labels}: video {labels['video']} is not in {DATA}")
+        print(f"error: {file}: video {labels['video']} is not in {DATA}")
+        return False
     w, h = video_size(path)
     errors, warnings = [], []
     seen = set()
     for i, fr in enumerate(labels["frames"]):
         f = fr.get("frame")
         if not isinstance(f, int) or f < 0 or f in seen:
-            errors.append(f"{a.labels}: frames[{i}].frame must be a new frame index, not {f!r}")
+            errors.append(f"{file}: frames[{i}].frame must be a new frame index, not {f!r}")
         seen.add(f)
         sides = [hd.get("side") for hd in fr.get("hands", [])]
         if len(sides) != len(set(sides)):
-            errors.append(f"{a.labels}: frame {f} labels two hands of one side")
+            errors.append(f"{file}: frame {f} labels two hands of one side")
         for k, hand in enumerate(fr.get("hands", [])):
-            e, wn = check_hand(f"{a.labels}: frame {f} hand {k} ({hand.get('side')})", hand, w, h)
+            e, wn = check_hand(f"{file}: frame {f} hand {k} ({hand.get('side')})", hand, w, h)
             errors += e
             warnings += wn
     for m in warnings:
@@ -352,21 +365,27 @@ def cmd_check(a):
     for m in errors:
         print("error: " + m)
     if errors:
-        sys.exit(1)
+        return False
+    n = sum(len(fr["hands"]) for fr in labels["frames"])
+    if a.out:
+        draw_labels(labels, path, os.path.join(a.out, os.path.splitext(os.path.basename(file))[0]), a)
+    print(f"{file}: {len(labels['frames'])} frames, {n} hands, {len(warnings)} warnings"
+          + (f"; drawings in {a.out}" if a.out else ""))
+    return True
+
+
+def draw_labels(labels, path, out, a):
     frames = read_frames(path, [fr["frame"] for fr in labels["frames"]])
-    os.makedirs(a.out, exist_ok=True)
+    os.makedirs(out, exist_ok=True)
     images = []
     for fr in labels["frames"]:
         for hand in fr["hands"]:
             img = draw_hand(frames[fr["frame"]], hand, a.zoom, a.step)
             text(img, 44, img.shape[0] - 16, f"f{fr['frame']} " + hand["side"][0].upper(), colour=(255, 255, 255))
-            write_png(os.path.join(a.out, f"check_{fr['frame']}_{hand['side']}.png"), img)
+            write_png(os.path.join(out, f"check_{fr['frame']}_{hand['side']}.png"), img)
             images.append(shrink(img, 2))
     if images:
-        write_png(os.path.join(a.out, "check_all.png"), montage(images, 3))
-    n = sum(len(fr["hands"]) for fr in labels["frames"])
-    print(f"{a.labels}: {len(labels['frames'])} frames, {n} hands, {len(warnings)} warnings; "
-          f"drawings in {a.out}")
+        write_png(os.path.join(out, "check_all.png"), montage(images, 3))
 
 
 def cmd_import(a):
@@ -402,24 +421,31 @@ def cmd_import(a):
 
 
 def cmd_compare(a):
-    first, second = load_labels(a.first), load_labels(a.second)
-    by_frame = {(fr["frame"], hd["side"]): hd for fr in second["frames"] for hd in fr["hands"]}
+    if len(a.files) % 2:
+        fail("compare takes pairs of label files: FIRST SECOND [FIRST SECOND ...]")
     dist, rel = [], []
-    for fr in first["frames"]:
-        for hd in fr["hands"]:
-            other = by_frame.get((fr["frame"], hd["side"]))
-            if other is None:
-                continue
-            p, q = np.array(hd["keypoints_2d"], float), np.array(other["keypoints_2d"], float)
-            both = np.array(hd.get("visible", [True] * JOINTS)) & np.array(other.get("visible", [True] * JOINTS))
-            box = max(1.0, float((p[both].max(0) - p[both].min(0)).max()))
-            d = np.linalg.norm(p - q, axis=1)[both]
-            print(f"frame {fr['frame']} {hd['side']}: {both.sum()} keypoints, box {box:.0f} px, "
-                  f"mean {d.mean():.1f} px, max {d.max():.1f} px (joint {int(np.argmax(np.where(both, np.linalg.norm(p - q, axis=1), -1)))})")
-            dist += list(d)
-            rel += list(d / box)
+    for first_file, second_file in zip(a.files[::2], a.files[1::2]):
+        first, second = load_labels(first_file), load_labels(second_file)
+        if first["video"] != second["video"]:
+            fail(f"{first_file} labels {first['video']}, {second_file} {second['video']}")
+        by_frame = {(fr["frame"], hd["side"]): hd for fr in second["frames"] for hd in fr["hands"]}
+        for fr in first["frames"]:
+            for hd in fr["hands"]:
+                other = by_frame.get((fr["frame"], hd["side"]))
+                if other is None:
+                    continue
+                p, q = np.array(hd["keypoints_2d"], float), np.array(other["keypoints_2d"], float)
+                # Keypoints both passes saw; the box as hands_bench scores (hands/hand_labels.cc).
+                both = np.array(hd.get("visible", [True] * JOINTS)) & np.array(other.get("visible", [True] * JOINTS))
+                box = max(1.0, float((p[both].max(0) - p[both].min(0)).max()))
+                d = np.linalg.norm(p - q, axis=1)
+                worst = int(np.argmax(np.where(both, d, -1)))
+                print(f"{first['video']} frame {fr['frame']} {hd['side']}: {both.sum()} keypoints, box {box:.0f} px, "
+                      f"mean {d[both].mean():.1f} px ({d[both].mean() / box:.3f} box), max {d[worst]:.1f} px (joint {worst})")
+                dist += list(d[both])
+                rel += list(d[both] / box)
     if not dist:
-        fail(f"{a.first} and {a.second} share no labelled hand")
+        fail("the pairs share no labelled hand")
     dist, rel = np.array(dist), np.array(rel)
     print(f"all: {len(dist)} keypoints; distance mean {dist.mean():.2f} px, 90th percentile "
           f"{np.percentile(dist, 90):.2f} px; in hand boxes mean {rel.mean():.3f}, 90th percentile "
@@ -444,8 +470,8 @@ def main():
     e.add_argument("--zoom", type=int, default=4)
     e.add_argument("--step", type=int, default=0, help="grid step in video px (0: by zoom)")
     c = sub.add_parser("check")
-    c.add_argument("labels")
-    c.add_argument("--out", required=True)
+    c.add_argument("labels", nargs="+")
+    c.add_argument("--out", help="draw the labels into OUT/<file stem>/ (without: validate only)")
     c.add_argument("--zoom", type=int, default=0, help="0: fit each hand into about 900 px")
     c.add_argument("--step", type=int, default=0, help="grid step in video px (0: by zoom)")
     i = sub.add_parser("import")
@@ -454,8 +480,7 @@ def main():
     i.add_argument("--labeller", required=True)
     i.add_argument("--out", required=True)
     m = sub.add_parser("compare")
-    m.add_argument("first")
-    m.add_argument("second")
+    m.add_argument("files", nargs="+", help="FIRST SECOND [FIRST SECOND ...]")
     a = ap.parse_args()
     {"sheet": cmd_sheet, "extract": cmd_extract, "check": cmd_check, "import": cmd_import,
      "compare": cmd_compare}[a.cmd](a)

@@ -17,7 +17,8 @@
 //   hands_bench labels         PCK at 0.1 and 0.2 of the hand box against the
 //                              hand-made labels in bench/hand_labels/*.json
 //                              (hands/hand_labels.h), for the models alone,
-//                              the tracker and the fit; the tracker's swaps.
+//                              the tracker and the fit; missed hands of each,
+//                              left/right swaps of the models and the tracker.
 //   hands_bench jumps [frames] the largest wrist moves between frames on the
 //                              bundled positives and what PnP did there.
 // [frames] limits each video to its first frames (default: all).
@@ -447,9 +448,7 @@ void Jumps(std::int64_t frames) {
 }
 
 // PCK against hand-made labels (bench/hand_labels/*.json, hands/hand_labels.h)
-// for the detector alone (every hand the models gave on the frame), the
-// tracker (the tracks' hands with their sides) and the fit (the fitted
-// joints' projection), per video; left/right swaps of the tracker.
+// per video, scored by ScoreLabels: the models alone, the tracker, the fit.
 void Labels() {
   const std::filesystem::path dir = std::filesystem::path(DOASIDO_SOURCE_DIR) / "bench/hand_labels";
   std::vector<std::filesystem::path> files;
@@ -463,37 +462,19 @@ void Labels() {
     std::printf("no label files in %s (see hands/hand_labels.h for the format)\n", dir.c_str());
     return;
   }
-  std::printf("%-22s %6s %6s %15s %15s %15s %6s %6s\n", "video", "frames", "hands",
-              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed", "swaps");
+  std::printf("%-22s %6s %6s %15s %15s %15s %12s %9s\n", "video", "frames", "hands",
+              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed m/t/f", "swaps m/t");
   for (const auto& file : files) {
     const HandLabels labels = ReadHandLabels(file);
     int last = 0;
     for (const auto& f : labels.frames) last = std::max(last, f.frame);
     const Run r = RunVideo(kData + "/" + labels.video, last + 1);
-    const Camera cam = Camera::FromK(r.result.intrinsics.K, 0, 0);
-    PckScore models, tracker, fit;
-    for (const LabelledFrame& l : labels.frames) {
-      const int f = l.frame - static_cast<int>(r.detected.first_frame);
-      if (f < 0 || f >= static_cast<int>(r.detected.frames.size())) continue;
-      std::vector<PredictedHand> raw, tracked, fitted;
-      for (const HandObservation& o : r.detected.frames[f]) {
-        raw.push_back({.side = o.p_right >= 0.5 ? Side::kRight : Side::kLeft, .uv = o.uv});
-      }
-      for (const FittedTrack& t : r.result.tracks) {
-        const int k = f - t.first_frame;
-        if (k < 0 || k >= static_cast<int>(t.joints.size())) continue;
-        if (t.observations[k]) tracked.push_back({.side = t.side, .uv = t.observations[k]->uv});
-        PredictedHand p{.side = t.side};
-        for (int j = 0; j < kJoints; ++j) p.uv[j] = cam.Project(t.joints[k][j]);
-        fitted.push_back(p);
-      }
-      models.Add(ScoreFrame(l, raw));
-      tracker.Add(ScoreFrame(l, tracked));
-      fit.Add(ScoreFrame(l, fitted));
-    }
-    std::printf("%-22s %6zu %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %6d %6d\n", file.stem().c_str(),
-                labels.frames.size(), fit.hands, models.Pck01(), models.Pck02(), tracker.Pck01(),
-                tracker.Pck02(), fit.Pck01(), fit.Pck02(), fit.missed, tracker.swaps);
+    const LabelScores s = ScoreLabels(labels, r.detected, r.result);
+    std::printf("%-22s %6d %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %8d/%d/%d %7d/%d\n",
+                file.stem().c_str(), s.labelled_frames, s.fit.hands, s.models.Pck01(),
+                s.models.Pck02(), s.tracker.Pck01(), s.tracker.Pck02(), s.fit.Pck01(),
+                s.fit.Pck02(), s.models.missed, s.tracker.missed, s.fit.missed, s.models.swaps,
+                s.tracker.swaps);
     std::fflush(stdout);
   }
 }

@@ -6,6 +6,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/file_text.h"
+#include "core/geometry.h"
 
 namespace doasido::hands {
 namespace {
@@ -108,6 +109,33 @@ PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand
       s.within_01 += d <= 0.1 * box ? 1 : 0;
       s.within_02 += d <= 0.2 * box ? 1 : 0;
     }
+  }
+  return s;
+}
+
+LabelScores ScoreLabels(const HandLabels& labels, const DetectedFrames& detected,
+                        const HandsResult& result) {
+  const Camera cam = Camera::FromK(result.intrinsics.K, 0, 0);
+  LabelScores s;
+  for (const LabelledFrame& l : labels.frames) {
+    const int f = l.frame - static_cast<int>(detected.first_frame);
+    if (f < 0 || f >= static_cast<int>(detected.frames.size())) continue;
+    ++s.labelled_frames;
+    std::vector<PredictedHand> raw, tracked, fitted;
+    for (const HandObservation& o : detected.frames[f]) {
+      raw.push_back({.side = o.p_right >= 0.5 ? Side::kRight : Side::kLeft, .uv = o.uv});
+    }
+    for (const FittedTrack& t : result.tracks) {
+      const int k = f - t.first_frame;
+      if (k < 0 || k >= static_cast<int>(t.joints.size())) continue;
+      if (t.observations[k]) tracked.push_back({.side = t.side, .uv = t.observations[k]->uv});
+      PredictedHand p{.side = t.side};
+      for (int j = 0; j < kJoints; ++j) p.uv[j] = cam.Project(t.joints[k][j]);
+      fitted.push_back(p);
+    }
+    s.models.Add(ScoreFrame(l, raw));
+    s.tracker.Add(ScoreFrame(l, tracked));
+    s.fit.Add(ScoreFrame(l, fitted));
   }
   return s;
 }

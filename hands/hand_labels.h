@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "hands/hand_observation.h"
+#include "hands/hand_reconstruction.h"
 
 namespace doasido::hands {
 
@@ -66,5 +67,17 @@ struct PckScore {
 // once); a hand without one within its box size counts as missed, its
 // keypoints as outside every threshold.
 PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand>& predicted);
+
+// One video's labels scored three ways (issue 38): every hand the models
+// gave on the frame (side from their handedness), the tracker's hands
+// (tracks' observations with the tracks' sides) and the fit (the fitted
+// joints projected with the result's K). Labelled frames outside
+// `detected` are skipped (labelled_frames counts those scored).
+struct LabelScores {
+  PckScore models, tracker, fit;
+  int labelled_frames = 0;
+};
+LabelScores ScoreLabels(const HandLabels& labels, const DetectedFrames& detected,
+                        const HandsResult& result);
 
 }  // namespace doasido::hands

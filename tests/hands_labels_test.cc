@@ -1,0 +1,90 @@
+// The hand-made labels of real frames (bench/hand_labels/, made with
+// scripts/label_hands.py) and the keypoint accuracy the hands stage reaches
+// on them: every label file parses and covers what issue 38 asks (36 frames
+// from 6 videos); on asl_hand's first labelled frames the models, the
+// tracker and the fit stay above a PCK floor.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "filters/hand_landmarker.h"
+#include "hands/hand_labels.h"
+#include "hands/hand_reconstruction.h"
+#include "test_util.h"
+
+namespace doasido::hands {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<fs::path> LabelFiles() {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(testing::SourceDir() / "bench/hand_labels")) {
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  }
+  return files;
+}
+
+TEST(HandLabels, EveryFileParsesAndTheSetCoversSixVideos) {
+  std::set<std::string> videos;
+  int frames = 0;
+  for (const fs::path& file : LabelFiles()) {
+    const HandLabels labels = ReadHandLabels(file);
+    EXPECT_TRUE(fs::exists(testing::SharedData() / labels.video)) << file;
+    EXPECT_FALSE(labels.labeller.empty()) << file;
+    videos.insert(labels.video);
+    frames += static_cast<int>(labels.frames.size());
+    for (const LabelledFrame& f : labels.frames) {
+      ASSERT_FALSE(f.hands.empty()) << file << " frame " << f.frame;
+      for (const LabelledHand& h : f.hands) {
+        int visible = 0;
+        for (int j = 0; j < kJoints; ++j) {
+          visible += h.visible[j] ? 1 : 0;
+          EXPECT_GE(h.uv[j].minCoeff(), 0.0) << file << " frame " << f.frame << " joint " << j;
+        }
+        EXPECT_GE(visible, 8) << file << " frame " << f.frame;  // a hand, not a guess
+      }
+    }
+  }
+  EXPECT_GE(videos.size(), 6u);
+  EXPECT_GE(frames, 36);
+}
+
+// asl_hand frames 0 and 93 (one right hand, palm to the camera): measured
+// PCK@0.2 is 1.0 for the models, the tracker and the fit, PCK@0.1 about
+// 0.8-0.9 (docs/benchmarks.md). The labels' own spread between two passes is
+// 0.026 hand boxes at the 90th percentile (bench/hand_labels/README.md), so
+// at 0.2 the labels cost nothing: a floor of 0.9 fails on a real regression
+// (a mirrored or swapped hand scores about 0.2, a lost hand 0), and on no
+// label noise.
+TEST(HandLabels, AslHandStaysAboveTheFloorForModelsTrackerAndFit) {
+  std::string why;
+  if (!filters::HandLandmarkerAvailable(&why)) GTEST_SKIP() << "hand models unavailable: " << why;
+  HandLabels labels = ReadHandLabels(testing::SourceDir() / "bench/hand_labels/asl_hand.json");
+  std::erase_if(labels.frames, [](const LabelledFrame& f) { return f.frame > 93; });
+  ASSERT_EQ(labels.frames.size(), 2u);
+  const HandsConfig config;
+  filters::HandLandmarker landmarker({.max_hands = config.max_hands,
+                                      .max_side = config.max_side,
+                                      .palm_every = config.palm_every,
+                                      .lost_search = config.palm_every});
+  const std::string video = (testing::SharedData() / labels.video).string();
+  const DetectedFrames detected =
+      DetectVideo(video, {.last_frame = 93, .clip = video}, config.max_side, landmarker);
+  const Intrinsics in{.K = KFromFov(detected.width, detected.height, config.default_fov_deg),
+                      .assumed = true,
+                      .source = kIntrinsicsFromDefault};
+  const LabelScores s = ScoreLabels(labels, detected, ReconstructHands(detected, in, config));
+  std::printf("asl_hand 0, 93: PCK@0.1/0.2 models %.3f/%.3f, tracker %.3f/%.3f, fit %.3f/%.3f\n",
+              s.models.Pck01(), s.models.Pck02(), s.tracker.Pck01(), s.tracker.Pck02(),
+              s.fit.Pck01(), s.fit.Pck02());
+  EXPECT_EQ(s.labelled_frames, 2);
+  for (const PckScore* p : {&s.models, &s.tracker, &s.fit}) {
+    EXPECT_EQ(p->missed, 0);
+    EXPECT_EQ(p->swaps, 0);
+    EXPECT_GE(p->Pck02(), 0.9);
+  }
+}
+
+}  // namespace
+}  // namespace doasido::hands

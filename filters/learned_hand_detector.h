@@ -53,6 +53,10 @@ struct LearnedDetectorConfig {
   // The models' runtime: "native" (in process, XNNPACK) or "wasm" (Node,
   // TFLite's WebAssembly runtime; the reference). filters/hand_models.h.
   std::string backend = "native";
+  // Which models of @mediapipe/hands: "full", "lite" or "lite_landmark"
+  // (fewer multiply-adds, other keypoints: filters/hand_models.h,
+  // docs/hand_models.md has what each changes on the labelled footage).
+  std::string models = "full";
   // Run the models only after the cheap verdicts (shot boundary and camera
   // motion, judged on the built-in detector's boxes in the one decode) keep
   // the clip, and only on its kept shot: filters/deferred_hand_models.h.
@@ -80,7 +84,7 @@ struct LearnedDetectorConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
                                                 min_score, fingertip_reach, hand_thickness,
-                                                min_object_edges, hold_samples, border_reach, backend,
+                                                min_object_edges, hold_samples, border_reach, backend, models,
                                                 after_cheap_verdicts, keep_mb, palm_every,
                                                 still_sample_fps, still_changed_fraction)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").

@@ -95,7 +95,11 @@ TEST(HandModels, NativeEqualsWebAssemblyOnEveryRealVideo) {
   ExpectNativeEqualsWebAssembly(kModelsFull);
 }
 
-// The lite pair (both lite files; lite_landmark mixes the two pairs' files).
+// The filters' default (the full palm detector, the lite landmark model).
+TEST(HandModels, LiteLandmarkNativeEqualsWebAssemblyOnEveryRealVideo) {
+  ExpectNativeEqualsWebAssembly(kModelsLiteLandmark);
+}
+
 TEST(HandModels, LiteModelsNativeEqualsWebAssemblyOnEveryRealVideo) {
   ExpectNativeEqualsWebAssembly(kModelsLite);
 }

@@ -104,6 +104,17 @@ TEST(HandModels, LiteModelsNativeEqualsWebAssemblyOnEveryRealVideo) {
   ExpectNativeEqualsWebAssembly(kModelsLite);
 }
 
+// CheckConfig refuses `config` naming `field`.
+void ExpectRefusedNaming(const LearnedDetectorConfig& config, const std::string& field) {
+  try {
+    CheckConfig(config, "filters_analyze.learned_detector");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_config");
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+  }
+}
+
 TEST(HandModels, TheModelsNamesPickTheirFilesAndAnUnknownOneIsRefused) {
   EXPECT_EQ(PalmModelFile(kModelsFull), "palm_detection_full.tflite");
   EXPECT_EQ(LandmarkModelFile(kModelsFull), "hand_landmark_full.tflite");
@@ -113,13 +124,7 @@ TEST(HandModels, TheModelsNamesPickTheirFilesAndAnUnknownOneIsRefused) {
   EXPECT_EQ(LandmarkModelFile(kModelsLiteLandmark), "hand_landmark_lite.tflite");
   LearnedDetectorConfig config;
   config.models = "tiny";
-  try {
-    CheckConfig(config, "filters_analyze.learned_detector");
-    FAIL() << "accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), "bad_config");
-    EXPECT_NE(std::string(e.what()).find("models"), std::string::npos) << e.what();
-  }
+  ExpectRefusedNaming(config, "models");
   EXPECT_THROW(MakeHandModels(kBackendNative, "clip", true, nullptr, "tiny"), Error);
 }
 
@@ -185,13 +190,7 @@ TEST(TfliteReader, HalfPrecisionConvertsExactly) {
 TEST(HandModels, AnUnknownBackendIsRefusedWhenLoaded) {
   LearnedDetectorConfig config;
   config.backend = "gpu";
-  try {
-    CheckConfig(config, "filters_analyze.learned_detector");
-    FAIL() << "accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), "bad_config");
-    EXPECT_NE(std::string(e.what()).find("backend"), std::string::npos);
-  }
+  ExpectRefusedNaming(config, "backend");
 }
 
 }  // namespace

@@ -17,7 +17,10 @@
 //                hands without a model run): model ms per sample of the
 //                pass, and the share of samples the models saw.
 //
-// Usage: filters_hand_models_bench [samples per video=40]
+// The model pair (full or lite) is the second argument; each model alone
+// is timed for both pairs.
+//
+// Usage: filters_hand_models_bench [samples per video=40] [full|lite=full]
 #include <time.h>
 
 #include <algorithm>
@@ -67,8 +70,11 @@ Sampled Samples(const std::filesystem::path& video, int count) {
 // The analysis pass's detector on the samples (it sees only the sample
 // frames, which is all it looks at): model CPU ms per sample, and how many
 // samples ran the models.
-void Analysis(const Sampled& s, double* ms_per_sample, int* model_samples) {
-  LearnedHandDetector detector(LearnedDetectorConfig{}, "");
+void Analysis(const Sampled& s, const std::string& models, double* ms_per_sample,
+              int* model_samples) {
+  LearnedDetectorConfig config;
+  config.models = models;
+  LearnedHandDetector detector(config, "");
   detector.Begin(s.geometry);
   AnalysisFrame frame;
   for (std::size_t i = 0; i < s.frames.size(); ++i) {
@@ -118,16 +124,17 @@ void PerModel(HandModels& models, int runs, double* palm_ms, double* landmark_ms
 
 int Main(int argc, char** argv) {
   const int per_video = argc > 1 ? std::atoi(argv[1]) : 40;
+  const std::string models = argc > 2 ? argv[2] : kModelsFull;
   const std::filesystem::path dir = std::filesystem::path(DOASIDO_SHARED_DATA) / "videos";
   const int palm_every = LearnedDetectorConfig{}.palm_every;
-  HandLandmarker every_palm({.backend = kBackendNative, .palm_every = 1});
-  HandLandmarker native({.backend = kBackendNative, .palm_every = palm_every});
+  HandLandmarker every_palm({.backend = kBackendNative, .models = models, .palm_every = 1});
+  HandLandmarker native({.backend = kBackendNative, .models = models, .palm_every = palm_every});
   std::string why;
   const bool have_wasm = WasmHandModelsAvailable(&why);
   std::unique_ptr<HandLandmarker> wasm;
   if (have_wasm) {
     wasm = std::make_unique<HandLandmarker>(
-        HandLandmarkerOptions{.backend = kBackendWasm, .palm_every = palm_every});
+        HandLandmarkerOptions{.backend = kBackendWasm, .models = models, .palm_every = palm_every});
   }
   std::vector<std::filesystem::path> videos;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
@@ -135,9 +142,9 @@ int Main(int argc, char** argv) {
     if (ext == ".mp4" || ext == ".avi") videos.push_back(e.path());
   }
   std::sort(videos.begin(), videos.end());
-  std::printf("MediaPipe Hands, CPU ms per sample (palm + landmark per hand), one core; "
-              "tracked: palm detector every %d samples while a hand is tracked\n",
-              palm_every);
+  std::printf("MediaPipe Hands (%s models), CPU ms per sample (palm + landmark per hand), one "
+              "core; tracked: palm detector every %d samples while a hand is tracked\n",
+              models.c_str(), palm_every);
   std::printf("%-20s %7s %6s | %10s | %10s %10s | %10s %7s | %10s | %7s\n", "video", "samples",
               "hands", "every palm", "tracked", "tracked all", "analysis", "modelled", "wasm trkd",
               "speedup");
@@ -159,7 +166,7 @@ int Main(int argc, char** argv) {
     if (wasm) Measure(*wasm, samples, &w);
     double analysis_ms = 0;
     int modelled = 0;
-    Analysis(sampled, &analysis_ms, &modelled);
+    Analysis(sampled, models, &analysis_ms, &modelled);
     std::printf("%-20s %7d %6.2f | %10.2f | %10.2f %10.2f | %10.2f %6.0f%% | %10.2f | %6.1fx\n",
                 video.filename().string().c_str(), n.samples, double(n.hands) / n.samples,
                 e.model_ms / e.samples, n.model_ms / n.samples, n.detect_ms / n.samples,
@@ -178,13 +185,16 @@ int Main(int argc, char** argv) {
               100.0 * all_modelled / ns, wasm ? all_wasm.model_ms / all_wasm.samples : 0.0,
               wasm ? all_wasm.model_ms / all_native.model_ms : 0.0);
   if (!wasm) std::printf("(no wasm runtime to compare: %s)\n", why.c_str());
-  double palm[2] = {0, 0}, landmark[2] = {0, 0};
-  PerModel(*MakeNativeHandModels(""), 30, &palm[0], &landmark[0]);
-  if (have_wasm) PerModel(*MakeWasmHandModels(""), 30, &palm[1], &landmark[1]);
-  std::printf("\nEach model alone, 30 runs: CPU ms per run\n%-10s %8s %8s\n", "", "native",
+  std::printf("\nEach model alone, 30 runs: CPU ms per run\n%-15s %8s %8s\n", "", "native",
               "wasm");
-  std::printf("%-10s %8.2f %8.2f\n%-10s %8.2f %8.2f\n", "palm", palm[0], palm[1], "landmark",
-              landmark[0], landmark[1]);
+  for (const char* pair : {kModelsFull, kModelsLite}) {
+    double palm[2] = {0, 0}, landmark[2] = {0, 0};
+    PerModel(*MakeNativeHandModels("", pair), 30, &palm[0], &landmark[0]);
+    if (have_wasm) PerModel(*MakeWasmHandModels("", pair), 30, &palm[1], &landmark[1]);
+    std::printf("%-15s %8.2f %8.2f\n%-15s %8.2f %8.2f\n", ("palm " + std::string(pair)).c_str(),
+                palm[0], palm[1], ("landmark " + std::string(pair)).c_str(), landmark[0],
+                landmark[1]);
+  }
   if (wasm && all_wasm.hands != all_native.hands) {
     std::printf("note: the runtimes found %d and %d hands\n", all_native.hands, all_wasm.hands);
   }

@@ -5,10 +5,11 @@
 // Both sides are counted in frames per CPU second (user + system of the
 // process and every child it waited for: the learned hand detector's Node
 // process included). Each side runs `repeats` times, alternating; the
-// fastest run counts. Three configurations of filters_analyze: no detector
+// fastest run counts. The configurations of filters_analyze: no detector
 // (use_builtin_detector = false: the price of the filters themselves), the
 // default learned hand detector (MediaPipe Hands, 5 samples/s, native
-// runtime), the same on the WebAssembly runtime (the reference), and no
+// runtime, the lite landmark model), the same with the full models, the
+// default on the WebAssembly runtime (the reference), and no
 // detector with decode = "fast" (no deblocking, YUV scaled straight to
 // analysis size: not PySceneDetect's pixels).
 // Each stage's share is its summed run time (stage_runs.duration_s, wall
@@ -143,6 +144,7 @@ void DemoMix(const fs::path& dir, int repeats) {
   const std::vector<DemoClip> clips = DemoClips(csv, synth / "videos");
   const std::vector<std::pair<std::string, std::string>> configs = {
       {"learned detector (default)", ""},
+      {"learned detector, full models", "[filters_analyze.learned_detector]\nmodels = \"full\"\n"},
       {"learned detector, wasm", "[filters_analyze.learned_detector]\nbackend = \"wasm\"\n"}};
   std::vector<PipelineRun> best(configs.size());
   double ffmpeg = 1e30;
@@ -194,6 +196,9 @@ int main(int argc, char** argv) {
   const std::vector<std::pair<std::string, std::string>> configs = {
       {"no detector", "[filters_analyze]\nuse_builtin_detector = false\n"},
       {"learned detector (default)", "[filters_analyze]\nhand_detector = \"learned\"\n"},
+      {"learned detector, full models",
+       "[filters_analyze]\nhand_detector = \"learned\"\n"
+       "[filters_analyze.learned_detector]\nmodels = \"full\"\n"},
       {"learned detector, wasm",
        "[filters_analyze]\nhand_detector = \"learned\"\n"
        "[filters_analyze.learned_detector]\nbackend = \"wasm\"\n"},

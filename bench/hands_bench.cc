@@ -21,7 +21,8 @@
 //                              left/right swaps of the models and the tracker.
 //   hands_bench jumps [frames] the largest wrist moves between frames on the
 //                              bundled positives and what PnP did there.
-// [frames] limits each video to its first frames (default: all).
+// [frames] limits each video to its first frames (default: all); a third
+// argument picks the hand models ([hands] models: full, lite, lite_landmark).
 #include <dirent.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -84,9 +85,12 @@ double CpuSeconds() {
   return s;
 }
 
+std::string g_models = HandsConfig{}.models;  // the third argument
+
 filters::HandLandmarker& Landmarker() {
   static filters::HandLandmarker landmarker({.max_hands = HandsConfig{}.max_hands,
                                              .max_side = HandsConfig{}.max_side,
+                                             .models = g_models,
                                              .palm_every = HandsConfig{}.palm_every,
                                              .lost_search = HandsConfig{}.palm_every});
   return landmarker;
@@ -483,6 +487,7 @@ int main(int argc, char** argv) {
   InitLogging("warn");
   const std::string mode = argc > 1 ? argv[1] : "real";
   const long arg = argc > 2 ? std::atol(argv[2]) : 0;
+  if (argc > 3) g_models = argv[3];
   if (mode == "real")
     Real(arg);
   else if (mode == "dex")
@@ -494,7 +499,8 @@ int main(int argc, char** argv) {
   else if (mode == "synth")
     Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
-    std::fprintf(stderr, "usage: hands_bench real|dex|jumps|labels|synth [frames|clips]\n");
+    std::fprintf(stderr,
+                 "usage: hands_bench real|dex|jumps|labels|synth [frames|clips] [models]\n");
     return 2;
   }
   return 0;

@@ -8,6 +8,7 @@
 #include "filters/analyze_stage.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
+#include "filters/hand_models.h"
 #include "filters/learned_hand_detector.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
@@ -164,6 +165,7 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
   RequireInRange(section, "hold_samples", c.hold_samples, 0, 100);
   RequireFraction(section, "border_reach", c.border_reach);
   RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
+  RequireOneOf(section, "models", c.models, {kModelsFull, kModelsLite, kModelsLiteLandmark});
   RequireInRange(section, "keep_mb", c.keep_mb, 1, 1e6);
   RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
   RequireInRange(section, "still_sample_fps", c.still_sample_fps, 0.01, 1000);

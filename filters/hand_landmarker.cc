@@ -183,7 +183,7 @@ bool HandLandmarkerAvailable(std::string* why) {
 
 HandLandmarker::HandLandmarker(HandLandmarkerOptions options)
     : options_(std::move(options)),
-      models_(MakeHandModels(options_.backend, options_.clip, true, &note_)),
+      models_(MakeHandModels(options_.backend, options_.clip, true, &note_, options_.models)),
       anchors_(PalmAnchors()) {}
 
 HandLandmarker::~HandLandmarker() = default;

@@ -50,6 +50,8 @@ struct HandLandmarkerOptions {
   // Which runtime runs the models: "native" or "wasm" (kBackendNative,
   // kBackendWasm in filters/hand_models.h).
   std::string backend = "native";
+  // Which models: "full", "lite" or "lite_landmark" (filters/hand_models.h).
+  std::string models = "full";
   // MediaPipe's VIDEO mode runs the palm detector on every frame where
   // fewer than max_hands hands are tracked. Here, while at least one hand is
   // tracked, it runs on every palm_every-th frame only (1: every frame, as

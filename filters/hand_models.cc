@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <regex>
 #include <sstream>
@@ -16,7 +17,6 @@ namespace doasido::filters {
 
 namespace {
 
-constexpr const char* kLandmarkFile = "hand_landmark_full.tflite";
 constexpr const char* kPackedAssets = "hands_solution_packed_assets.data";
 constexpr const char* kPackedLoader = "hands_solution_packed_assets_loader.js";
 
@@ -36,20 +36,21 @@ std::size_t OutputNamed(const TfliteModel& m, const std::string& name) {
   throw Error("bad_model", "no output named " + name, {.file = m.path});
 }
 
-// The parsed models, read once per process and shared by every thread's
-// graphs (XNNPACK reads the weights from them).
+// The parsed models of one pair, read once per process and shared by every
+// thread's graphs (XNNPACK reads the weights from them).
 struct ParsedModels {
   std::shared_ptr<const TfliteModel> palm, landmark;
 };
-ParsedModels LoadParsedModels() {
+ParsedModels LoadParsedModels(const std::string& pair) {
   static std::mutex mutex;
-  static ParsedModels models;
+  static std::map<std::string, ParsedModels> loaded;
   std::lock_guard<std::mutex> lock(mutex);
+  ParsedModels& models = loaded[pair];
   if (!models.palm) {
     const std::filesystem::path dir = MediapipeHandsDir();
-    const auto [begin, end] = PalmModelRange(dir);
+    const auto [begin, end] = PalmModelRange(dir, pair);
     models.palm = std::make_shared<TfliteModel>(ReadTfliteModel(dir / kPackedAssets, begin, end));
-    models.landmark = std::make_shared<TfliteModel>(ReadTfliteModel(dir / kLandmarkFile));
+    models.landmark = std::make_shared<TfliteModel>(ReadTfliteModel(dir / LandmarkModelFile(pair)));
   }
   return models;
 }
@@ -77,10 +78,11 @@ struct ThreadGraphs {
 
 class NativeHandModels : public HandModels {
  public:
-  NativeHandModels() {
-    thread_local std::unique_ptr<ThreadGraphs> graphs;
-    if (!graphs) graphs = std::make_unique<ThreadGraphs>(LoadParsedModels());
-    graphs_ = graphs.get();
+  explicit NativeHandModels(const std::string& pair) {
+    thread_local std::map<std::string, std::unique_ptr<ThreadGraphs>> graphs;
+    std::unique_ptr<ThreadGraphs>& mine = graphs[pair];
+    if (!mine) mine = std::make_unique<ThreadGraphs>(LoadParsedModels(pair));
+    graphs_ = mine.get();
   }
   void Palm(const float* input, PalmOutput* out) override {
     const double start = ThreadCpuMs();
@@ -114,26 +116,42 @@ class NativeHandModels : public HandModels {
 
 std::filesystem::path MediapipeHandsDir() { return NpmDir() / "node_modules" / "@mediapipe/hands"; }
 
-std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& hands_dir) {
+std::string PalmModelFile(const std::string& models) {
+  if (models != kModelsFull && models != kModelsLite && models != kModelsLiteLandmark) {
+    throw Error("bad_config",
+                "hand models must be full, lite or lite_landmark, not " + models,
+                {.field = "models"});
+  }
+  return std::string("palm_detection_") + (models == kModelsLite ? "lite" : "full") + ".tflite";
+}
+
+std::string LandmarkModelFile(const std::string& models) {
+  PalmModelFile(models);  // checks the name
+  return std::string("hand_landmark_") + (models == kModelsFull ? "full" : "lite") + ".tflite";
+}
+
+std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& hands_dir,
+                                                   const std::string& models) {
+  const std::string palm = PalmModelFile(models);
   const std::filesystem::path loader = hands_dir / kPackedLoader;
   std::ifstream in(loader);
   std::stringstream text;
   text << in.rdbuf();
   const std::string s = text.str();
   std::smatch m;
-  static const std::regex range(
-      R"re(palm_detection_full\.tflite", "start": (\d+), "end": (\d+))re");
+  const std::regex range("/" + std::regex_replace(palm, std::regex("\\."), "\\.") +
+                         R"re(", "start": (\d+), "end": (\d+))re");
   if (!std::regex_search(s, m, range)) {
     throw Error("hand_detector_unavailable",
-                "palm_detection_full.tflite is not listed in the @mediapipe/hands loader",
-                {.file = loader.string()});
+                palm + " is not listed in the @mediapipe/hands loader", {.file = loader.string()});
   }
   return {std::stoull(m[1].str()), std::stoull(m[2].str())};
 }
 
-bool HandModelFilesAvailable(std::string* why) {
+bool HandModelFilesAvailable(std::string* why, const std::string& models) {
   const std::filesystem::path dir = MediapipeHandsDir();
-  for (const char* file : {kLandmarkFile, kPackedAssets, kPackedLoader}) {
+  for (const std::string& file : {LandmarkModelFile(models), std::string(kPackedAssets),
+                                  std::string(kPackedLoader)}) {
     if (!std::filesystem::exists(dir / file)) {
       if (why) {
         *why = (dir / file).string() +
@@ -145,13 +163,14 @@ bool HandModelFilesAvailable(std::string* why) {
   return true;
 }
 
-std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip) {
+std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip,
+                                                 const std::string& models) {
   std::string why;
-  if (!HandModelFilesAvailable(&why)) {
+  if (!HandModelFilesAvailable(&why, models)) {
     throw Error("hand_detector_unavailable", why, {.clip = clip});
   }
   try {
-    return std::make_unique<NativeHandModels>();
+    return std::make_unique<NativeHandModels>(models);
   } catch (const Error& e) {
     throw Error("hand_detector_unavailable", "the native hand models cannot load: " + e.message(),
                 {.clip = clip, .file = e.site().file});
@@ -159,17 +178,19 @@ std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip) {
 }
 
 std::unique_ptr<HandModels> MakeHandModels(const std::string& backend, const std::string& clip,
-                                           bool fallback, std::string* note) {
-  if (backend == kBackendWasm) return MakeWasmHandModels(clip);
+                                           bool fallback, std::string* note,
+                                           const std::string& models) {
+  PalmModelFile(models);  // a bad name is the config's error, not a missing runtime
+  if (backend == kBackendWasm) return MakeWasmHandModels(clip, models);
   if (backend != kBackendNative) {
     throw Error("bad_config", "hand model backend must be native or wasm, not " + backend,
                 {.clip = clip, .field = "backend"});
   }
   try {
-    return MakeNativeHandModels(clip);
+    return MakeNativeHandModels(clip, models);
   } catch (const Error& e) {
-    if (!fallback) throw;
-    auto wasm = MakeWasmHandModels(clip);
+    if (!fallback || e.code() == "bad_config") throw;
+    auto wasm = MakeWasmHandModels(clip, models);
     if (note) *note = std::string(e.what()) + "; using the WebAssembly runtime instead";
     return wasm;
   }

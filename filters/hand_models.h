@@ -11,9 +11,10 @@
 // post-processing (filters/hand_landmarker.cc) is shared.
 //
 // The model files come from the npm package @mediapipe/hands in NpmDir()
-// (core/data_dirs.h): hand_landmark_full.tflite, and
-// palm_detection_full.tflite packed in hands_solution_packed_assets.data at
-// the byte range its loader script lists.
+// (core/data_dirs.h), in two variants (kModelsFull, kModelsLite):
+// hand_landmark_<variant>.tflite, and palm_detection_<variant>.tflite packed
+// in hands_solution_packed_assets.data at the byte range its loader script
+// lists.
 #pragma once
 
 #include <filesystem>
@@ -30,6 +31,14 @@ inline constexpr int kPalmValues = 18;  // box (cx, cy, w, h) + 7 keypoints (x, 
 
 inline constexpr const char* kBackendNative = "native";
 inline constexpr const char* kBackendWasm = "wasm";
+
+// Which of the models the package ships run, same inputs and outputs:
+// "full" (palm detector 344 M multiply-adds, landmark model 331 M), "lite"
+// (289 M and 146 M; other weights, so other palms and keypoints), or
+// "lite_landmark" (the full palm detector, the lite landmark model).
+inline constexpr const char* kModelsFull = "full";
+inline constexpr const char* kModelsLite = "lite";
+inline constexpr const char* kModelsLiteLandmark = "lite_landmark";
 
 struct PalmOutput {
   std::vector<float> regressors;  // kPalmAnchors x kPalmValues, input pixels about the anchor
@@ -54,24 +63,33 @@ class HandModels {
   virtual const char* backend() const = 0;
 };
 
-// The runtime named `backend` ("native" or "wasm"). Throws
+// The runtime named `backend` ("native" or "wasm") running the model pair
+// `models` (kModelsFull or kModelsLite). Throws
 // Error("hand_detector_unavailable") saying what is missing; with
 // `fallback`, a native runtime that cannot load gives the wasm one and
 // `note` says why.
 std::unique_ptr<HandModels> MakeHandModels(const std::string& backend, const std::string& clip,
-                                           bool fallback = true, std::string* note = nullptr);
-std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip);
-std::unique_ptr<HandModels> MakeWasmHandModels(const std::string& clip);
+                                           bool fallback = true, std::string* note = nullptr,
+                                           const std::string& models = kModelsFull);
+std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip,
+                                                 const std::string& models = kModelsFull);
+std::unique_ptr<HandModels> MakeWasmHandModels(const std::string& clip,
+                                               const std::string& models = kModelsFull);
 
 // True when the wasm runtime can start (node and the npm packages), else
 // false with the reason in `why`.
 bool WasmHandModelsAvailable(std::string* why = nullptr);
 // True when the model files are in the npm folder.
-bool HandModelFilesAvailable(std::string* why = nullptr);
+bool HandModelFilesAvailable(std::string* why = nullptr, const std::string& models = kModelsFull);
+// The files of the pair `models`; throws Error("bad_config", field
+// "models") for a name other than the three above.
+std::string PalmModelFile(const std::string& models);
+std::string LandmarkModelFile(const std::string& models);
 
 // The folder of @mediapipe/hands, and the palm detector's byte range in its
 // packed assets (throws Error("hand_detector_unavailable") when not listed).
 std::filesystem::path MediapipeHandsDir();
-std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& hands_dir);
+std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& hands_dir,
+                                                   const std::string& models = kModelsFull);
 
 }  // namespace doasido::filters

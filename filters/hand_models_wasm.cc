@@ -30,7 +30,7 @@ constexpr const char* kPackages[] = {"@mediapipe/hands", "@tensorflow/tfjs-tflit
 
 class WasmHandModels : public HandModels {
  public:
-  explicit WasmHandModels(const std::string& clip);
+  WasmHandModels(const std::string& clip, const std::string& models);
   ~WasmHandModels() override;
 
   void Palm(const float* input, PalmOutput* out) override {
@@ -67,7 +67,8 @@ class WasmHandModels : public HandModels {
   double ms_ = 0;
 };
 
-WasmHandModels::WasmHandModels(const std::string& clip) : clip_(clip) {
+WasmHandModels::WasmHandModels(const std::string& clip, const std::string& models)
+    : clip_(clip) {
   std::string why;
   if (!WasmHandModelsAvailable(&why)) {
     throw Error("hand_detector_unavailable",
@@ -91,8 +92,10 @@ WasmHandModels::WasmHandModels(const std::string& clip) : clip_(clip) {
   std::vector<char*> env;
   for (std::string& s : env_strings) env.push_back(s.data());
   env.push_back(nullptr);
-  std::string node = "node", flag = "-e", script = kMediapipeHandsScript;
-  char* argv[] = {node.data(), flag.data(), script.data(), nullptr};
+  // The script finds the files of the pair by these names.
+  std::string node = "node", flag = "-e", script = kMediapipeHandsScript,
+              palm = PalmModelFile(models), landmark = LandmarkModelFile(models);
+  char* argv[] = {node.data(), flag.data(), script.data(), palm.data(), landmark.data(), nullptr};
   const int spawned = posix_spawnp(&pid_, node.c_str(), &actions, nullptr, argv, env.data());
   posix_spawn_file_actions_destroy(&actions);
   close(in[0]);
@@ -216,8 +219,9 @@ bool WasmHandModelsAvailable(std::string* why) {
   return true;
 }
 
-std::unique_ptr<HandModels> MakeWasmHandModels(const std::string& clip) {
-  return std::make_unique<WasmHandModels>(clip);
+std::unique_ptr<HandModels> MakeWasmHandModels(const std::string& clip,
+                                               const std::string& models) {
+  return std::make_unique<WasmHandModels>(clip, models);
 }
 
 }  // namespace doasido::filters

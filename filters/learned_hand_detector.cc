@@ -71,6 +71,7 @@ LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std
       landmarker_(HandLandmarkerOptions{.max_hands = config.max_hands,
                                         .clip = clip,
                                         .backend = config.backend,
+                                        .models = config.models,
                                         .palm_every = config.palm_every}) {}
 
 std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config) {

@@ -38,6 +38,7 @@
 #include "filters/activity.h"
 #include "filters/frame_analyzer.h"
 #include "filters/hand_landmarker.h"
+#include "filters/hand_models.h"
 
 namespace doasido::filters {
 
@@ -53,6 +54,12 @@ struct LearnedDetectorConfig {
   // The models' runtime: "native" (in process, XNNPACK) or "wasm" (Node,
   // TFLite's WebAssembly runtime; the reference). filters/hand_models.h.
   std::string backend = "native";
+  // Which models of @mediapipe/hands: "full", "lite" or "lite_landmark"
+  // (filters/hand_models.h). lite_landmark: the full palm detector and the
+  // lite landmark model (146 M multiply-adds instead of 331 M), the same
+  // verdicts on the labelled real footage; "lite" also swaps the palm
+  // detector and lost one (docs/hand_models.md).
+  std::string models = kModelsLiteLandmark;
   // Run the models only after the cheap verdicts (shot boundary and camera
   // motion, judged on the built-in detector's boxes in the one decode) keep
   // the clip, and only on its kept shot: filters/deferred_hand_models.h.
@@ -80,7 +87,7 @@ struct LearnedDetectorConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
                                                 min_score, fingertip_reach, hand_thickness,
-                                                min_object_edges, hold_samples, border_reach, backend,
+                                                min_object_edges, hold_samples, border_reach, backend, models,
                                                 after_cheap_verdicts, keep_mb, palm_every,
                                                 still_sample_fps, still_changed_fraction)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").

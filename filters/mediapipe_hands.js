@@ -6,7 +6,8 @@
 // C++ (filters/hand_landmarker.cc), shared with the native runtime
 // (filters/xnnpack_graph.h), so the two runtimes see the same tensors.
 // filters/hand_models_wasm.cc embeds this file and runs it with `node -e`,
-// NODE_PATH pointing at the npm folder.
+// NODE_PATH pointing at the npm folder, and the two model files' names as
+// arguments (palm_detection_<pair>.tflite hand_landmark_<pair>.tflite).
 //
 // Protocol, one request at a time:
 //   stdin:  "palm\n" then 192*192*3 float32 (little-endian, RGB in [0, 1],
@@ -59,15 +60,18 @@ function arrayBufferOf(buffer) {
 
 // The palm detector is packed with other assets; its byte range is in the
 // package's loader script.
-function palmModelBytes(handsDir) {
+function palmModelBytes(handsDir, palmFile) {
   const loader = fs.readFileSync(path.join(handsDir, 'hands_solution_packed_assets_loader.js'), 'utf8');
-  const m = loader.match(/palm_detection_full\.tflite", "start": (\d+), "end": (\d+)/);
-  if (!m) fail('palm_detection_full.tflite not listed in the @mediapipe/hands loader');
+  const m = loader.match(new RegExp('/' + palmFile.replace(/\./g, '\\.') +
+                                    '", "start": (\\d+), "end": (\\d+)'));
+  if (!m) fail(palmFile + ' not listed in the @mediapipe/hands loader');
   const packed = fs.readFileSync(path.join(handsDir, 'hands_solution_packed_assets.data'));
   return arrayBufferOf(packed.subarray(Number(m[1]), Number(m[2])));
 }
 
 async function main() {
+  const [palmFile, landmarkFile] = process.argv.slice(1);
+  if (!palmFile || !landmarkFile) fail('usage: the palm and landmark model files as arguments');
   let tf, tflite, handsDir;
   try {
     handsDir = packageDir('@mediapipe/hands');
@@ -81,9 +85,9 @@ async function main() {
   tflite.setWasmPath(path.join(packageDir('@tensorflow/tfjs-tflite'), 'wasm') + '/');
   await tf.setBackend('cpu');
   const models = {
-    palm: await tflite.loadTFLiteModel(palmModelBytes(handsDir), { numThreads: 1 }),
+    palm: await tflite.loadTFLiteModel(palmModelBytes(handsDir, palmFile), { numThreads: 1 }),
     landmark: await tflite.loadTFLiteModel(
-        arrayBufferOf(fs.readFileSync(path.join(handsDir, 'hand_landmark_full.tflite'))), { numThreads: 1 }),
+        arrayBufferOf(fs.readFileSync(path.join(handsDir, landmarkFile))), { numThreads: 1 }),
   };
   reply(JSON.stringify({ ready: true }) + '\n');
 

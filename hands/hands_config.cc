@@ -1,6 +1,7 @@
 #include "hands/hands_config.h"
 
 #include "core/config_check.h"
+#include "filters/hand_models.h"
 
 namespace doasido::hands {
 
@@ -9,6 +10,8 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(section, "max_hands", c.max_hands, 1, 2);
   RequireInRange(section, "max_side", c.max_side, 128, 4096);
   RequireOneOf(section, "backend", c.backend, {"native", "wasm"});
+  RequireOneOf(section, "models", c.models,
+               {filters::kModelsFull, filters::kModelsLite, filters::kModelsLiteLandmark});
   RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
   const std::string t = section + ".tracker";
   RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);

@@ -74,6 +74,7 @@ struct HandsConfig {
   int max_hands = 2;
   int max_side = 640;              // frames are decoded at most this large for the models
   std::string backend = "native";  // runtime of the hand models: "native" or "wasm"
+  std::string models = "full";  // "full", "lite" or "lite_landmark" (filters/hand_models.h)
   // While a hand is tracked, the palm detector looks for the others on every
   // palm_every-th frame (1: every frame, as MediaPipe's VIDEO mode); with no
   // hand tracked on every frame; after a hand is lost on every frame for
@@ -83,7 +84,7 @@ struct HandsConfig {
   FitConfig fit;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(HandsConfig, default_fov_deg, max_hands, max_side,
-                                                backend, palm_every, tracker, fit)
+                                                backend, models, palm_every, tracker, fit)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const HandsConfig& c, const std::string& section);

@@ -85,7 +85,7 @@ StageResult HandsStage::Run(const ClipContext& context) {
   if (!landmarker_) {
     landmarker_ = std::make_unique<filters::HandLandmarker>(filters::HandLandmarkerOptions{
         .max_hands = config_.max_hands, .max_side = config_.max_side, .clip = clip,
-        .backend = config_.backend, .palm_every = config_.palm_every,
+        .backend = config_.backend, .models = config_.models, .palm_every = config_.palm_every,
         .lost_search = config_.palm_every});
   }
   DetectedFrames detected;

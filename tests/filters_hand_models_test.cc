@@ -49,12 +49,13 @@ double MaxCornerGap(const cv::Rect2d& a, const cv::Rect2d& b) {
                    std::abs(a.br().y - b.br().y)});
 }
 
-TEST(HandModels, NativeEqualsWebAssemblyOnEveryRealVideo) {
+// The two runtimes on the models `models` (kModelsFull, ...).
+void ExpectNativeEqualsWebAssembly(const std::string& models) {
   std::string why;
   if (!WasmHandModelsAvailable(&why)) GTEST_SKIP() << "no reference runtime: " << why;
-  HandLandmarker native({.backend = kBackendNative});
+  HandLandmarker native({.backend = kBackendNative, .models = models});
   ASSERT_STREQ(native.backend(), kBackendNative) << native.note();
-  HandLandmarker wasm({.backend = kBackendWasm});
+  HandLandmarker wasm({.backend = kBackendWasm, .models = models});
   int hands = 0, palms = 0;
   double worst_keypoint = 0, worst_palm = 0;
   for (const std::filesystem::path& video : RealVideos()) {
@@ -83,11 +84,48 @@ TEST(HandModels, NativeEqualsWebAssemblyOnEveryRealVideo) {
       }
     }
   }
-  std::printf("%d hands, %d palms compared; largest gaps: keypoint %.4f px, palm box %.4f px\n",
-              hands, palms, worst_keypoint, worst_palm);
+  std::printf("%s: %d hands, %d palms compared; largest gaps: keypoint %.4f px, palm box %.4f px\n",
+              models.c_str(), hands, palms, worst_keypoint, worst_palm);
   // Most sample videos show hands: a comparison of nothing would prove nothing.
   EXPECT_GE(hands, 15);
   EXPECT_GE(palms, 10);
+}
+
+TEST(HandModels, NativeEqualsWebAssemblyOnEveryRealVideo) {
+  ExpectNativeEqualsWebAssembly(kModelsFull);
+}
+
+// The filters' default (the full palm detector, the lite landmark model).
+TEST(HandModels, LiteLandmarkNativeEqualsWebAssemblyOnEveryRealVideo) {
+  ExpectNativeEqualsWebAssembly(kModelsLiteLandmark);
+}
+
+TEST(HandModels, LiteModelsNativeEqualsWebAssemblyOnEveryRealVideo) {
+  ExpectNativeEqualsWebAssembly(kModelsLite);
+}
+
+// CheckConfig refuses `config` naming `field`.
+void ExpectRefusedNaming(const LearnedDetectorConfig& config, const std::string& field) {
+  try {
+    CheckConfig(config, "filters_analyze.learned_detector");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_config");
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+  }
+}
+
+TEST(HandModels, TheModelsNamesPickTheirFilesAndAnUnknownOneIsRefused) {
+  EXPECT_EQ(PalmModelFile(kModelsFull), "palm_detection_full.tflite");
+  EXPECT_EQ(LandmarkModelFile(kModelsFull), "hand_landmark_full.tflite");
+  EXPECT_EQ(PalmModelFile(kModelsLite), "palm_detection_lite.tflite");
+  EXPECT_EQ(LandmarkModelFile(kModelsLite), "hand_landmark_lite.tflite");
+  EXPECT_EQ(PalmModelFile(kModelsLiteLandmark), "palm_detection_full.tflite");
+  EXPECT_EQ(LandmarkModelFile(kModelsLiteLandmark), "hand_landmark_lite.tflite");
+  LearnedDetectorConfig config;
+  config.models = "tiny";
+  ExpectRefusedNaming(config, "models");
+  EXPECT_THROW(MakeHandModels(kBackendNative, "clip", true, nullptr, "tiny"), Error);
 }
 
 std::vector<std::uint8_t> LandmarkModelBytes() {
@@ -152,13 +190,7 @@ TEST(TfliteReader, HalfPrecisionConvertsExactly) {
 TEST(HandModels, AnUnknownBackendIsRefusedWhenLoaded) {
   LearnedDetectorConfig config;
   config.backend = "gpu";
-  try {
-    CheckConfig(config, "filters_analyze.learned_detector");
-    FAIL() << "accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), "bad_config");
-    EXPECT_NE(std::string(e.what()).find("backend"), std::string::npos);
-  }
+  ExpectRefusedNaming(config, "backend");
 }
 
 }  // namespace

@@ -12,16 +12,24 @@
 // replay's object success against the floating hand's, and the wrist
 // tracking error (mean, max).
 //
-// Retargeting is the slow part (~20 s a 10-s clip on 2 threads), so the
+// Retargeting is the slow part (275-680 s a 10-s clip on 2 threads, ~1000 s
+// on one thread of a loaded machine), so the
 // trajectories are cached in --cache (trajectory.json + scene/ per
 // reference, stages/dynamic_stage.h's layout) and made only when
 // missing; --make_only stops after making them, --plan_only plans the ones
 // made so far without making more.
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
-//       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only | --plan_only]
-//       [--no_replay]
+//       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
+//       [--no_replay] [--compare] [--only=NAME] [--real=DIR]
+// --compare replays each plan also on the floating hand (plan.h
+// ReplayMount::kFloating), under the plan's time map and at the video's
+// clock, and the arm at the video's clock (limits ignored): which of the
+// re-timing, the lead-in or the arm loses an object; --only=NAME prints
+// that reference command by command. --real=DIR plans the hand-only
+// trajectories of real clips a doasido run made (no object: no replay).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -49,8 +57,13 @@ const fs::path kData = DOASIDO_SHARED_DATA;
 struct Flags {
   fs::path cache = fs::temp_directory_path() / "doasido-deploy-bench";
   int refs = 10, carries = 5, threads = 2;
+  int from = 0;  // make references from..refs-1 only (two makers split the list)
   double clip_seconds = 10, carry_seconds = 4;
   bool make_only = false, plan_only = false, replay = true;
+  bool compare = false;
+  // Hand-only trajectories of real clips: every <clip>/retarget_kinematic/
+  // trajectory.json under this folder (a doasido run's artifact root).
+  fs::path real;     // also replay the floating hand (re-timed and at the video's clock)
   std::string only;         // plan only the reference of this name
   deploy::PlanConfig plan;  // --no_leads: without the lead moves
 };
@@ -63,6 +76,7 @@ Flags Parse(int argc, char** argv) {
     const std::string k = a.substr(0, eq), v = eq == std::string::npos ? "" : a.substr(eq + 1);
     if (k == "--cache") f.cache = v;
     else if (k == "--refs") f.refs = std::stoi(v);
+    else if (k == "--from") f.from = std::stoi(v);
     else if (k == "--carries") f.carries = std::stoi(v);
     else if (k == "--threads") f.threads = std::stoi(v);
     else if (k == "--clip_seconds") f.clip_seconds = std::stod(v);
@@ -70,6 +84,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--make_only") f.make_only = true;
     else if (k == "--plan_only") f.plan_only = true;
     else if (k == "--no_replay") f.replay = false;
+    else if (k == "--compare") f.compare = true;
+    else if (k == "--real") f.real = v;
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
@@ -176,22 +192,86 @@ struct Row {
   std::string why;
 };
 
-Row PlanOne(const Flags& f, const fs::path& dir) {
-  Row row{.name = dir.filename().string()};
+// The plan's commands at the video's own clock (no lead moves, time map
+// the identity): what the floating hand did in the retargeting.
+deploy::Plan AtVideoClock(const deploy::Plan& plan) {
+  deploy::Plan video = plan;
+  video.lead_in = video.lead_out = 0;
+  video.times.clear();
+  video.source_times.clear();
+  const int count = static_cast<int>(std::floor(plan.trajectory_duration * plan.rate_hz)) + 1;
+  for (int k = 0; k < count; ++k) {
+    video.times.push_back(k / plan.rate_hz);
+    video.source_times.push_back(k / plan.rate_hz);
+  }
+  // The arm's path at trajectory time s, from the re-timed commands (the
+  // time map inverted), ignoring the arm's limits.
+  video.arm.clear();
+  video.hand.clear();
+  const size_t begin = plan.lead_in, end = plan.times.size() - plan.lead_out;
+  size_t c = begin;
+  for (int k = 0; k < count; ++k) {
+    const double s = k / plan.rate_hz;
+    while (c + 1 < end && plan.source_times[c + 1] < s) ++c;
+    const size_t n = std::min(c + 1, end - 1);
+    const double span = plan.source_times[n] - plan.source_times[c];
+    const double a = span > 0 ? std::clamp((s - plan.source_times[c]) / span, 0.0, 1.0) : 0.0;
+    video.arm.push_back((1 - a) * plan.arm[c] + a * plan.arm[n]);
+    video.hand.push_back((1 - a) * plan.hand[c] + a * plan.hand[n]);
+  }
+  return video;
+}
+
+std::string Outcome(const char* what, const deploy::ReplayReport& r) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%s %s %.0f mm %.2f rad (wrist %.1f mm %.3f rad)", what,
+                r.success ? "ok" : "LOST", 1000 * r.object_position_error_mean, r.object_rotation_error_mean,
+                1000 * r.wrist_position_error_mean, r.wrist_rotation_error_mean);
+  return buf;
+}
+
+// The arm's replay against the floating hand's: re-timed, and at the video's clock.
+// With --only, command by command (every 25th): object, wrist and finger
+// errors and hand-object contacts, arm | floating hand.
+void PrintCommands(const deploy::Plan& plan, const deploy::ReplayReport& floating) {
+  const deploy::ReplayReport& r = plan.replay;
+  std::printf("  %7s %7s | arm: object mm rad, wrist mm, fingers rad, contacts | floating: the same\n", "t s",
+              "traj s");
+  for (size_t k = 0; k < r.object_position_error.size() && k < floating.object_position_error.size(); k += 25) {
+    const size_t c = k + plan.lead_in;
+    std::printf("  %7.2f %7.2f | %6.1f %5.2f %5.1f %5.3f %2d | %6.1f %5.2f %5.1f %5.3f %2d\n", plan.times[c],
+                plan.source_times[c], 1000 * r.object_position_error[k], r.object_rotation_error[k],
+                1000 * r.wrist_position_error[k], r.finger_error[k], r.hand_contacts[k],
+                1000 * floating.object_position_error[k], floating.object_rotation_error[k],
+                1000 * floating.wrist_position_error[k], floating.finger_error[k], floating.hand_contacts[k]);
+  }
+}
+
+void Compare(const Flags& f, const deploy::Plan& plan, const retarget::HandTrajectory& t,
+             const retarget::Embodiment& hand, const retarget::TrajectoryFiles& files) {
+  const std::string xml = retarget::ReadSceneXml(files.scene_dir);
+  deploy::Plan floating = plan, video = AtVideoClock(plan);
+  deploy::ReplayPlan(floating, t, hand, xml, files.scene_dir, f.plan.servo_omega, deploy::ReplayMount::kFloating);
+  deploy::ReplayPlan(video, t, hand, xml, files.scene_dir, f.plan.servo_omega, deploy::ReplayMount::kFloating);
+  deploy::Plan arm_video = AtVideoClock(plan);
+  deploy::ReplayPlan(arm_video, t, hand, xml, files.scene_dir, f.plan.servo_omega);
+  std::printf("  compare %-12s %.2fx: %s | %s | %s\n", files.trajectory.parent_path().filename().c_str(),
+              plan.slowdown, Outcome("arm", plan.replay).c_str(), Outcome("floating re-timed", floating.replay).c_str(),
+              Outcome("floating video clock", video.replay).c_str());
+  std::printf("  compare %-12s 1.00x: %s\n", files.trajectory.parent_path().filename().c_str(),
+              Outcome("arm at the video clock (limits ignored)", arm_video.replay).c_str());
+  if (!f.only.empty()) PrintCommands(plan, floating.replay);
+}
+
+Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
+  Row row{.name = name.empty() ? dir.filename().string() : name};
   const retarget::TrajectoryFiles files = retarget::FilesBeside(dir / "trajectory.json");
   const retarget::HandTrajectory t = retarget::ReadTrajectoryJson(files.trajectory);
   const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
   deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
-  if (f.replay) {
+  if (f.replay && !t.object_poses.empty()) {
     deploy::ReplayPlan(plan, t, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
-  }
-  const deploy::ReplayReport& r = plan.replay;
-  for (size_t k = 0; !f.only.empty() && k < r.object_position_error.size(); k += 25) {
-    const size_t c = k + plan.lead_in;
-    const Pose o = t.object_poses[std::min<size_t>(std::lround(plan.source_times[c] * t.fps), t.qpos.size() - 1)];
-    std::printf("  t %6.2f s (trajectory %5.2f s): object error %5.1f mm %.2f rad, trajectory's object z %.3f\n",
-                plan.times[c], plan.source_times[c], 1000 * r.object_position_error[k], r.object_rotation_error[k],
-                o.t.z());
+    if (f.compare) Compare(f, plan, t, hand, files);
   }
   row.ok = plan.ok;
   row.slowdown = plan.slowdown;
@@ -267,7 +347,7 @@ int main(int argc, char** argv) {
   const Flags f = Parse(argc, argv);
   fs::create_directories(f.cache);
   const auto t0 = Clock::now();
-  for (int i = 0; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
+  for (int i = f.from; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
   if (!f.plan_only) MakeHot3d(f);
   for (int i = 0; i < f.carries && !f.plan_only; ++i) MakeCarry(f, i);
   std::fprintf(stderr, "trajectories ready in %s (%.0f s)\n", f.cache.c_str(),
@@ -295,7 +375,22 @@ int main(int argc, char** argv) {
   Report(single);
   std::printf("\n== Two arms (deploy plan-two, one clock): %zu synthetic carries\n", two.size());
   Report(two);
+  std::vector<Row> real;
+  if (!f.real.empty()) {
+    std::vector<fs::path> found;
+    for (const auto& e : fs::recursive_directory_iterator(f.real)) {
+      if (e.path().filename() == "trajectory.json" && e.path().parent_path().filename() == "retarget_kinematic") {
+        found.push_back(e.path().parent_path());
+      }
+    }
+    std::sort(found.begin(), found.end());
+    for (const fs::path& dir : found) real.push_back(PlanOne(f, dir, "real " + dir.parent_path().filename().string()));
+    std::printf("\n== Real clips, hand-only (retarget_kinematic, wrist tracking only): %zu under %s\n", real.size(),
+                f.real.c_str());
+    Report(real);
+  }
   std::vector<Row> all = single;
+  all.insert(all.end(), real.begin(), real.end());
   all.insert(all.end(), two.begin(), two.end());
   std::printf("\n== All %zu plans\n", all.size());
   Report(all);

@@ -89,12 +89,15 @@ void CheckConfig(const BimanualConfig& c, const std::string& section) {
 }
 
 double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right, const Pose& right_base,
-                      const BimanualConfig& config) {
+                      const BimanualConfig& config, bool hand_to_hand) {
   const std::vector<Capsule> a = ArmCapsules(left, left_base, config);
   const std::vector<Capsule> b = ArmCapsules(right, right_base, config);
   double best = std::numeric_limits<double>::infinity();
-  for (const Capsule& x : a) {
-    for (const Capsule& y : b) best = std::min(best, SegmentDistance(x.a, x.b, y.a, y.b) - x.radius - y.radius);
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (size_t j = 0; j < b.size(); ++j) {
+      if (!hand_to_hand && i + 1 == a.size() && j + 1 == b.size()) continue;  // the hands: last capsules
+      best = std::min(best, SegmentDistance(a[i].a, a[i].b, b[j].a, b[j].b) - a[i].radius - b[j].radius);
+    }
   }
   return best;
 }
@@ -142,7 +145,8 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
   }
   const Pose left_base = left_place.world_to_base.Inverse(), right_base = right_place.world_to_base.Inverse();
   for (size_t k = 0; k < out.left.arm.size(); ++k) {
-    const double d = ArmArmDistance(out.left.arm[k], left_base, out.right.arm[k], right_base, config);
+    const bool on_path = k >= static_cast<size_t>(out.left.lead_in) && k + out.left.lead_out < out.left.arm.size();
+    const double d = ArmArmDistance(out.left.arm[k], left_base, out.right.arm[k], right_base, config, !on_path);
     out.arm_distance.push_back(d);
     if (d < config.clearance) {
       out.collisions.push_back({.frame = static_cast<int>(k), .time = out.left.times[k], .value = d,

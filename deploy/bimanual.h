@@ -20,7 +20,12 @@
 // (ur3e.h: from each joint's origin to the next, with the links' radii)
 // plus the hand as a capsule of `hand_radius` along the flange's z axis for
 // `hand_length`; the least distance between a capsule of one arm and one of
-// the other, surfaces to surfaces, must stay above `clearance`. Frames where
+// the other, surfaces to surfaces, must stay above `clearance`. On the
+// path itself the two hands' envelopes are not checked against each
+// other: two hands holding one object come closer than two 9-cm capsules
+// allow (carries measured 1.3 cm), and the retargeting simulated both
+// hands in one scene with their real geometry, so how near they come is
+// the task's; the lead moves, which no simulation saw, check them too. Frames where
 // it does not are listed with their times; the plan is ok only without
 // them and with both arms' plans ok.
 #pragma once
@@ -64,8 +69,10 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
 
 // The least surface distance between the two arms (and hands) at joint
 // angles `left`, `right` with bases `left_base`, `right_base` (base->world).
+// Without `hand_to_hand`, the pair of the two hands' envelopes is left out
+// (each hand against the other arm's links still counts).
 double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right, const Pose& right_base,
-                      const BimanualConfig& config);
+                      const BimanualConfig& config, bool hand_to_hand = true);
 
 // Streams doasido_lcm::bimanual_command (deploy/bimanual_command.lcm), one
 // message per tick carrying both arms and both hands, as StreamPlan does

@@ -76,10 +76,18 @@ VectorXd HandAt(const std::vector<int>& from, const retarget::HandTrajectory& t,
   return hand;
 }
 
+// The lead moves' command intervals (the longest arm's on one clock):
+// home to the approach pose, the approach down onto the first frame, the
+// lead-out back home.
+struct Leads {
+  int to_approach = 0, approach = 0, out = 0;
+};
+
 // Step 3's commands for arm `index` (joints 6 index .. of the shared
-// path): lead-in, the path at the time map's s, lead-out.
+// path): lead-in (home to `above`, then down to the first frame), the path
+// at the time map's s, lead-out.
 void FillCommands(Plan& plan, const retarget::HandTrajectory& t, const JointSpline& path, int index,
-                  const TimeMap& map, int lead_in, int lead_out, const ArmQ& home) {
+                  const TimeMap& map, const Leads& leads, const ArmQ& above, const ArmQ& home) {
   const std::vector<int> from = HandSource(plan, t);
   plan.times.clear();
   plan.source_times.clear();
@@ -93,12 +101,32 @@ void FillCommands(Plan& plan, const retarget::HandTrajectory& t, const JointSpli
   };
   const ArmQ first = path.Value(map.s.front()).segment<6>(6 * index);
   const ArmQ last = path.Value(map.s.back()).segment<6>(6 * index);
-  for (int k = 0; k < lead_in; ++k) push(RestToRestAt(home, first, double(k) / lead_in), map.s.front());
+  for (int k = 0; k < leads.to_approach; ++k) {
+    push(RestToRestAt(home, above, double(k) / leads.to_approach), map.s.front());
+  }
+  for (int k = 0; k < leads.approach; ++k) {
+    push(RestToRestAt(above, first, double(k) / leads.approach), map.s.front());
+  }
   for (double s : map.s) push(path.Value(s).segment<6>(6 * index), s);
-  for (int k = 1; k <= lead_out; ++k) push(RestToRestAt(last, home, double(k) / lead_out), map.s.back());
-  plan.lead_in = lead_in;
-  plan.lead_out = lead_out;
+  for (int k = 1; k <= leads.out; ++k) push(RestToRestAt(last, home, double(k) / leads.out), map.s.back());
+  plan.lead_in = leads.to_approach + leads.approach;
+  plan.lead_out = leads.out;
   plan.slowdown = map.slowdown;
+}
+
+// Where the lead-in's approach starts: the first frame's wrist raised by
+// config.approach_height (the arm's IK, seeded with the first frame's
+// joints), so the hand comes down onto the first frame instead of sweeping
+// in from home through what it is about to touch (a clip may start with
+// the hand at or on the object). The first frame's joints when the height
+// is 0 or IK misses the raised pose.
+ArmQ ApproachPose(const retarget::HandTrajectory& t, const Placement& placement, const ArmQ& first,
+                  const PlanConfig& config) {
+  if (!(config.approach_height > 0)) return first;
+  Pose wrist = WristPose(t, 0);
+  wrist.t.z() += config.approach_height;
+  const IkResult r = ArmIk(config.ik).Solve(placement.world_to_base * wrist, first);
+  return r.reached ? r.q : first;
 }
 
 // Step 4's speed and acceleration checks.
@@ -142,6 +170,8 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   CheckConfig(c.ik, section + ".ik");
   CheckConfig(c.time_scaling, section + ".time_scaling");
   RequireInRange(section, "servo_omega", c.servo_omega, 0, 1000);
+  RequireInRange(section, "approach_height", c.approach_height, 0, 0.5);
+  RequireInRange(section, "approach_speed", c.approach_speed, 0.005, 1);
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -213,19 +243,28 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
   const VectorXd amax1 = Eigen::Map<const VectorXd>(limits.max_acceleration.data(), 6);
   const VectorXd vmax = vmax1.replicate(arms, 1), amax = amax1.replicate(arms, 1);
   const ArmQ home = Home(config);
+  std::vector<ArmQ> above;
+  for (size_t a = 0; a < arms; ++a) above.push_back(ApproachPose(*trajectories[a], placements[a], paths[a].q[0], config));
+  // The approach's duration at config.approach_speed, at least.
+  const int approach_min =
+      config.approach_height > 0 ? static_cast<int>(std::ceil(config.approach_height / config.approach_speed * config.rate_hz)) : 0;
   double margin = config.time_scaling.margin;
   for (int attempt = 0; attempt < config.time_scaling.attempts; ++attempt, margin *= 0.8) {
     const TimeMap map = RetimePath(path, vmax, amax, config.rate_hz, config.time_scaling, margin);
-    int lead_in = 0, lead_out = 0;
-    for (size_t a = 0; a < arms; ++a) {
+    Leads leads;
+    for (size_t a = 0; a < arms && config.lead_in; ++a) {
       const VectorXd start = path.Value(map.s.front()).segment<6>(6 * a);
+      leads.to_approach = std::max(leads.to_approach, RestToRestIntervals(home, above[a], vmax1, amax1, config.rate_hz, margin));
+      const int down = RestToRestIntervals(above[a], start, vmax1, amax1, config.rate_hz, margin);
+      leads.approach = std::max(leads.approach, down > 0 ? std::max(down, approach_min) : 0);
+    }
+    for (size_t a = 0; a < arms && config.lead_out; ++a) {
       const VectorXd end = path.Value(map.s.back()).segment<6>(6 * a);
-      if (config.lead_in) lead_in = std::max(lead_in, RestToRestIntervals(home, start, vmax1, amax1, config.rate_hz, margin));
-      if (config.lead_out) lead_out = std::max(lead_out, RestToRestIntervals(end, home, vmax1, amax1, config.rate_hz, margin));
+      leads.out = std::max(leads.out, RestToRestIntervals(end, home, vmax1, amax1, config.rate_hz, margin));
     }
     bool within = true;
     for (size_t a = 0; a < arms; ++a) {
-      FillCommands(plans[a], *trajectories[a], path, static_cast<int>(a), map, lead_in, lead_out, home);
+      FillCommands(plans[a], *trajectories[a], path, static_cast<int>(a), map, leads, above[a], home);
       CheckLimits(plans[a], limits);
       within = within && plans[a].too_fast.empty() && plans[a].over_acceleration.empty();
     }

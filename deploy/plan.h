@@ -17,7 +17,10 @@
 // 3. Time scaling (time_scaling.h): s(t) so that every joint stays within
 //    its speed and acceleration limits, never faster than the video,
 //    starting and ending at rest. The commands are at t = k / rate: a
-//    lead-in from the home pose to the first frame, the re-timed path (the
+//    lead-in from the home pose to a pose approach_height above the first
+//    frame's wrist and down onto it (no faster than approach_speed, so a
+//    clip that starts at or on the object is not swept into from the
+//    side), the re-timed path (the
 //    hand's joints sampled from the trajectory at the same s), a lead-out
 //    back home; the lead moves are rest-to-rest quintics within the limits.
 //    The plan records each command's trajectory time (the time map,
@@ -38,7 +41,11 @@
 //    object's error against the trajectory's object poses at the same
 //    trajectory time (position m, rotation rad; success as in REFERENCE.md
 //    section 5: mean < 0.10 m and < 0.5 rad), and the wrist tracking error
-//    (the simulated flange against the trajectory's wrist) per command.
+//    (the simulated flange against the trajectory's wrist), the finger
+//    joints' error and the hand-object contacts per command. The same
+//    replay on the retargeting's floating hand (ReplayMount::kFloating,
+//    its wrist driven by the trajectory's wrist controls under the same
+//    time map) tells what the re-timing does from what the arm does.
 #pragma once
 
 #include <filesystem>
@@ -86,6 +93,10 @@ struct PlanConfig {
   std::array<double, 6> home{0, -1.5708, 1.5708, -1.5708, -1.5708, 0};
   bool lead_in = true;   // move from home to the first frame
   bool lead_out = true;  // and back home after the last
+  // The lead-in ends coming down onto the first frame from this height
+  // above it (m; 0: straight from home), at most at approach_speed (m/s).
+  double approach_height = 0.05;
+  double approach_speed = 0.05;
   // The replay's arm servo (rad/s): each arm joint tracks its command by a
   // computed-torque PD, M (w^2 e + 2 w e') + bias, critically damped at
   // this natural frequency; 40 is the floating wrist's servo in the
@@ -94,7 +105,8 @@ struct PlanConfig {
   double servo_omega = 40;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
-                                                home, lead_in, lead_out, servo_omega)
+                                                home, lead_in, lead_out, approach_height, approach_speed,
+                                                servo_omega)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -132,6 +144,11 @@ struct ReplayReport {
   std::vector<double> wrist_rotation_error;  // rad
   double wrist_position_error_mean = 0, wrist_position_error_max = 0;
   double wrist_rotation_error_mean = 0, wrist_rotation_error_max = 0;
+  // Per command as above: the mean absolute error of the hand's finger
+  // joints against the trajectory's (rad), and the contacts between the
+  // hand and the object.
+  std::vector<double> finger_error;
+  std::vector<int> hand_contacts;
 };
 
 struct Plan {
@@ -179,10 +196,18 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
 // c the mean of `wrists` on the table (z = 0).
 Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wrists, double base_height);
 
+// Which rig a replay simulates: the arm carrying the hand (step 5), or the
+// retargeting's floating hand under the same time map, its wrist actuators
+// driven by the trajectory's own wrist controls at each command's
+// trajectory time: the yardstick that tells what the re-timing alone does
+// to the object from what the arm does.
+enum class ReplayMount { kArm, kFloating };
+
 // Step 5 on a plan made from `trajectory`; fills plan.replay.
 void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
                 const retarget::Embodiment& embodiment, const std::string& scene_xml,
-                const std::filesystem::path& scene_dir, double servo_omega = PlanConfig{}.servo_omega);
+                const std::filesystem::path& scene_dir, double servo_omega = PlanConfig{}.servo_omega,
+                ReplayMount mount = ReplayMount::kArm);
 
 // JSON: {"format": "doasido_deploy_plan", "version": 2, "source", "embodiment",
 // "rate_hz", "placement": {yaw, x, y, world_to_base: [tx,ty,tz,qw,qx,qy,qz],

@@ -92,7 +92,9 @@ Json PlanToJson(const Plan& plan) {
                  {"wrist_position_error_mean", r.wrist_position_error_mean},
                  {"wrist_position_error_max", r.wrist_position_error_max},
                  {"wrist_rotation_error_mean", r.wrist_rotation_error_mean},
-                 {"wrist_rotation_error_max", r.wrist_rotation_error_max}};
+                 {"wrist_rotation_error_max", r.wrist_rotation_error_max},
+                 {"finger_error", r.finger_error},
+                 {"hand_contacts", r.hand_contacts}};
   j["ok"] = plan.ok;
   return j;
 }
@@ -189,7 +191,9 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
                    .wrist_position_error_mean = r.value("wrist_position_error_mean", 0.0),
                    .wrist_position_error_max = r.value("wrist_position_error_max", 0.0),
                    .wrist_rotation_error_mean = r.value("wrist_rotation_error_mean", 0.0),
-                   .wrist_rotation_error_max = r.value("wrist_rotation_error_max", 0.0)};
+                   .wrist_rotation_error_max = r.value("wrist_rotation_error_max", 0.0),
+                   .finger_error = r.value("finger_error", std::vector<double>{}),
+                   .hand_contacts = r.value("hand_contacts", std::vector<int>{})};
     field = "ok";
     plan.ok = j.at("ok").get<bool>();
   } catch (const nlohmann::json::exception& e) {

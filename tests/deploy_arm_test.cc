@@ -1,6 +1,7 @@
 // The UR3e model against its published DH definition, the IK against
 // targets with known solutions, and the plan's reach report against a
 // trajectory whose unreachable frames are known.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -266,6 +267,93 @@ TEST(Plan, ReplayMeasuresObjectError) {
   ASSERT_EQ(plan.replay.wrist_position_error.size(), end - first);
   EXPECT_LT(plan.replay.wrist_position_error_max, 0.005);
   EXPECT_LT(plan.replay.wrist_rotation_error_max, 0.02);
+}
+
+// The lead-in ends coming straight down onto the first frame: a command
+// whose flange is approach_height above the first wrist, then a descent
+// along the vertical lasting at least approach_height / approach_speed.
+TEST(Plan, TheLeadInComesDownOntoTheFirstFrame) {
+  Pose centre;
+  retarget::HandTrajectory t = PathWithGap(&centre);
+  for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;
+  PlanConfig config = IdentityPlacement(centre);
+  const Plan plan = MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config);
+  ASSERT_TRUE(plan.ok);
+  const Pose base = plan.placement.world_to_base.Inverse();
+  const Pose first = WristPose(t, 0);
+  const auto flange = [&](int k) { return (base * DhForwardPose(plan.arm[k])).t; };
+  int above = -1;
+  for (int k = 0; k < plan.lead_in && above < 0; ++k) {
+    if ((flange(k) - (first.t + Vec3(0, 0, config.approach_height))).norm() < 0.002) above = k;
+  }
+  ASSERT_GE(above, 0) << "no lead-in command 5 cm above the first frame";
+  EXPECT_GE((plan.lead_in - above) / plan.rate_hz, config.approach_height / config.approach_speed - 0.03);
+  for (int k = above; k <= plan.lead_in; ++k) {
+    EXPECT_LT((flange(k) - first.t).head<2>().norm(), 0.003) << "command " << k << " leaves the vertical";
+    if (k > above) {
+      EXPECT_LE(flange(k).z(), flange(k - 1).z() + 1e-6) << "command " << k << " goes up";
+    }
+  }
+  EXPECT_LT((flange(plan.lead_in) - first.t).norm(), 0.002);
+}
+
+// The floating-hand replay (the retargeting's wrist, driven here by the
+// trajectory's wrist positions: the fixture has no controls) under the
+// same time map as the arm's, on a path that needs a slowdown: both leave
+// the untouched mug where it stands, both follow the wrist path, and both
+// report every command of the path.
+TEST(Plan, FloatingAndArmReplaysAgreeOnARetimedPath) {
+  Pose centre;
+  retarget::HandTrajectory t = PathWithGap(&centre);
+  for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;
+  t.fps = 150;  // three times faster than the arm can follow
+  const Vec3 away = -Vec3(centre.t.x(), centre.t.y(), 0).normalized() * 0.35;
+  const auto dir = std::filesystem::temp_directory_path() / ("floating_" + std::to_string(getpid()));
+  const retarget::ObjectScene scene =
+      retarget::BuildObjectScene(retarget::MakeMug(), {Quat::Identity(), away}, retarget::SceneConfig{}, dir);
+  std::ifstream in(scene.xml_path);
+  const std::string xml((std::istreambuf_iterator<char>(in)), {});
+  PlanConfig config = IdentityPlacement(centre);
+  config.rate_hz = 150;
+  const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
+  Plan arm = MakePlan(t, e, config);
+  ASSERT_TRUE(arm.ok);
+  EXPECT_GT(arm.slowdown, 1.5);
+  t.object_poses.assign(t.qpos.size(), scene.pose);
+  Plan floating = arm;
+  ReplayPlan(arm, t, e, xml, dir);
+  ReplayPlan(floating, t, e, xml, dir, config.servo_omega, ReplayMount::kFloating);
+  std::filesystem::remove_all(dir);
+  const size_t path = arm.arm.size() - arm.lead_in - arm.lead_out;
+  for (const Plan* p : {&arm, &floating}) {
+    ASSERT_TRUE(p->replay.ran);
+    EXPECT_TRUE(p->replay.success);
+    EXPECT_LT(p->replay.object_position_error_max, 0.003);
+    ASSERT_EQ(p->replay.wrist_position_error.size(), path);
+    ASSERT_EQ(p->replay.hand_contacts.size(), path);
+    ASSERT_EQ(p->replay.finger_error.size(), path);
+    EXPECT_EQ(*std::max_element(p->replay.hand_contacts.begin(), p->replay.hand_contacts.end()), 0);
+  }
+  EXPECT_LT(arm.replay.wrist_position_error_max, 0.005);
+  // The floating wrist is a PD at 40 rad/s without feed-forward (the
+  // fixture has no controls that would lead it): it lags the moving target
+  // by about 2 v / omega, v the wrist's speed under the time map, and sags
+  // g / omega^2 = 6 mm.
+  double speed = 0;
+  for (size_t k = arm.lead_in; k + 1 < arm.arm.size() - arm.lead_out; ++k) {
+    const double s0 = arm.source_times[k] * t.fps, s1 = arm.source_times[k + 1] * t.fps;
+    const auto at = [&](double f) {
+      const int i = std::min(static_cast<int>(f), static_cast<int>(t.qpos.size()) - 2);
+      return Vec3((1 - (f - i)) * WristPose(t, i).t + (f - i) * WristPose(t, i + 1).t);
+    };
+    speed = std::max(speed, (at(s1) - at(s0)).norm() * arm.rate_hz);
+  }
+  EXPECT_GT(floating.replay.wrist_position_error_max, arm.replay.wrist_position_error_max);
+  // On average within that bound; at the peaks (rotation and translation
+  // lagging together) within three times it.
+  const double lag = 2 * speed / config.servo_omega + 0.006;
+  EXPECT_LT(floating.replay.wrist_position_error_mean, lag) << "wrist speed " << speed << " m/s";
+  EXPECT_LT(floating.replay.wrist_position_error_max, 3 * lag) << "wrist speed " << speed << " m/s";
 }
 
 TEST(Plan, JsonRoundTrip) {

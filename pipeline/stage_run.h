@@ -8,6 +8,7 @@
 #include <string>
 
 #include "db/database.h"
+#include "db/stage.h"
 
 namespace doasido::pipeline {
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/csv.h"
 #include "core/file_text.h"
 #include "core/error.h"
 #include "core/error_codes.h"
@@ -312,24 +313,24 @@ class RowBuilder {
   std::unordered_map<std::string, std::string> unreachable_;
 };
 
+// Why a record of a delimited list is not a row ("" when it is one): an
+// unterminated quote, an empty line, bytes that are not UTF-8 text, or
+// another number of columns than the header's.
+std::string RecordProblem(const CsvRecord& record, size_t columns) {
+  if (!record.error.empty()) return record.error;
+  if (record.Blank()) return "empty line";
+  if (!IsUtf8(record.raw)) return "not valid UTF-8 text";
+  if (record.fields.size() != columns) {
+    return "expected " + std::to_string(columns) + " columns, found " +
+           std::to_string(record.fields.size());
+  }
+  return "";
+}
+
 void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& options,
                    ListReadResult& out) {
-  const std::string text = ReadAll(path);
-  size_t pos = 0;
-  long line = 1;
-  std::vector<std::string> header, fields;
-  std::string error;
-  long consumed = 0;
-  while (pos < text.size() && header.empty()) {
-    if (!SplitRecord(text, pos, delimiter, header, error, consumed)) {
-      throw Error("bad_list", "header: " + error, {.file = path.string(), .line = line});
-    }
-    line += consumed;
-    if (header.size() == 1 && Trim(header[0]).empty()) header.clear();
-  }
-  if (header.empty()) throw Error("bad_list", "empty list (no header)", {.file = path.string()});
-  for (auto& h : header) h = Trim(h);
-  if (!header.empty() && header[0].rfind("\xEF\xBB\xBF", 0) == 0) header[0] = header[0].substr(3);
+  CsvReader reader(ReadAll(path), path.string(), "bad_list", delimiter);
+  const std::vector<std::string> header = reader.Header();
   const bool has_video = std::any_of(header.begin(), header.end(), [](const std::string& h) {
     return std::find(kVideoColumns.begin(), kVideoColumns.end(), Lower(h)) != kVideoColumns.end();
   });
@@ -339,33 +340,18 @@ void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& opti
   }
   RowBuilder builder(path, options, out);
   Cells cells;
-  while (pos < text.size()) {
-    const long row_line = line;
-    const size_t row_start = pos;
-    const bool ok = SplitRecord(text, pos, delimiter, fields, error, consumed);
-    line += consumed;
-    if (!ok) {
-      builder.Bad(row_line, "", error);
-      continue;
-    }
-    const std::string raw = text.substr(row_start, pos - row_start);
-    if (Trim(raw).empty()) {
-      builder.Bad(row_line, "", "empty line");
-      continue;
-    }
-    if (!IsUtf8(raw)) {
-      builder.Bad(row_line, "", "not valid UTF-8 text");
-      continue;
-    }
-    if (fields.size() != header.size()) {
-      builder.Bad(row_line, fields.size() < header.size() ? header[fields.size()] : "",
-                  "expected " + std::to_string(header.size()) + " columns, found " +
-                      std::to_string(fields.size()));
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (const std::string why = RecordProblem(record, header.size()); !why.empty()) {
+      const std::size_t found = record.fields.size();
+      const bool short_row = record.error.empty() && !record.Blank() && IsUtf8(record.raw) &&
+                             found < header.size();
+      builder.Bad(record.line, short_row ? header[found] : "", why);
       continue;
     }
     cells.clear();
-    for (size_t i = 0; i < header.size(); ++i) cells.emplace_back(header[i], fields[i]);
-    builder.Add(cells, row_line);
+    for (size_t i = 0; i < header.size(); ++i) cells.emplace_back(header[i], record.fields[i]);
+    builder.Add(cells, record.line);
   }
 }
 
@@ -459,38 +445,19 @@ bool ReadJsonDocument(const fs::path& path, const ListOptions& options, ListRead
 std::vector<std::map<std::string, std::string>> ReadTable(const fs::path& path,
                                                          std::vector<RowError>* errors,
                                                          std::vector<long>* lines) {
-  const std::string text = ReadAll(path);
-  size_t pos = 0;
-  long line = 1, consumed = 0;
-  std::vector<std::string> header, fields;
-  std::string error;
-  if (!SplitRecord(text, pos, ',', header, error, consumed)) {
-    throw Error("bad_list", "header: " + error, {.file = path.string(), .line = 1});
-  }
-  line += consumed;
+  CsvReader reader(ReadAll(path), path.string(), "bad_list");
+  const std::vector<std::string> header = reader.Header();
   std::vector<std::map<std::string, std::string>> rows;
-  while (pos < text.size()) {
-    const long row_line = line;
-    const size_t start = pos;
-    const bool ok = SplitRecord(text, pos, ',', fields, error, consumed);
-    line += consumed;
-    const std::string raw = text.substr(start, pos - start);
-    std::string reason = !ok                              ? error
-                         : Trim(raw).empty()              ? "empty line"
-                         : !IsUtf8(raw)                   ? "not valid UTF-8 text"
-                         : fields.size() != header.size() ? "expected " +
-                                                                std::to_string(header.size()) +
-                                                                " columns, found " +
-                                                                std::to_string(fields.size())
-                                                          : "";
-    if (!reason.empty()) {
-      if (errors) errors->push_back({path.string(), row_line, "", reason});
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (const std::string why = RecordProblem(record, header.size()); !why.empty()) {
+      if (errors) errors->push_back({path.string(), record.line, "", why});
       continue;
     }
     std::map<std::string, std::string> row;
-    for (size_t i = 0; i < header.size(); ++i) row[Trim(header[i])] = fields[i];
+    for (size_t i = 0; i < header.size(); ++i) row[header[i]] = record.fields[i];
     rows.push_back(std::move(row));
-    if (lines) lines->push_back(row_line);
+    if (lines) lines->push_back(record.line);
   }
   return rows;
 }
@@ -744,58 +711,6 @@ void ReadFrameNames(const fs::path& path, const ListOptions& options, ListReadRe
 
 std::string RowError::Format() const {
   return file + ":" + std::to_string(line) + ": " + (field.empty() ? "" : field + ": ") + reason;
-}
-
-bool SplitRecord(const std::string& text, size_t& pos, char delimiter,
-                 std::vector<std::string>& fields, std::string& error, long& lines_consumed) {
-  fields.clear();
-  lines_consumed = 0;
-  std::string field;
-  bool quoted = false, was_quoted = false;
-  while (pos < text.size()) {
-    const char c = text[pos];
-    if (quoted) {
-      if (c == '"') {
-        if (pos + 1 < text.size() && text[pos + 1] == '"') {
-          field += '"';
-          pos += 2;
-          continue;
-        }
-        quoted = false;
-      } else {
-        if (c == '\n') ++lines_consumed;
-        field += c;
-      }
-      ++pos;
-      continue;
-    }
-    if (c == '"' && Trim(field).empty() && !was_quoted) {
-      quoted = was_quoted = true;
-      field.clear();
-    } else if (c == delimiter) {
-      fields.push_back(std::move(field));
-      field.clear();
-      was_quoted = false;
-    } else if (c == '\n') {
-      ++pos;
-      ++lines_consumed;
-      if (!field.empty() && field.back() == '\r') field.pop_back();
-      fields.push_back(std::move(field));
-      return true;
-    } else {
-      field += c;
-    }
-    ++pos;
-  }
-  if (quoted) {
-    error = "unterminated quoted field";
-    ++lines_consumed;
-    return false;
-  }
-  if (!field.empty() && field.back() == '\r') field.pop_back();
-  fields.push_back(std::move(field));
-  ++lines_consumed;
-  return true;
 }
 
 std::optional<double> ParseTimestamp(const std::string& raw) {

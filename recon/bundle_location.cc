@@ -1,7 +1,8 @@
 #include "recon/bundle_location.h"
 
 #include "core/file_text.h"
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 
 namespace doasido::recon {
 
@@ -38,9 +39,12 @@ ClipBundle ReadClipBundle(const std::filesystem::path& dir, const std::string& c
   try {
     return ReadBundle(dir);
   } catch (const Error& e) {
+    // The same files fail again on a retry: a bundle that does not read is
+    // kBadBundle (permanent), its reader's own code kept in the message.
     ErrorSite site = e.site();
     site.clip = clip;
-    throw PermanentError(e.code(), e.message(), site);
+    if (IsPermanentError(e.code())) throw Error(e.code(), e.message(), site);
+    throw Error(kBadBundle, e.code() + ": " + e.message(), site);
   }
 }
 
@@ -75,7 +79,7 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
     out.dir = hands_dir;
     out.source = kBundleFromHands;
   } else {
-    throw PermanentError(kErrorNoBundle,
+    throw Error(kErrorNoBundle,
                          "the list names no bundle, no model command wrote one and the " +
                              std::string(kHandsStageFolder) + " stage found no hands",
                          {.clip = clip, .file = out.dir.string()});
@@ -90,7 +94,7 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
   if (HasHands(out.bundle) || !hands_found) return out;
   const ClipBundle hands = ReadClipBundle(hands_dir, clip);
   if (hands.frames != out.bundle.frames) {
-    throw PermanentError("bad_bundle",
+    throw Error(kBadBundle,
                          "the hands stage has " + std::to_string(hands.frames) +
                              " frames, the bundle " + std::to_string(out.bundle.frames) +
                              "; they must cover the same span",

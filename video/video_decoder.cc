@@ -5,7 +5,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "core/permanent_error.h"
 #include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
@@ -286,7 +285,7 @@ void VideoDecoder::ThrowTruncated(std::int64_t frame, const std::string& why) co
     message += " of " + std::to_string(geometry_.declared_frames) + " declared";
   }
   message += "); the file is truncated or corrupt";
-  throw PermanentError(
+  throw Error(
       kVideoTruncated, message,
       {.clip = options_.clip, .file = path_.string(), .field = "frame " + std::to_string(frame)});
 }

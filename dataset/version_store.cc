@@ -175,12 +175,15 @@ fs::path FindVersion(const fs::path& root, const std::string& name, const std::s
               {.field = "version"});
 }
 
-Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& options,
-                       const std::function<void(int, int)>& progress) {
-  CheckName(options.name);
+namespace {
+
+// The steps of CreateVersion.
+
+// The clips whose runs are not settled; refused unless --allow-stale.
+std::vector<UnsettledClip> CheckSettled(Database& db, const CreateOptions& options) {
   std::map<ClipId, std::string> external_ids;
   for (const ClipRecord& clip : db.ListClips()) external_ids[clip.id] = clip.external_id;
-  const std::vector<UnsettledClip> unsettled = FindUnsettled(db.ReportRuns(), external_ids);
+  std::vector<UnsettledClip> unsettled = FindUnsettled(db.ReportRuns(), external_ids);
   if (!unsettled.empty() && !options.allow_stale) {
     throw Error("unsettled_runs",
                 std::to_string(unsettled.size()) +
@@ -190,6 +193,81 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
                     "version anyway (recorded in its manifest)",
                 {.clip = std::to_string(unsettled.front().clip_id), .field = "--allow-stale"});
   }
+  return unsettled;
+}
+
+// The next version's number under `root` (past every version of the name
+// and every stray vK folder) and its parent.
+int NextVersionNumber(const fs::path& root, const std::string& name, std::string& parent) {
+  int number = 1;
+  for (const VersionRef& v : ListVersions(root)) {
+    if (v.name != name) continue;
+    number = v.number + 1;
+    parent = v.version;
+  }
+  // A vK folder without a manifest is not a version; the next one numbers
+  // past it instead of colliding with it on every run.
+  for (const VersionRef& v : ListStrayVersions(root)) {
+    if (v.name != name) continue;
+    std::fprintf(stderr, "%s is not a version (no %s); left alone\n", v.dir.c_str(), kManifestFile);
+    number = std::max(number, v.number + 1);
+  }
+  return number;
+}
+
+// Writes the episodes, the playbook report and the manifest into `temp`.
+// An episode whose file is missing is left out, named; the others are
+// written.
+void WriteVersionFiles(Database& db, const CreateOptions& options, const fs::path& temp,
+                       Manifest& m, const std::function<void(int, int)>& progress) {
+  std::vector<Episode> written;
+  for (size_t i = 0; i < m.episodes.size(); ++i) {
+    Episode& e = m.episodes[i];
+    if (const std::string missing = MissingTrajectory(db, e); !missing.empty()) {
+      std::fprintf(stderr, "left out clip %lld: %s\n", static_cast<long long>(e.clip_id),
+                   missing.c_str());
+      m.excluded.push_back({e.clip_id, e.external_id,
+                            e.stages.empty() ? StageProvenance{} : e.stages.back(), missing});
+      continue;
+    }
+    e.index = static_cast<std::int64_t>(written.size());
+    WriteEpisode(db, e, temp / kEpisodesFolder / e.id);
+    written.push_back(std::move(e));
+    if (progress) progress(static_cast<int>(i + 1), static_cast<int>(m.episodes.size()));
+  }
+  m.episodes = std::move(written);
+  if (m.episodes.empty() && !options.allow_empty) {
+    throw Error("empty_version", "every selected episode's trajectory file is missing",
+                {.field = "--select"});
+  }
+  reports::ReportOptions report;
+  report.thumbnails = options.thumbnails;
+  reports::WriteReport(db, temp / kPlaybookFolder, report);
+  m.files = HashFiles(temp);
+  WriteManifest(m, temp);
+}
+
+// Moves the finished `temp` into place as `final_dir`, never over another
+// run's version.
+void PublishVersion(const fs::path& temp, const fs::path& final_dir, const std::string& version) {
+  if (renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, final_dir.c_str(), RENAME_NOREPLACE) == 0) return;
+  const int err = errno;
+  std::error_code ec;
+  fs::remove_all(temp, ec);
+  if (err == EEXIST || err == ENOTEMPTY) {
+    throw Error("version_exists", "another run created " + version + " first; run again",
+                {.file = final_dir.string()});
+  }
+  throw Error("io", std::string("cannot rename the version into place: ") + std::strerror(err),
+              {.file = final_dir.string()});
+}
+
+}  // namespace
+
+Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& options,
+                       const std::function<void(int, int)>& progress) {
+  CheckName(options.name);
+  const std::vector<UnsettledClip> unsettled = CheckSettled(db, options);
   EpisodeSelection selection = SelectEpisodes(db, options.selection);
   if (selection.episodes.empty() && !options.allow_empty) {
     throw Error("empty_version",
@@ -205,20 +283,7 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
 
   Manifest m;
   m.name = options.name;
-  int number = 1;
-  for (const VersionRef& v : ListVersions(root)) {
-    if (v.name != options.name) continue;
-    number = v.number + 1;
-    m.parent = v.version;
-  }
-  // A vK folder without a manifest is not a version; the next one numbers
-  // past it instead of colliding with it on every run.
-  for (const VersionRef& v : ListStrayVersions(root)) {
-    if (v.name != options.name) continue;
-    std::fprintf(stderr, "%s is not a version (no %s); left alone\n", v.dir.c_str(), kManifestFile);
-    number = std::max(number, v.number + 1);
-  }
-  m.version = "v" + std::to_string(number);
+  m.version = "v" + std::to_string(NextVersionNumber(root, options.name, m.parent));
   m.created_at = static_cast<double>(std::time(nullptr));
   m.tool_version = ToolVersion();
   m.tool_revision = SourceRevision();
@@ -237,48 +302,12 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
   fs::create_directories(temp / kEpisodesFolder, ec);
   if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
   try {
-    // An episode whose file is missing is left out, named; the others are
-    // written.
-    std::vector<Episode> written;
-    for (size_t i = 0; i < m.episodes.size(); ++i) {
-      Episode& e = m.episodes[i];
-      if (const std::string missing = MissingTrajectory(db, e); !missing.empty()) {
-        std::fprintf(stderr, "left out clip %lld: %s\n", static_cast<long long>(e.clip_id),
-                     missing.c_str());
-        m.excluded.push_back({e.clip_id, e.external_id,
-                              e.stages.empty() ? StageProvenance{} : e.stages.back(), missing});
-        continue;
-      }
-      e.index = static_cast<std::int64_t>(written.size());
-      WriteEpisode(db, e, temp / kEpisodesFolder / e.id);
-      written.push_back(std::move(e));
-      if (progress) progress(static_cast<int>(i + 1), static_cast<int>(m.episodes.size()));
-    }
-    m.episodes = std::move(written);
-    if (m.episodes.empty() && !options.allow_empty) {
-      throw Error("empty_version", "every selected episode's trajectory file is missing",
-                  {.field = "--select"});
-    }
-    reports::ReportOptions report;
-    report.thumbnails = options.thumbnails;
-    reports::WriteReport(db, temp / kPlaybookFolder, report);
-    m.files = HashFiles(temp);
-    WriteManifest(m, temp);
+    WriteVersionFiles(db, options, temp, m, progress);
   } catch (...) {
     fs::remove_all(temp, ec);
     throw;
   }
-  const fs::path final_dir = dataset_dir / m.version;
-  if (renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, final_dir.c_str(), RENAME_NOREPLACE) != 0) {
-    const int err = errno;
-    fs::remove_all(temp, ec);
-    if (err == EEXIST || err == ENOTEMPTY) {
-      throw Error("version_exists", "another run created " + m.version + " first; run again",
-                  {.file = final_dir.string()});
-    }
-    throw Error("io", std::string("cannot rename the version into place: ") + std::strerror(err),
-                {.file = final_dir.string()});
-  }
+  PublishVersion(temp, dataset_dir / m.version, m.version);
   return m;
 }
 

@@ -7,6 +7,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <functional>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -131,6 +132,208 @@ std::string ShardMeta(sqlite3* db, const std::string& key) {
   db::Statement q(db, "SELECT value FROM shard.meta WHERE key = ?");
   q.Bind(1, key);
   return q.Step() ? q.Text(0) : std::string();
+}
+
+
+// The steps of Database::MergeShard, each on the connection with the shard
+// attached as schema "shard", inside the merge's transaction.
+
+// Attaches `file` as schema "shard"; any error is the shard's (not a
+// doasido shard database), not this database's.
+void AttachShard(sqlite3* db, const std::filesystem::path& file, const std::string& where,
+                 std::optional<Attached>& attached) {
+  try {
+    attached.emplace(db, file);
+    if (Count(db, "SELECT COUNT(*) FROM shard.sqlite_master WHERE name = 'meta'") == 0) {
+      throw Error("not_a_shard", "");
+    }
+  } catch (const Error& e) {
+    throw Error("not_a_shard",
+                "not a doasido shard database (made by doasido shard)" +
+                    (e.message().empty() ? std::string() : ": " + e.message()),
+                {.file = where});
+  }
+}
+
+// This database's row for the attached shard.
+struct ShardEntry {
+  std::string name;
+  std::int64_t id = 0;
+  std::string config_hash;
+};
+
+// The attached shard's entry, after checking that it was split from this
+// database (`uuid`) and runs its `pipeline`.
+ShardEntry CheckShardIsOurs(sqlite3* db, const std::string& uuid,
+                            const std::vector<std::string>& pipeline, const std::string& where) {
+  ShardEntry entry;
+  entry.name = ShardMeta(db, "shard_name");
+  if (entry.name.empty()) {
+    throw Error("not_a_shard", "not a doasido shard database (made by doasido shard)",
+                {.file = where});
+  }
+  if (ShardMeta(db, "parent_uuid") != uuid) {
+    throw Error("foreign_shard",
+                "shard " + entry.name + " was split from another database (" +
+                    ShardMeta(db, "parent_path") + ")",
+                {.file = where});
+  }
+  db::Statement q(db, "SELECT id, config_hash FROM shards WHERE name = ?");
+  q.Bind(1, entry.name);
+  if (q.Step()) {
+    entry.id = q.Int(0);
+    entry.config_hash = q.Text(1);
+  }
+  if (entry.id == 0) {
+    throw Error("foreign_shard", "this database lists no shard named " + entry.name,
+                {.file = where});
+  }
+  std::vector<std::string> theirs;
+  db::Statement stages(db, "SELECT stage FROM shard.pipeline ORDER BY position");
+  while (stages.Step()) theirs.push_back(stages.Text(0));
+  if (theirs != pipeline) {
+    throw Error("pipeline_mismatch",
+                "shard " + entry.name + " runs pipeline " + Json(theirs).dump() +
+                    ", this database " + Json(pipeline).dump(),
+                {.file = where, .field = "pipeline"});
+  }
+  return entry;
+}
+
+// The shard's stage parameter hashes, checked against the configuration
+// this database recorded for it.
+Json CheckShardConfig(sqlite3* db, const ShardEntry& entry, const std::string& where) {
+  Json hashes = Json::parse(ShardMeta(db, "stage_hashes"), nullptr, false);
+  if (hashes.is_discarded() || ParamHash(hashes) != entry.config_hash) {
+    throw Error("config_mismatch",
+                "shard " + entry.name + " was made with another configuration than this "
+                "database recorded for it",
+                {.file = where, .field = "stage_hashes"});
+  }
+  return hashes;
+}
+
+// temp.selected: the shard's clips but those held back.
+void SelectShardClips(sqlite3* db, std::int64_t shard_id, const std::set<ClipId>& hold_back) {
+  db::Exec(db, "CREATE TEMP TABLE IF NOT EXISTS selected (clip_id INTEGER PRIMARY KEY);"
+               "DELETE FROM temp.selected;");
+  db::Statement select(db, "INSERT INTO temp.selected SELECT clip_id FROM shard_clips"
+                           " WHERE shard_id = ?");
+  select.Bind(1, shard_id).Run();
+  db::Statement drop(db, "DELETE FROM temp.selected WHERE clip_id = ?");
+  for (ClipId clip : hold_back) {
+    drop.Bind(1, clip).Run();
+  }
+}
+
+// Refuses a shard whose finished runs used other stage parameters than it
+// was made for.
+void CheckRunParameters(sqlite3* db, const Json& hashes, const std::string& shard,
+                        const std::string& where) {
+  db::Statement runs(db, "SELECT stage, param_hash FROM shard.stage_runs"
+                         " WHERE state = 'done' AND clip_id IN temp.selected");
+  while (runs.Step()) {
+    const std::string stage = runs.Text(0);
+    const std::string hash = runs.IsNull(1) ? "" : runs.Text(1);
+    if (hashes.contains(stage) && hashes[stage] != hash) {
+      throw Error("config_mismatch",
+                  "shard " + shard + " ran stage " + stage + " with parameters " + hash +
+                      "; it was made for " + hashes[stage].get<std::string>() +
+                      " (run it with the --config it was sharded with)",
+                  {.file = where, .field = stage});
+    }
+  }
+}
+
+// Replaces, table by table, the rows of every selected clip whose rows
+// differ from the shard's (as multisets of content). Returns how many
+// clips changed.
+std::int64_t MergeClipRows(sqlite3* db) {
+  RegisterFingerprint(db);
+  db::Exec(db, "CREATE TEMP TABLE IF NOT EXISTS changed (clip_id INTEGER PRIMARY KEY);"
+               "CREATE TEMP TABLE IF NOT EXISTS differing (clip_id INTEGER PRIMARY KEY);"
+               "DELETE FROM temp.changed;");
+  for (const ClipTable& t : kClipTables) {
+    auto per_clip = [&t](const std::string& schema, const char* columns) {
+      return "SELECT clip_id, row_fingerprint(" + std::string(columns) + "), COUNT(*) FROM " +
+             schema + "." + t.name + " WHERE clip_id IN temp.selected GROUP BY clip_id";
+    };
+    const std::string mine = per_clip("main", t.columns);
+    const std::string theirs = per_clip("shard", SourceColumns(t));
+    db::Exec(db, "DELETE FROM temp.differing;");
+    db::Exec(db, "INSERT INTO temp.differing SELECT clip_id FROM (" + mine + " EXCEPT " +
+                     theirs + ") UNION SELECT clip_id FROM (" + theirs + " EXCEPT " + mine + ")");
+    db::Exec(db, std::string("DELETE FROM main.") + t.name + " WHERE clip_id IN temp.differing");
+    db::Exec(db, std::string("INSERT INTO main.") + t.name + " (" + t.columns + ") SELECT " +
+                     SourceColumns(t) + " FROM shard." + t.name +
+                     " WHERE clip_id IN temp.differing ORDER BY rowid");
+    db::Exec(db, "INSERT OR IGNORE INTO temp.changed SELECT clip_id FROM temp.differing");
+  }
+  return Count(db, "SELECT COUNT(*) FROM temp.changed");
+}
+
+// What probing learnt about the selected clips' videos (their paths stay
+// this database's), and the files the shard downloaded (in `shard_root`,
+// stored through `store`).
+void MergeVideos(sqlite3* db, const std::filesystem::path& shard_root,
+                 const std::function<std::string(const std::string&)>& store) {
+  db::Exec(db,
+           "UPDATE main.videos SET (width, height, fps, frame_count, duration_s,"
+           " variable_frame_rate, rotation_deg, codec, probed_at) ="
+           " (SELECT width, height, fps, frame_count, duration_s, variable_frame_rate,"
+           "         rotation_deg, codec, probed_at FROM shard.videos s WHERE s.id = videos.id)"
+           " WHERE id IN (SELECT video_id FROM main.clips WHERE id IN temp.selected)"
+           "   AND EXISTS (SELECT 1 FROM shard.videos s WHERE s.id = videos.id AND"
+           "     (s.width, s.height, s.fps, s.frame_count, s.duration_s, s.variable_frame_rate,"
+           "      s.rotation_deg, s.codec, s.probed_at) IS NOT (videos.width, videos.height,"
+           "      videos.fps, videos.frame_count, videos.duration_s, videos.variable_frame_rate,"
+           "      videos.rotation_deg, videos.codec, videos.probed_at))");
+  db::Statement local(db, "SELECT id, local_path, size_bytes, sha256, downloaded_at"
+                          " FROM shard.videos WHERE local_path IS NOT NULL AND id IN"
+                          " (SELECT video_id FROM main.clips WHERE id IN temp.selected)");
+  db::Statement update(db, "UPDATE main.videos SET local_path = ?, size_bytes = ?, sha256 = ?,"
+                           " downloaded_at = ? WHERE id = ? AND (local_path, size_bytes, sha256,"
+                           " downloaded_at) IS NOT (?, ?, ?, ?)");
+  while (local.Step()) {
+    std::filesystem::path p = local.Text(1);
+    if (p.is_relative()) p = shard_root / p;
+    const std::string stored = store(p.lexically_normal().string());
+    update.Bind(1, stored).Bind(2, local.OptInt(2)).Bind(3, local.IsNull(3) ? "" : local.Text(3));
+    update.Bind(4, local.OptReal(4)).Bind(5, local.Int(0)).Bind(6, stored);
+    update.Bind(7, local.OptInt(2)).Bind(8, local.IsNull(3) ? "" : local.Text(3));
+    update.Bind(9, local.OptReal(4)).Run();
+  }
+}
+
+// Copies the shard's events since the last merge; a shard with no open run
+// hands its clips back and is marked merged into `parent`.
+void MergeEvents(sqlite3* db, std::int64_t shard_id, const std::string& parent,
+                 Database::MergeStats& stats) {
+  db::Statement last(db, "SELECT merged_event FROM shards WHERE id = ?");
+  last.Bind(1, shard_id);
+  last.Step();
+  const std::int64_t from = last.Int(0);
+  db::Statement events(db, "INSERT INTO main.events (at, clip_id, stage, kind, worker, detail)"
+                           " SELECT at, clip_id, stage, kind, worker, detail FROM shard.events"
+                           " WHERE id > ? AND (clip_id IS NULL OR clip_id IN temp.selected)"
+                           " AND kind NOT IN ('pipeline') ORDER BY id");
+  events.Bind(1, from).Run();
+  stats.events = sqlite3_changes(db);
+  if (stats.open_runs == 0) {
+    // Finished: the clips are this database's again (re-queue, re-shard
+    // and its workers treat them as any clip), and the shard takes no
+    // more runs (RefuseMergedShard), so nothing it does later competes.
+    db::Statement hand_back(db, "DELETE FROM shard_clips WHERE shard_id = ?");
+    hand_back.Bind(1, shard_id).Run();
+    stats.handed_back = sqlite3_changes(db);
+    db::Statement mark(db, "INSERT OR REPLACE INTO shard.meta (key, value) VALUES (?, ?)");
+    mark.Bind(1, Database::kMergedIntoKey).Bind(2, parent).Run();
+  }
+  if (stats.events > 0 || stats.changed_clips > 0) {
+    db::Statement update(db, "UPDATE shards SET merged_at = ?, merged_event ="
+                             " (SELECT COALESCE(MAX(id), 0) FROM shard.events) WHERE id = ?");
+    update.Bind(1, Now()).Bind(2, shard_id).Run();
+  }
 }
 
 }  // namespace
@@ -308,141 +511,18 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
     throw Error("self_merge", "this is the database being merged into, not a shard of it",
                 {.file = where});
   }
-  // Errors about the file are the shard's, not this database's.
   std::optional<Attached> attached;
-  try {
-    attached.emplace(db_, file);
-    if (Count(db_, "SELECT COUNT(*) FROM shard.sqlite_master WHERE name = 'meta'") == 0) {
-      throw Error("not_a_shard", "");
-    }
-  } catch (const Error& e) {
-    throw Error("not_a_shard",
-                "not a doasido shard database (made by doasido shard)" +
-                    (e.message().empty() ? std::string() : ": " + e.message()),
-                {.file = where});
-  }
+  AttachShard(db_, file, where, attached);
   Transaction tx(*this);
-  if (ShardMeta(db_, "shard_name").empty()) {
-    throw Error("not_a_shard", "not a doasido shard database (made by doasido shard)",
-                {.file = where});
-  }
   MergeStats stats;
-  stats.shard = ShardMeta(db_, "shard_name");
-  if (ShardMeta(db_, "parent_uuid") != Uuid()) {
-    throw Error("foreign_shard",
-                "shard " + stats.shard + " was split from another database (" +
-                    ShardMeta(db_, "parent_path") + ")",
-                {.file = where});
-  }
-  std::int64_t shard_id = 0;
-  std::string config_hash;
-  {
-    auto& q = Prepare("SELECT id, config_hash FROM shards WHERE name = ?");
-    q.Bind(1, stats.shard);
-    if (q.Step()) {
-      shard_id = q.Int(0);
-      config_hash = q.Text(1);
-    }
-    q.Reset();
-  }
-  if (shard_id == 0) {
-    throw Error("foreign_shard", "this database lists no shard named " + stats.shard,
-                {.file = where});
-  }
-  {
-    std::vector<std::string> theirs;
-    db::Statement q(db_, "SELECT stage FROM shard.pipeline ORDER BY position");
-    while (q.Step()) theirs.push_back(q.Text(0));
-    if (theirs != Pipeline()) {
-      throw Error("pipeline_mismatch",
-                  "shard " + stats.shard + " runs pipeline " + Json(theirs).dump() +
-                      ", this database " + Json(Pipeline()).dump(),
-                  {.file = where, .field = "pipeline"});
-    }
-  }
-  const Json hashes = Json::parse(ShardMeta(db_, "stage_hashes"), nullptr, false);
-  if (hashes.is_discarded() || ParamHash(hashes) != config_hash) {
-    throw Error("config_mismatch",
-                "shard " + stats.shard + " was made with another configuration than this "
-                "database recorded for it",
-                {.file = where, .field = "stage_hashes"});
-  }
-  db::Exec(db_, "CREATE TEMP TABLE IF NOT EXISTS selected (clip_id INTEGER PRIMARY KEY);"
-                "DELETE FROM temp.selected;");
-  Prepare("INSERT INTO temp.selected SELECT clip_id FROM shard_clips WHERE shard_id = ?")
-      .Bind(1, shard_id)
-      .Run();
-  for (ClipId clip : hold_back) {
-    Prepare("DELETE FROM temp.selected WHERE clip_id = ?").Bind(1, clip).Run();
-  }
-  {
-    db::Statement runs(db_, "SELECT stage, param_hash FROM shard.stage_runs"
-                            " WHERE state = 'done' AND clip_id IN temp.selected");
-    while (runs.Step()) {
-      const std::string stage = runs.Text(0);
-      const std::string hash = runs.IsNull(1) ? "" : runs.Text(1);
-      if (hashes.contains(stage) && hashes[stage] != hash) {
-        throw Error("config_mismatch",
-                    "shard " + stats.shard + " ran stage " + stage + " with parameters " + hash +
-                        "; it was made for " + hashes[stage].get<std::string>() +
-                        " (run it with the --config it was sharded with)",
-                    {.file = where, .field = stage});
-      }
-    }
-  }
-  RegisterFingerprint(db_);
-  db::Exec(db_, "CREATE TEMP TABLE IF NOT EXISTS changed (clip_id INTEGER PRIMARY KEY);"
-                "CREATE TEMP TABLE IF NOT EXISTS differing (clip_id INTEGER PRIMARY KEY);"
-                "DELETE FROM temp.changed;");
-  for (const ClipTable& t : kClipTables) {
-    // Clips whose rows differ, as multisets of content.
-    auto per_clip = [&t](const std::string& schema, const char* columns) {
-      return "SELECT clip_id, row_fingerprint(" + std::string(columns) + "), COUNT(*) FROM " +
-             schema + "." + t.name + " WHERE clip_id IN temp.selected GROUP BY clip_id";
-    };
-    const std::string mine = per_clip("main", t.columns);
-    const std::string theirs = per_clip("shard", SourceColumns(t));
-    db::Exec(db_, "DELETE FROM temp.differing;");
-    db::Exec(db_, "INSERT INTO temp.differing SELECT clip_id FROM (" + mine + " EXCEPT " +
-                      theirs + ") UNION SELECT clip_id FROM (" + theirs + " EXCEPT " + mine + ")");
-    db::Exec(db_, std::string("DELETE FROM main.") + t.name +
-                      " WHERE clip_id IN temp.differing");
-    db::Exec(db_, std::string("INSERT INTO main.") + t.name + " (" + t.columns + ") SELECT " +
-                      SourceColumns(t) + " FROM shard." + t.name +
-                      " WHERE clip_id IN temp.differing ORDER BY rowid");
-    db::Exec(db_, "INSERT OR IGNORE INTO temp.changed SELECT clip_id FROM temp.differing");
-  }
-  // What probing learnt about the videos (their paths stay this database's).
-  db::Exec(db_,
-           "UPDATE main.videos SET (width, height, fps, frame_count, duration_s,"
-           " variable_frame_rate, rotation_deg, codec, probed_at) ="
-           " (SELECT width, height, fps, frame_count, duration_s, variable_frame_rate,"
-           "         rotation_deg, codec, probed_at FROM shard.videos s WHERE s.id = videos.id)"
-           " WHERE id IN (SELECT video_id FROM main.clips WHERE id IN temp.selected)"
-           "   AND EXISTS (SELECT 1 FROM shard.videos s WHERE s.id = videos.id AND"
-           "     (s.width, s.height, s.fps, s.frame_count, s.duration_s, s.variable_frame_rate,"
-           "      s.rotation_deg, s.codec, s.probed_at) IS NOT (videos.width, videos.height,"
-           "      videos.fps, videos.frame_count, videos.duration_s, videos.variable_frame_rate,"
-           "      videos.rotation_deg, videos.codec, videos.probed_at))");
-  {  // Files the shard downloaded: the shard's folder holds them.
-    const auto shard_root = std::filesystem::absolute(file).parent_path();
-    db::Statement local(db_, "SELECT id, local_path, size_bytes, sha256, downloaded_at"
-                             " FROM shard.videos WHERE local_path IS NOT NULL AND id IN"
-                             " (SELECT video_id FROM main.clips WHERE id IN temp.selected)");
-    db::Statement update(db_, "UPDATE main.videos SET local_path = ?, size_bytes = ?, sha256 = ?,"
-                              " downloaded_at = ? WHERE id = ? AND (local_path, size_bytes, sha256,"
-                              " downloaded_at) IS NOT (?, ?, ?, ?)");
-    while (local.Step()) {
-      std::filesystem::path p = local.Text(1);
-      if (p.is_relative()) p = shard_root / p;
-      const std::string stored = Store(p.lexically_normal().string());
-      update.Bind(1, stored).Bind(2, local.OptInt(2)).Bind(3, local.IsNull(3) ? "" : local.Text(3));
-      update.Bind(4, local.OptReal(4)).Bind(5, local.Int(0)).Bind(6, stored);
-      update.Bind(7, local.OptInt(2)).Bind(8, local.IsNull(3) ? "" : local.Text(3));
-      update.Bind(9, local.OptReal(4)).Run();
-    }
-  }
-  stats.changed_clips = QueryInt("SELECT COUNT(*) FROM temp.changed");
+  const ShardEntry entry = CheckShardIsOurs(db_, Uuid(), Pipeline(), where);
+  stats.shard = entry.name;
+  const Json hashes = CheckShardConfig(db_, entry, where);
+  SelectShardClips(db_, entry.id, hold_back);
+  CheckRunParameters(db_, hashes, entry.name, where);
+  stats.changed_clips = MergeClipRows(db_);
+  MergeVideos(db_, std::filesystem::absolute(file).parent_path(),
+              [this](const std::string& path) { return Store(path); });
   stats.clips = QueryInt("SELECT COUNT(*) FROM temp.selected");
   stats.finished_runs = Count(db_, 
       "SELECT COUNT(*) FROM shard.stage_runs WHERE state IN ('done', 'failed')"
@@ -450,33 +530,7 @@ Database::MergeStats Database::MergeShard(const std::filesystem::path& file,
   stats.open_runs = Count(db_, 
       "SELECT COUNT(*) FROM shard.stage_runs WHERE state IN ('pending', 'running')"
       " AND clip_id IN temp.selected");
-  {
-    auto& last = Prepare("SELECT merged_event FROM shards WHERE id = ?");
-    last.Bind(1, shard_id);
-    last.Step();
-    const std::int64_t from = last.Int(0);
-    last.Reset();
-    db::Statement events(db_, "INSERT INTO main.events (at, clip_id, stage, kind, worker, detail)"
-                              " SELECT at, clip_id, stage, kind, worker, detail FROM shard.events"
-                              " WHERE id > ? AND (clip_id IS NULL OR clip_id IN temp.selected)"
-                              " AND kind NOT IN ('pipeline') ORDER BY id");
-    events.Bind(1, from).Run();
-    stats.events = sqlite3_changes(db_);
-    if (stats.open_runs == 0) {
-      // Finished: the clips are this database's again (re-queue, re-shard
-      // and its workers treat them as any clip), and the shard takes no
-      // more runs (RefuseMergedShard), so nothing it does later competes.
-      Prepare("DELETE FROM shard_clips WHERE shard_id = ?").Bind(1, shard_id).Run();
-      stats.handed_back = sqlite3_changes(db_);
-      db::Statement mark(db_, "INSERT OR REPLACE INTO shard.meta (key, value) VALUES (?, ?)");
-      mark.Bind(1, kMergedIntoKey).Bind(2, std::filesystem::absolute(path_).string()).Run();
-    }
-    if (stats.events > 0 || stats.changed_clips > 0) {
-      db::Statement update(db_, "UPDATE shards SET merged_at = ?, merged_event ="
-                                " (SELECT COALESCE(MAX(id), 0) FROM shard.events) WHERE id = ?");
-      update.Bind(1, Now()).Bind(2, shard_id).Run();
-    }
-  }
+  MergeEvents(db_, entry.id, std::filesystem::absolute(path_).string(), stats);
   if (!placement.empty() && stats.clips > 0) {  // else the clips are this database's already
     Prepare("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)")
         .Bind(1, kPlacementKey)

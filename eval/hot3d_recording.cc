@@ -7,6 +7,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/json_input.h"
 #include "recon/recon_metrics.h"
@@ -51,28 +52,28 @@ Pose PoseFrom(const Vec3& t, const Quat& q, const std::filesystem::path& file, l
 
 std::map<std::string, std::map<long long, Pose>> ReadHot3dPoses(const std::filesystem::path& file) {
   std::map<std::string, std::map<long long, Pose>> out;
-  std::ifstream in = Open(file);
-  std::string row;
-  std::getline(in, row);
-  if (row.rfind("object_uid,timestamp[ns]", 0) != 0) {
-    throw Error("bad_hot3d", "not a HOT3D object pose table (header '" + row.substr(0, 60) + "')",
-                {.file = file.string(), .line = 1});
-  }
+  CsvReader reader = CsvReader::Open(file, "bad_hot3d");
+  const std::vector<std::string> header = reader.Header();
   static const char* kFields[] = {"object_uid", "timestamp[ns]", "t_wo_x[m]", "t_wo_y[m]", "t_wo_z[m]",
                                   "q_wo_w", "q_wo_x", "q_wo_y", "q_wo_z"};
-  for (long line = 2; std::getline(in, row); ++line) {
-    if (row.empty()) continue;
-    std::vector<std::string> c;
-    std::stringstream ss(row);
-    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+  if (header.size() < 2 || header[0] != kFields[0] || header[1] != kFields[1]) {
+    std::string names;
+    for (const std::string& name : header) names += (names.empty() ? "" : ",") + name;
+    reader.Fail(reader.header_line(), "",
+                "not a HOT3D object pose table (header '" + names.substr(0, 60) + "')");
+  }
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (!record.error.empty()) reader.Fail(record.line, "", record.error);
+    if (record.Blank()) continue;
+    const std::vector<std::string>& c = record.fields;
     if (c.size() != 9) {
-      throw Error("bad_hot3d", "expected 9 columns, found " + std::to_string(c.size()),
-                  {.file = file.string(), .line = line});
+      reader.Fail(record.line, "", "expected 9 columns, found " + std::to_string(c.size()));
     }
     double v[9];
-    for (int k = 1; k < 9; ++k) v[k] = Number(c[k], file, line, kFields[k]);
+    for (int k = 1; k < 9; ++k) v[k] = Number(c[k], file, record.line, kFields[k]);
     out[c[0]][static_cast<long long>(v[1])] =
-        PoseFrom(Vec3(v[2], v[3], v[4]), Quat(v[5], v[6], v[7], v[8]), file, line, "q_wo");
+        PoseFrom(Vec3(v[2], v[3], v[4]), Quat(v[5], v[6], v[7], v[8]), file, record.line, "q_wo");
   }
   return out;
 }

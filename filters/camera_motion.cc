@@ -32,6 +32,88 @@ void ExcludeBoxes(const std::vector<cv::Rect2d>& boxes, double margin, cv::Mat& 
   }
 }
 
+
+// The steps of CameraMotionExtractor::Consume.
+
+// The camera's motion between two sampled frames, as the signals store it.
+struct PairMotion {
+  double tx = 0, ty = 0, rotation = 0, log_scale = 0;
+  int points = 0, inliers = 0, valid = 0;
+  int masked = 0;  // corners came from the background only (hands and objects masked)
+};
+
+// Corners to track in `prev_gray`: from the background when `prev_mask`
+// leaves enough of them (`masked` = 1), else from the whole frame.
+std::vector<cv::Point2f> Corners(const cv::Mat& prev_gray, const cv::Mat& prev_mask,
+                                 const CameraMotionSignalConfig& config, int& masked) {
+  std::vector<cv::Point2f> corners;
+  if (!prev_mask.empty()) {
+    cv::goodFeaturesToTrack(prev_gray, corners, config.max_corners, config.quality_level,
+                            config.min_distance, prev_mask);
+    masked = static_cast<int>(corners.size()) >= config.min_background_points ? 1 : 0;
+  }
+  if (!masked) {
+    cv::goodFeaturesToTrack(prev_gray, corners, config.max_corners, config.quality_level,
+                            config.min_distance);
+  }
+  return corners;
+}
+
+// The frame-to-frame homography (or similarity) of the tracked corners by
+// RANSAC at `threshold` pixels; false when none fits.
+bool FitFrameMotion(const std::vector<cv::Point2f>& src, const std::vector<cv::Point2f>& dst,
+                    const CameraMotionSignalConfig& config, double threshold, cv::Matx33d& h,
+                    cv::Mat& inlier_mask) {
+  if (config.model == "similarity") {
+    cv::Mat a = cv::estimateAffinePartial2D(src, dst, inlier_mask, cv::RANSAC, threshold);
+    if (a.empty()) return false;
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 3; ++c) h(r, c) = a.at<double>(r, c);
+    }
+    return true;
+  }
+  cv::Mat m = cv::findHomography(src, dst, cv::RANSAC, threshold, inlier_mask);
+  if (m.empty() || std::abs(m.at<double>(2, 2)) <= 1e-12) return false;
+  h = cv::Matx33d(m) * (1.0 / m.at<double>(2, 2));
+  return true;
+}
+
+// Tracks `corners` from `prev_gray` into `gray` and fills `m` with the
+// fitted motion of the frame centre (shift as a fraction of the diagonal,
+// rotation, log scale).
+void MotionBetween(const cv::Mat& prev_gray, const cv::Mat& gray,
+                   const std::vector<cv::Point2f>& corners, const CameraMotionSignalConfig& config,
+                   double downscale, PairMotion& m) {
+  std::vector<cv::Point2f> tracked;
+  std::vector<unsigned char> status;
+  std::vector<float> error;
+  cv::calcOpticalFlowPyrLK(prev_gray, gray, corners, tracked, status, error,
+                           cv::Size(config.lk_window, config.lk_window), config.lk_levels);
+  std::vector<cv::Point2f> src, dst;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    if (status[i]) {
+      src.push_back(corners[i]);
+      dst.push_back(tracked[i]);
+    }
+  }
+  m.points = static_cast<int>(src.size());
+  const double threshold = std::max(0.5, config.ransac_threshold / std::max(1.0, downscale));
+  if (m.points < config.min_points) return;
+  cv::Mat inlier_mask;
+  cv::Matx33d h = cv::Matx33d::eye();
+  if (!FitFrameMotion(src, dst, config, threshold, h, inlier_mask)) return;
+  m.inliers = cv::countNonZero(inlier_mask);
+  const double cx = gray.cols / 2.0, cy = gray.rows / 2.0;
+  const cv::Vec3d c = h * cv::Vec3d(cx, cy, 1.0);
+  const double diagonal = std::hypot(gray.cols, gray.rows);
+  m.tx = (c[0] / c[2] - cx) / diagonal;
+  m.ty = (c[1] / c[2] - cy) / diagonal;
+  m.rotation = std::atan2(h(1, 0) - h(0, 1), h(0, 0) + h(1, 1));
+  const double det = std::abs(h(0, 0) * h(1, 1) - h(0, 1) * h(1, 0));
+  m.log_scale = det > 0 ? 0.5 * std::log(det) : 0.0;
+  m.valid = 1;
+}
+
 }  // namespace
 
 Json ToJson(const CameraMotionSignals& s) {
@@ -87,78 +169,21 @@ void CameraMotionExtractor::Consume(FrameContext& context) {
   }
   const double time = context.frame->timestamp_s;
   if (!prev_gray_.empty()) {
-    double tx = 0, ty = 0, rotation = 0, log_scale = 0;
-    int points = 0, inliers = 0, valid = 0;
-    std::vector<cv::Point2f> corners;
-    int masked = 0;
-    if (!prev_mask_.empty()) {
-      cv::goodFeaturesToTrack(prev_gray_, corners, config_.max_corners, config_.quality_level,
-                              config_.min_distance, prev_mask_);
-      masked = static_cast<int>(corners.size()) >= config_.min_background_points ? 1 : 0;
-    }
-    if (!masked) {
-      cv::goodFeaturesToTrack(prev_gray_, corners, config_.max_corners, config_.quality_level,
-                              config_.min_distance);
-    }
+    PairMotion m;
+    const std::vector<cv::Point2f> corners = Corners(prev_gray_, prev_mask_, config_, m.masked);
     if (static_cast<int>(corners.size()) >= config_.min_points) {
-      std::vector<cv::Point2f> tracked;
-      std::vector<unsigned char> status;
-      std::vector<float> error;
-      cv::calcOpticalFlowPyrLK(prev_gray_, gray, corners, tracked, status, error,
-                               cv::Size(config_.lk_window, config_.lk_window), config_.lk_levels);
-      std::vector<cv::Point2f> src, dst;
-      for (size_t i = 0; i < corners.size(); ++i) {
-        if (status[i]) {
-          src.push_back(corners[i]);
-          dst.push_back(tracked[i]);
-        }
-      }
-      points = static_cast<int>(src.size());
-      const double threshold =
-          std::max(0.5, config_.ransac_threshold / std::max(1.0, geometry_.downscale));
-      if (points >= config_.min_points) {
-        cv::Mat inlier_mask;
-        cv::Matx33d h = cv::Matx33d::eye();
-        bool fitted = false;
-        if (config_.model == "similarity") {
-          cv::Mat a = cv::estimateAffinePartial2D(src, dst, inlier_mask, cv::RANSAC, threshold);
-          if (!a.empty()) {
-            for (int r = 0; r < 2; ++r) {
-              for (int c = 0; c < 3; ++c) h(r, c) = a.at<double>(r, c);
-            }
-            fitted = true;
-          }
-        } else {
-          cv::Mat m = cv::findHomography(src, dst, cv::RANSAC, threshold, inlier_mask);
-          if (!m.empty() && std::abs(m.at<double>(2, 2)) > 1e-12) {
-            h = cv::Matx33d(m) * (1.0 / m.at<double>(2, 2));
-            fitted = true;
-          }
-        }
-        if (fitted) {
-          inliers = cv::countNonZero(inlier_mask);
-          const double cx = gray.cols / 2.0, cy = gray.rows / 2.0;
-          const cv::Vec3d c = h * cv::Vec3d(cx, cy, 1.0);
-          const double diagonal = std::hypot(gray.cols, gray.rows);
-          tx = (c[0] / c[2] - cx) / diagonal;
-          ty = (c[1] / c[2] - cy) / diagonal;
-          rotation = std::atan2(h(1, 0) - h(0, 1), h(0, 0) + h(1, 1));
-          const double det = std::abs(h(0, 0) * h(1, 1) - h(0, 1) * h(1, 0));
-          log_scale = det > 0 ? 0.5 * std::log(det) : 0.0;
-          valid = 1;
-        }
-      }
+      MotionBetween(prev_gray_, gray, corners, config_, geometry_.downscale, m);
     }
     signals_.frame.push_back(context.ordinal);
     signals_.dt_s.push_back(time - prev_time_);
-    signals_.tx.push_back(tx);
-    signals_.ty.push_back(ty);
-    signals_.rotation.push_back(rotation);
-    signals_.log_scale.push_back(log_scale);
-    signals_.points.push_back(points);
-    signals_.inliers.push_back(inliers);
-    signals_.valid.push_back(valid);
-    signals_.masked.push_back(masked);
+    signals_.tx.push_back(m.tx);
+    signals_.ty.push_back(m.ty);
+    signals_.rotation.push_back(m.rotation);
+    signals_.log_scale.push_back(m.log_scale);
+    signals_.points.push_back(m.points);
+    signals_.inliers.push_back(m.inliers);
+    signals_.valid.push_back(m.valid);
+    signals_.masked.push_back(m.masked);
   }
   gray.copyTo(prev_gray_);
   prev_mask_ = mask;

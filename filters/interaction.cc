@@ -45,99 +45,146 @@ std::vector<Component> Components(const cv::Mat& mask, cv::Mat& labels) {
   return out;
 }
 
+
+// The steps of BuiltinHandObjectDetector::Consume.
+
+// Skin-coloured pixels (a YCrCb box), opened then closed to drop specks
+// and fill small holes.
+cv::Mat SkinMask(const cv::Mat& bgr, const BuiltinDetectorConfig& config) {
+  cv::Mat ycrcb, skin;
+  cv::cvtColor(bgr, ycrcb, cv::COLOR_BGR2YCrCb);
+  cv::inRange(ycrcb, cv::Scalar(config.y_min, config.cr_min, config.cb_min),
+              cv::Scalar(255, config.cr_max, config.cb_max), skin);
+  cv::morphologyEx(skin, skin, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  cv::morphologyEx(skin, skin, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
+  return skin;
+}
+
+// Pixels that changed since `old_gray`. When much of the picture changed,
+// a global shift (camera pan) is estimated at half size by phase
+// correlation and undone in `old_gray` and `old_skin`, so that only things
+// that moved in the scene count as motion.
+cv::Mat SceneMotion(const cv::Mat& gray, cv::Mat& old_gray, cv::Mat& old_skin,
+                    const BuiltinDetectorConfig& config) {
+  const double frame_area = static_cast<double>(gray.rows) * gray.cols;
+  cv::Mat diff, motion;
+  cv::absdiff(gray, old_gray, diff);
+  motion = diff > config.motion_threshold;
+  if (config.compensate_camera &&
+      cv::countNonZero(motion) > config.global_motion_fraction * frame_area) {
+    cv::Mat a, b;
+    cv::resize(old_gray, a, {}, 0.5, 0.5, cv::INTER_AREA);
+    cv::resize(gray, b, {}, 0.5, 0.5, cv::INTER_AREA);
+    a.convertTo(a, CV_32F);
+    b.convertTo(b, CV_32F);
+    double response = 0;
+    const cv::Point2d shift = cv::phaseCorrelate(a, b, cv::noArray(), &response) * 2.0;
+    if (response > 0.05 && std::hypot(shift.x, shift.y) > 0.5) {
+      const cv::Matx23d m(1, 0, shift.x, 0, 1, shift.y);
+      cv::warpAffine(old_gray, old_gray, m, gray.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+      cv::warpAffine(old_skin, old_skin, m, gray.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+      cv::absdiff(gray, old_gray, diff);
+      motion = diff > config.motion_threshold;
+    }
+  }
+  cv::morphologyEx(motion, motion, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  return motion;
+}
+
+// Hands: skin regions of plausible size of which enough moved, each boxed
+// by the part that moved (hands move more than the arms and clothes a skin
+// region often includes), grown a little.
+std::vector<cv::Rect2d> MovingHands(const cv::Mat& skin, const cv::Mat& motion,
+                                    const BuiltinDetectorConfig& config, double frame_area) {
+  std::vector<cv::Rect2d> hands;
+  cv::Mat labels;
+  const std::vector<Component> skin_parts = Components(skin, labels);
+  const cv::Mat moving_skin = motion & skin;
+  for (const Component& c : skin_parts) {
+    if (static_cast<int>(hands.size()) >= config.max_hands) break;
+    if (c.area < config.min_hand_area * frame_area) break;  // sorted by area
+    if (c.area > config.max_hand_area * frame_area) continue;
+    const cv::Mat mine = labels(c.box) == c.label;
+    const cv::Mat moved_here = moving_skin(c.box) & mine;
+    const int moved = cv::countNonZero(moved_here);
+    if (moved < config.min_hand_motion * c.area) continue;
+    std::vector<cv::Point> pts;
+    cv::findNonZero(moved_here, pts);
+    cv::Rect part = cv::boundingRect(pts) + c.box.tl();
+    const int grow = std::max(2, part.width / 8);
+    part = cv::Rect(part.x - grow, part.y - grow, part.width + 2 * grow, part.height + 2 * grow) &
+           c.box;
+    hands.emplace_back(part.x, part.y, part.width, part.height);
+  }
+  return hands;
+}
+
+// Objects: motion that is neither skin now nor where skin was (`any_skin`),
+// within `reach` pixels of a hand; at most two.
+std::vector<cv::Rect2d> ObjectsTouchingHands(const cv::Mat& motion, const cv::Mat& any_skin,
+                                             const std::vector<cv::Rect2d>& hands, double reach,
+                                             const BuiltinDetectorConfig& config,
+                                             double frame_area) {
+  std::vector<cv::Rect2d> objects;
+  cv::Mat near_skin;
+  cv::dilate(any_skin, near_skin, cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}), {-1, -1},
+             2);
+  cv::Mat other = motion & ~near_skin;
+  cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  cv::Mat object_labels;
+  for (const Component& c : Components(other, object_labels)) {
+    if (c.area < config.min_object_area * frame_area) break;
+    const cv::Rect2d box(c.box.x, c.box.y, c.box.width, c.box.height);
+    bool next_to_hand = false;
+    for (const cv::Rect2d& h : hands) next_to_hand |= BoxGap(h, box) <= reach;
+    if (next_to_hand) objects.push_back(box);
+    if (objects.size() >= 2) break;
+  }
+  return objects;
+}
+
+// A box found at `scale` of the frame as a detection in frame pixels.
+Detection BoxDetection(const cv::Rect2d& b, double scale, std::int64_t frame,
+                       const std::string& kind, int contact) {
+  Detection d;
+  d.frame = frame;
+  d.kind = kind;
+  d.x1 = b.x * scale;
+  d.y1 = b.y * scale;
+  d.x2 = (b.x + b.width) * scale;
+  d.y2 = (b.y + b.height) * scale;
+  d.score = 1.0;
+  d.contact_state = contact;
+  d.source = "detector:builtin";
+  return d;
+}
+
 }  // namespace
 
 void BuiltinHandObjectDetector::Consume(FrameContext& context) {
-  const cv::Mat& bgr = context.frame->bgr;
   const cv::Mat& gray = context.gray;
   const double frame_area = static_cast<double>(gray.rows) * gray.cols;
-  cv::Mat ycrcb, skin;
-  cv::cvtColor(bgr, ycrcb, cv::COLOR_BGR2YCrCb);
-  cv::inRange(ycrcb, cv::Scalar(config_.y_min, config_.cr_min, config_.cb_min),
-              cv::Scalar(255, config_.cr_max, config_.cb_max), skin);
-  const cv::Mat k3 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3});
-  const cv::Mat k7 = cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7});
-  cv::morphologyEx(skin, skin, cv::MORPH_OPEN, k3);
-  cv::morphologyEx(skin, skin, cv::MORPH_CLOSE, k7);
-
+  const cv::Mat skin = SkinMask(context.frame->bgr, config_);
   FrameBoxes found;
   found.known = true;
   if (static_cast<int>(grays_.size()) >= config_.motion_gap) {
     cv::Mat old_gray = grays_.front();
     cv::Mat old_skin = skins_.front();
-    cv::Mat diff, motion;
-    cv::absdiff(gray, old_gray, diff);
-    motion = diff > config_.motion_threshold;
-    if (config_.compensate_camera &&
-        cv::countNonZero(motion) > config_.global_motion_fraction * frame_area) {
-      // Much of the picture changed: estimate a global shift (camera pan)
-      // at half size by phase correlation and undo it, so that only things
-      // that moved in the scene count as motion.
-      cv::Mat a, b;
-      cv::resize(old_gray, a, {}, 0.5, 0.5, cv::INTER_AREA);
-      cv::resize(gray, b, {}, 0.5, 0.5, cv::INTER_AREA);
-      a.convertTo(a, CV_32F);
-      b.convertTo(b, CV_32F);
-      double response = 0;
-      const cv::Point2d shift = cv::phaseCorrelate(a, b, cv::noArray(), &response) * 2.0;
-      if (response > 0.05 && std::hypot(shift.x, shift.y) > 0.5) {
-        const cv::Matx23d m(1, 0, shift.x, 0, 1, shift.y);
-        cv::warpAffine(old_gray, old_gray, m, gray.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-        cv::warpAffine(old_skin, old_skin, m, gray.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
-        cv::absdiff(gray, old_gray, diff);
-        motion = diff > config_.motion_threshold;
-      }
-    }
-    cv::morphologyEx(motion, motion, cv::MORPH_OPEN, k3);
-
-    // Hands: skin regions of plausible size of which enough moved.
-    cv::Mat labels;
-    const std::vector<Component> skin_parts = Components(skin, labels);
-    const cv::Mat moving_skin = motion & skin;
-    for (const Component& c : skin_parts) {
-      if (static_cast<int>(found.hands.size()) >= config_.max_hands) break;
-      if (c.area < config_.min_hand_area * frame_area) break;  // sorted by area
-      if (c.area > config_.max_hand_area * frame_area) continue;
-      const cv::Mat mine = labels(c.box) == c.label;
-      const cv::Mat moved_here = moving_skin(c.box) & mine;
-      const int moved = cv::countNonZero(moved_here);
-      if (moved < config_.min_hand_motion * c.area) continue;
-      // The box of the part that moved: hands move more than the arms and
-      // clothes a skin region often includes.
-      std::vector<cv::Point> pts;
-      cv::findNonZero(moved_here, pts);
-      cv::Rect part = cv::boundingRect(pts) + c.box.tl();
-      const int grow = std::max(2, part.width / 8);
-      part = cv::Rect(part.x - grow, part.y - grow, part.width + 2 * grow, part.height + 2 * grow) &
-             c.box;
-      found.hands.emplace_back(part.x, part.y, part.width, part.height);
-    }
+    const cv::Mat motion = SceneMotion(gray, old_gray, old_skin, config_);
+    found.hands = MovingHands(skin, motion, config_, frame_area);
     const bool seen = !found.hands.empty();
     if (!seen && context.ordinal - last_seen_ <= config_.hold_frames) {
       found.hands = last_.hands;  // a still hand is still there
     }
-    // Objects: motion that is neither skin now nor where skin was, touching a hand.
+    const double reach = config_.contact_distance * std::hypot(gray.cols, gray.rows);
     if (!found.hands.empty()) {
-      cv::Mat near_skin;
-      cv::dilate(skin | old_skin, near_skin, k7, {-1, -1}, 2);
-      cv::Mat other = motion & ~near_skin;
-      cv::dilate(other, other, k3);
-      cv::Mat object_labels;
-      const double reach = config_.contact_distance * std::hypot(gray.cols, gray.rows);
-      for (const Component& c : Components(other, object_labels)) {
-        if (c.area < config_.min_object_area * frame_area) break;
-        const cv::Rect2d box(c.box.x, c.box.y, c.box.width, c.box.height);
-        bool next_to_hand = false;
-        for (const cv::Rect2d& h : found.hands) next_to_hand |= BoxGap(h, box) <= reach;
-        if (next_to_hand) found.objects.push_back(box);
-        if (found.objects.size() >= 2) break;
-      }
+      found.objects = ObjectsTouchingHands(motion, skin | old_skin, found.hands, reach, config_,
+                                           frame_area);
     }
     for (const cv::Rect2d& h : found.hands) {
       bool contact = false;
-      for (const cv::Rect2d& o : found.objects) {
-        contact |= BoxGap(h, o) <= config_.contact_distance * std::hypot(gray.cols, gray.rows);
-      }
+      for (const cv::Rect2d& o : found.objects) contact |= BoxGap(h, o) <= reach;
       found.hand_contact.push_back(contact ? 3 : 0);
     }
     if (seen) {
@@ -151,24 +198,14 @@ void BuiltinHandObjectDetector::Consume(FrameContext& context) {
     grays_.pop_front();
     skins_.pop_front();
   }
-
   const double s = geometry_.downscale;
-  auto add = [&](const cv::Rect2d& b, const std::string& kind, int contact) {
-    Detection d;
-    d.frame = context.frame->index;
-    d.kind = kind;
-    d.x1 = b.x * s;
-    d.y1 = b.y * s;
-    d.x2 = (b.x + b.width) * s;
-    d.y2 = (b.y + b.height) * s;
-    d.score = 1.0;
-    d.contact_state = contact;
-    d.source = "detector:builtin";
-    detections_.push_back(d);
-  };
-  for (size_t i = 0; i < found.hands.size(); ++i)
-    add(found.hands[i], "hand", found.hand_contact[i]);
-  for (const cv::Rect2d& o : found.objects) add(o, "object", -1);
+  for (size_t i = 0; i < found.hands.size(); ++i) {
+    detections_.push_back(BoxDetection(found.hands[i], s, context.frame->index, "hand",
+                                       found.hand_contact[i]));
+  }
+  for (const cv::Rect2d& o : found.objects) {
+    detections_.push_back(BoxDetection(o, s, context.frame->index, "object", -1));
+  }
   context.boxes = found;
 }
 

@@ -2,12 +2,12 @@
 
 #include <cmath>
 
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 
 namespace doasido::hands {
 namespace {
 
-constexpr const char* kBadIntrinsics = "bad_intrinsics";
 
 std::optional<double> Number(const Json& metadata, const char* key, const std::string& clip) {
   if (!metadata.is_object() || !metadata.contains(key)) return std::nullopt;
@@ -26,14 +26,14 @@ std::optional<double> Number(const Json& metadata, const char* key, const std::s
     }
   }
   if (!std::isfinite(value)) {
-    throw PermanentError(kBadIntrinsics, "not a number: " + v.dump(), {.clip = clip, .field = key});
+    throw Error(kBadIntrinsics, "not a number: " + v.dump(), {.clip = clip, .field = key});
   }
   return value;
 }
 
 void RequirePositive(double value, const char* key, const std::string& clip) {
   if (!(value > 0)) {
-    throw PermanentError(kBadIntrinsics, "must be positive, got " + std::to_string(value),
+    throw Error(kBadIntrinsics, "must be positive, got " + std::to_string(value),
                          {.clip = clip, .field = key});
   }
 }
@@ -62,7 +62,7 @@ std::optional<Intrinsics> IntrinsicsFromList(const Json& metadata, int width, in
     return out;
   }
   if (!(*fov > 1 && *fov < 179)) {
-    throw PermanentError(kBadIntrinsics,
+    throw Error(kBadIntrinsics,
                          "horizontal field of view must be in (1, 179) degrees, got " +
                              std::to_string(*fov),
                          {.clip = clip, .field = "fov"});

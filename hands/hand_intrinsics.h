@@ -30,7 +30,7 @@ struct Intrinsics {
 Mat3 KFromFov(int width, int height, double horizontal_fov_deg);
 
 // From a list row's columns (numbers, or strings holding numbers); nullopt
-// when it has neither fx nor fov. Throws PermanentError("bad_intrinsics")
+// when it has neither fx nor fov. Throws Error(kBadIntrinsics) (permanent)
 // naming the clip and the column for a value that is not a number or out of
 // range (focal length not positive, fov outside (1, 179) degrees).
 std::optional<Intrinsics> IntrinsicsFromList(const Json& metadata, int width, int height,

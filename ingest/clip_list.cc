@@ -11,71 +11,26 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/csv.h"
 #include "core/file_text.h"
 #include "core/error.h"
 #include "core/error_codes.h"
 #include "core/json_input.h"
+#include "ingest/list_rows.h"
 
 namespace doasido::ingest {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace rows;  // NOLINT: the row helpers are this file's vocabulary
 
-constexpr std::int64_t kMaxFrame = 1'000'000'000;  // ~1 year at 30 fps
 // A clip object is a flat record with a little nested metadata; a list of
 // JSON is at most the size of a large dataset's index.
 constexpr JsonLimits kRowLimits{.max_depth = 32, .max_bytes = 1u << 20};
 constexpr JsonLimits kDocumentLimits{.max_depth = 32, .max_bytes = 1u << 30};
-constexpr double kMaxSeconds = 1e7;                 // ~115 days
 
 std::string ReadAll(const fs::path& path) {
   return ReadFileOrThrow(path, "bad_list", "cannot open list");
-}
-
-bool IsUtf8(const std::string& s) {
-  size_t i = 0;
-  while (i < s.size()) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    size_t extra = 0;
-    if (c < 0x80) {
-      extra = 0;
-    } else if (c >= 0xC2 && c <= 0xDF) {
-      extra = 1;
-    } else if ((c >> 4) == 0xE) {
-      extra = 2;
-    } else if (c >= 0xF0 && c <= 0xF4) {
-      extra = 3;
-    } else {
-      return false;
-    }
-    if (i + extra >= s.size() && extra > 0) return false;
-    for (size_t k = 1; k <= extra; ++k) {
-      if ((static_cast<unsigned char>(s[i + k]) >> 6) != 0x2) return false;
-    }
-    i += 1 + extra;
-  }
-  return true;
-}
-
-std::string Trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
-}
-
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
-bool IsUrl(const std::string& s) { return s.find("://") != std::string::npos; }
-
-std::string VideoUrl(std::string url_template, const std::string& id) {
-  for (auto pos = url_template.find("{id}"); pos != std::string::npos;
-       pos = url_template.find("{id}", pos + id.size())) {
-    url_template.replace(pos, 4, id);
-  }
-  return url_template;
 }
 
 // Only white space (or nothing): the same empty list in every format.
@@ -98,238 +53,24 @@ bool IsBlank(const fs::path& path) {
               {.file = path.string()});
 }
 
-// Strict integer: digits only (optional sign), nothing after.
-std::optional<std::int64_t> ParseInt(const std::string& text) {
-  const std::string t = Trim(text);
-  if (t.empty()) return std::nullopt;
-  std::int64_t v = 0;
-  const char* begin = t.data() + (t[0] == '+' ? 1 : 0);
-  const auto [ptr, ec] = std::from_chars(begin, t.data() + t.size(), v);
-  if (ec != std::errc() || ptr != t.data() + t.size()) return std::nullopt;
-  return v;
+// Why a record of a delimited list is not a row ("" when it is one): an
+// unterminated quote, an empty line, bytes that are not UTF-8 text, or
+// another number of columns than the header's.
+std::string RecordProblem(const CsvRecord& record, size_t columns) {
+  if (!record.error.empty()) return record.error;
+  if (record.Blank()) return "empty line";
+  if (!IsUtf8(record.raw)) return "not valid UTF-8 text";
+  if (record.fields.size() != columns) {
+    return "expected " + std::to_string(columns) + " columns, found " +
+           std::to_string(record.fields.size());
+  }
+  return "";
 }
-
-std::optional<double> ParseReal(const std::string& text) {
-  const std::string t = Trim(text);
-  if (t.empty()) return std::nullopt;
-  double v = 0;
-  const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-  if (ec != std::errc() || ptr != t.data() + t.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-using Cells = std::vector<std::pair<std::string, Json>>;
-
-std::string CellText(const Json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
-
-const std::vector<std::string> kVideoColumns = {"video", "path", "video_path", "url", "file"};
-const std::vector<std::string> kIdColumns = {"id", "clip_id", "narration_id"};
-
-// Fills `row` from named cells, or reports the first problem in `error`.
-class RowBuilder {
- public:
-  RowBuilder(const fs::path& list, const ListOptions& options, ListReadResult& out)
-      : list_(list), base_(list.parent_path()), options_(options), out_(out) {}
-
-  // What a column means, decided once per file from its header name.
-  enum class Role { kVideo, kId, kStartFrame, kEndFrame, kStartTime, kEndTime, kStart, kEnd,
-                    kMetadata };
-
-  static Role RoleOf(const std::string& raw_key) {
-    const std::string key = Lower(Trim(raw_key));
-    auto in = [&key](const std::vector<std::string>& names) {
-      return std::find(names.begin(), names.end(), key) != names.end();
-    };
-    if (in(kVideoColumns)) return Role::kVideo;
-    if (in(kIdColumns)) return Role::kId;
-    if (key == "start_frame") return Role::kStartFrame;
-    if (key == "end_frame" || key == "stop_frame") return Role::kEndFrame;
-    if (in({"start_time", "start_timestamp", "start_s"})) return Role::kStartTime;
-    if (in({"end_time", "stop_timestamp", "end_s", "stop_time"})) return Role::kEndTime;
-    if (key == "start") return Role::kStart;
-    if (key == "end" || key == "stop") return Role::kEnd;
-    return Role::kMetadata;
-  }
-
-  void Add(const Cells& cells, long line) {
-    ListRow row;
-    row.line = line;
-    row.clip.source_list = list_.string();
-    row.clip.source_line = line;
-    std::optional<std::string> start_text, end_text;
-    for (const auto& [raw_key, value] : cells) {
-      auto [it, fresh] = roles_.emplace(raw_key, Role::kMetadata);
-      if (fresh) it->second = RoleOf(raw_key);
-      const Role role = it->second;
-      if (role == Role::kMetadata) {
-        row.clip.metadata[raw_key] = value;
-        continue;
-      }
-      const std::string text = Trim(CellText(value));
-      const std::string key = Lower(Trim(raw_key));
-      switch (role) {
-        case Role::kVideo: row.video = text; break;
-        case Role::kId: row.clip.external_id = text; break;
-        case Role::kStartFrame:
-          if (!Frame(text, key, line, row.clip.start_frame)) return;
-          break;
-        case Role::kEndFrame:
-          if (!Frame(text, key, line, row.clip.end_frame)) return;
-          break;
-        case Role::kStartTime:
-          if (!Time(text, key, line, row.clip.start_s)) return;
-          break;
-        case Role::kEndTime:
-          if (!Time(text, key, line, row.clip.end_s)) return;
-          break;
-        case Role::kStart: start_text = text; break;
-        case Role::kEnd: end_text = text; break;
-        case Role::kMetadata: break;
-      }
-    }
-    if (start_text && !StartOrEnd(*start_text, "start", line, row.clip.start_frame,
-                                  row.clip.start_s)) {
-      return;
-    }
-    if (end_text && !StartOrEnd(*end_text, "end", line, row.clip.end_frame, row.clip.end_s)) {
-      return;
-    }
-    Finish(std::move(row));
-  }
-
-  // A JSON object's members as cells.
-  void AddObject(const Json& object, long line) {
-    Cells cells;
-    for (const auto& [k, v] : object.items()) cells.emplace_back(k, v);
-    Add(cells, line);
-  }
-
-  // Shared final checks: video present and found, span ordered, no duplicate.
-  void Finish(ListRow row) {
-    const long line = row.line;
-    if (row.video.empty()) return Bad(line, "video", "no video path or URL");
-    if (!IsUrl(row.video)) {
-      fs::path p(row.video);
-      if (p.is_relative()) p = base_ / p;
-      row.video = fs::absolute(p).lexically_normal().string();
-      if (options_.check_files) {
-        if (const std::string why = Unreachable(row.video); !why.empty()) {
-          return Bad(line, "video", why);
-        }
-      }
-    }
-    const auto& c = row.clip;
-    if (c.start_frame.has_value() != c.end_frame.has_value() && c.end_frame) {
-      // an end without a start runs from the first frame
-      row.clip.start_frame = 0;
-    }
-    if (c.start_frame && c.end_frame && *c.end_frame < *c.start_frame) {
-      return Bad(line, "end_frame",
-                 "end " + std::to_string(*c.end_frame) + " is before start " +
-                     std::to_string(*c.start_frame));
-    }
-    if (c.start_s && c.end_s && *c.end_s < *c.start_s) {
-      return Bad(line, "end_time", "end is before start");
-    }
-    char span[128];
-    std::snprintf(span, sizeof span, "|%lld|%lld|%.17g|%.17g",
-                  static_cast<long long>(c.start_frame.value_or(-1)),
-                  static_cast<long long>(c.end_frame.value_or(-1)), c.start_s.value_or(-1),
-                  c.end_s.value_or(-1));
-    const auto [it, fresh] = seen_.emplace(row.video + span, line);
-    if (!fresh) {
-      return Bad(line, "video", "duplicate of line " + std::to_string(it->second) +
-                                    " (same video and span)");
-    }
-    out_.rows.push_back(std::move(row));
-  }
-
-  void Bad(long line, const std::string& field, const std::string& reason) {
-    out_.errors.push_back({list_.string(), line, field, reason});
-  }
-
- private:
-  // "" when the video file is there, else why not: a missing file, and the
-  // file-system errors that must stay this row's (a symlink loop, a name
-  // too long, no permission) rather than end the whole list.
-  std::string Unreachable(const std::string& path) {
-    auto [it, fresh] = unreachable_.emplace(path, "");
-    if (!fresh) return it->second;
-    std::error_code ec;
-    const fs::file_status st = fs::status(path, ec);
-    if (ec == std::errc::no_such_file_or_directory || (!ec && !fs::exists(st))) {
-      it->second = "file not found: " + ShortPath(path);
-    } else if (ec) {
-      it->second = "cannot reach file (" + ec.message() + "): " + ShortPath(path);
-    } else if (fs::is_directory(st)) {
-      it->second = "a folder, not a video file: " + ShortPath(path);
-    }
-    return it->second;
-  }
-
-  // Keeps a message readable when a row names an absurdly long path.
-  static std::string ShortPath(const std::string& path) {
-    if (path.size() <= 300) return path;
-    return path.substr(0, 120) + "...(" + std::to_string(path.size()) + " characters)..." +
-           path.substr(path.size() - 60);
-  }
-
-  bool Frame(const std::string& text, const std::string& field, long line,
-             std::optional<std::int64_t>& out) {
-    if (text.empty()) return true;
-    const auto v = ParseInt(text);
-    if (!v) return Bad(line, field, "not a whole frame number: '" + text + "'"), false;
-    if (*v < 0) return Bad(line, field, "negative frame number " + text), false;
-    if (*v > kMaxFrame) return Bad(line, field, "frame number out of range: " + text), false;
-    out = *v;
-    return true;
-  }
-
-  bool Time(const std::string& text, const std::string& field, long line,
-            std::optional<double>& out) {
-    if (text.empty()) return true;
-    const auto v = ParseTimestamp(text);
-    if (!v) return Bad(line, field, "not a time (seconds or HH:MM:SS.fff): '" + text + "'"), false;
-    if (*v > kMaxSeconds) return Bad(line, field, "time out of range: " + text), false;
-    out = *v;
-    return true;
-  }
-
-  bool StartOrEnd(const std::string& text, const std::string& field, long line,
-                  std::optional<std::int64_t>& frame, std::optional<double>& seconds) {
-    if (ParseInt(text) || (!text.empty() && text[0] == '-' && ParseReal(text))) {
-      return Frame(text, field, line, frame);
-    }
-    return Time(text, field, line, seconds);
-  }
-
-  fs::path list_;
-  fs::path base_;
-  const ListOptions& options_;
-  ListReadResult& out_;
-  std::unordered_map<std::string, long> seen_;
-  std::unordered_map<std::string, Role> roles_;
-  std::unordered_map<std::string, std::string> unreachable_;
-};
 
 void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& options,
                    ListReadResult& out) {
-  const std::string text = ReadAll(path);
-  size_t pos = 0;
-  long line = 1;
-  std::vector<std::string> header, fields;
-  std::string error;
-  long consumed = 0;
-  while (pos < text.size() && header.empty()) {
-    if (!SplitRecord(text, pos, delimiter, header, error, consumed)) {
-      throw Error("bad_list", "header: " + error, {.file = path.string(), .line = line});
-    }
-    line += consumed;
-    if (header.size() == 1 && Trim(header[0]).empty()) header.clear();
-  }
-  if (header.empty()) throw Error("bad_list", "empty list (no header)", {.file = path.string()});
-  for (auto& h : header) h = Trim(h);
-  if (!header.empty() && header[0].rfind("\xEF\xBB\xBF", 0) == 0) header[0] = header[0].substr(3);
+  CsvReader reader(ReadAll(path), path.string(), "bad_list", delimiter);
+  const std::vector<std::string> header = reader.Header();
   const bool has_video = std::any_of(header.begin(), header.end(), [](const std::string& h) {
     return std::find(kVideoColumns.begin(), kVideoColumns.end(), Lower(h)) != kVideoColumns.end();
   });
@@ -339,33 +80,18 @@ void ReadDelimited(const fs::path& path, char delimiter, const ListOptions& opti
   }
   RowBuilder builder(path, options, out);
   Cells cells;
-  while (pos < text.size()) {
-    const long row_line = line;
-    const size_t row_start = pos;
-    const bool ok = SplitRecord(text, pos, delimiter, fields, error, consumed);
-    line += consumed;
-    if (!ok) {
-      builder.Bad(row_line, "", error);
-      continue;
-    }
-    const std::string raw = text.substr(row_start, pos - row_start);
-    if (Trim(raw).empty()) {
-      builder.Bad(row_line, "", "empty line");
-      continue;
-    }
-    if (!IsUtf8(raw)) {
-      builder.Bad(row_line, "", "not valid UTF-8 text");
-      continue;
-    }
-    if (fields.size() != header.size()) {
-      builder.Bad(row_line, fields.size() < header.size() ? header[fields.size()] : "",
-                  "expected " + std::to_string(header.size()) + " columns, found " +
-                      std::to_string(fields.size()));
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (const std::string why = RecordProblem(record, header.size()); !why.empty()) {
+      const std::size_t found = record.fields.size();
+      const bool short_row = record.error.empty() && !record.Blank() && IsUtf8(record.raw) &&
+                             found < header.size();
+      builder.Bad(record.line, short_row ? header[found] : "", why);
       continue;
     }
     cells.clear();
-    for (size_t i = 0; i < header.size(); ++i) cells.emplace_back(header[i], fields[i]);
-    builder.Add(cells, row_line);
+    for (size_t i = 0; i < header.size(); ++i) cells.emplace_back(header[i], record.fields[i]);
+    builder.Add(cells, record.line);
   }
 }
 
@@ -459,38 +185,19 @@ bool ReadJsonDocument(const fs::path& path, const ListOptions& options, ListRead
 std::vector<std::map<std::string, std::string>> ReadTable(const fs::path& path,
                                                          std::vector<RowError>* errors,
                                                          std::vector<long>* lines) {
-  const std::string text = ReadAll(path);
-  size_t pos = 0;
-  long line = 1, consumed = 0;
-  std::vector<std::string> header, fields;
-  std::string error;
-  if (!SplitRecord(text, pos, ',', header, error, consumed)) {
-    throw Error("bad_list", "header: " + error, {.file = path.string(), .line = 1});
-  }
-  line += consumed;
+  CsvReader reader(ReadAll(path), path.string(), "bad_list");
+  const std::vector<std::string> header = reader.Header();
   std::vector<std::map<std::string, std::string>> rows;
-  while (pos < text.size()) {
-    const long row_line = line;
-    const size_t start = pos;
-    const bool ok = SplitRecord(text, pos, ',', fields, error, consumed);
-    line += consumed;
-    const std::string raw = text.substr(start, pos - start);
-    std::string reason = !ok                              ? error
-                         : Trim(raw).empty()              ? "empty line"
-                         : !IsUtf8(raw)                   ? "not valid UTF-8 text"
-                         : fields.size() != header.size() ? "expected " +
-                                                                std::to_string(header.size()) +
-                                                                " columns, found " +
-                                                                std::to_string(fields.size())
-                                                          : "";
-    if (!reason.empty()) {
-      if (errors) errors->push_back({path.string(), row_line, "", reason});
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (const std::string why = RecordProblem(record, header.size()); !why.empty()) {
+      if (errors) errors->push_back({path.string(), record.line, "", why});
       continue;
     }
     std::map<std::string, std::string> row;
-    for (size_t i = 0; i < header.size(); ++i) row[Trim(header[i])] = fields[i];
+    for (size_t i = 0; i < header.size(); ++i) row[header[i]] = record.fields[i];
     rows.push_back(std::move(row));
-    if (lines) lines->push_back(row_line);
+    if (lines) lines->push_back(record.line);
   }
   return rows;
 }
@@ -619,11 +326,14 @@ void AddFrameGroups(const std::map<std::string, FrameGroup>& groups, const fs::p
   }
 }
 
-void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult& out) {
+// The steps of ReadVoc.
+
+// The annotation folder (`folder`/Annotations when there is one) and its
+// *.xml files, sorted.
+fs::path VocFiles(const fs::path& folder, std::vector<fs::path>& files) {
   std::error_code ec;
   const fs::path annotations =
       fs::is_directory(folder / "Annotations", ec) ? folder / "Annotations" : folder;
-  std::vector<fs::path> files;
   for (fs::directory_iterator it(annotations, ec), end; !ec && it != end; it.increment(ec)) {
     if (it->path().extension() == ".xml") files.push_back(it->path());
   }
@@ -635,6 +345,45 @@ void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult&
   if (files.empty()) {
     throw Error("bad_list", "no *.xml annotations", {.file = annotations.string()});
   }
+  return annotations;
+}
+
+// One <object> of a VOC file as a detection `d` of `frame`; else the field
+// and why it cannot be one.
+std::pair<std::string, std::string> VocDetection(const tinyxml2::XMLElement* obj,
+                                                 std::int64_t frame, const ImageSize& image,
+                                                 Detection& d) {
+  const auto* kind = obj->FirstChildElement("name");
+  const auto* box = obj->FirstChildElement("bndbox");
+  if (kind == nullptr || kind->GetText() == nullptr || box == nullptr) {
+    return {"object", "object without <name> or <bndbox>"};
+  }
+  d.frame = frame;
+  d.source = "100doh_voc";
+  const std::string k = Trim(kind->GetText());
+  d.kind = k == "hand" ? "hand" : "object";
+  bool numbers_ok = true;
+  // VOC boxes are 1-based inclusive; ours are 0-based with exclusive ends.
+  d.x1 = Number(box, "xmin", &numbers_ok) - 1;
+  d.y1 = Number(box, "ymin", &numbers_ok) - 1;
+  d.x2 = Number(box, "xmax", &numbers_ok);
+  d.y2 = Number(box, "ymax", &numbers_ok);
+  if (d.kind == "hand") {
+    d.contact_state = static_cast<int>(Number(obj, "contactstate", &numbers_ok));
+    d.hand_side = static_cast<int>(Number(obj, "handside", &numbers_ok));
+    d.dx = Number(obj, "unitdx", &numbers_ok);
+    d.dy = Number(obj, "unitdy", &numbers_ok);
+    d.magnitude = Number(obj, "magnitude", &numbers_ok);
+  }
+  const std::string why =
+      !numbers_ok ? "box numbers are missing or not numbers" : ImpossibleBox(d, image);
+  if (!why.empty()) return {"bndbox", why};
+  return {};
+}
+
+void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult& out) {
+  std::vector<fs::path> files;
+  const fs::path annotations = VocFiles(folder, files);
   std::map<std::string, FrameGroup> groups;
   long index = 0;
   for (const auto& file : files) {
@@ -671,36 +420,10 @@ void ReadVoc(const fs::path& folder, const ListOptions& options, ListReadResult&
              : ImageSize{};
     for (const auto* obj = root->FirstChildElement("object"); obj;
          obj = obj->NextSiblingElement("object")) {
-      const auto* kind = obj->FirstChildElement("name");
-      const auto* box = obj->FirstChildElement("bndbox");
-      if (kind == nullptr || kind->GetText() == nullptr || box == nullptr) {
-        ok = false;
-        bad("object", "object without <name> or <bndbox>");
-        break;
-      }
       Detection d;
-      d.frame = frame;
-      d.source = "100doh_voc";
-      const std::string k = Trim(kind->GetText());
-      d.kind = k == "hand" ? "hand" : "object";
-      bool numbers_ok = true;
-      // VOC boxes are 1-based inclusive; ours are 0-based with exclusive ends.
-      d.x1 = Number(box, "xmin", &numbers_ok) - 1;
-      d.y1 = Number(box, "ymin", &numbers_ok) - 1;
-      d.x2 = Number(box, "xmax", &numbers_ok);
-      d.y2 = Number(box, "ymax", &numbers_ok);
-      if (d.kind == "hand") {
-        d.contact_state = static_cast<int>(Number(obj, "contactstate", &numbers_ok));
-        d.hand_side = static_cast<int>(Number(obj, "handside", &numbers_ok));
-        d.dx = Number(obj, "unitdx", &numbers_ok);
-        d.dy = Number(obj, "unitdy", &numbers_ok);
-        d.magnitude = Number(obj, "magnitude", &numbers_ok);
-      }
-      const std::string why = !numbers_ok ? "box numbers are missing or not numbers"
-                                          : ImpossibleBox(d, image_size);
-      if (!why.empty()) {
+      if (const auto [field, why] = VocDetection(obj, frame, image_size, d); !why.empty()) {
         ok = false;
-        bad("bndbox", why);
+        bad(field, why);
         break;
       }
       dets.push_back(d);
@@ -744,58 +467,6 @@ void ReadFrameNames(const fs::path& path, const ListOptions& options, ListReadRe
 
 std::string RowError::Format() const {
   return file + ":" + std::to_string(line) + ": " + (field.empty() ? "" : field + ": ") + reason;
-}
-
-bool SplitRecord(const std::string& text, size_t& pos, char delimiter,
-                 std::vector<std::string>& fields, std::string& error, long& lines_consumed) {
-  fields.clear();
-  lines_consumed = 0;
-  std::string field;
-  bool quoted = false, was_quoted = false;
-  while (pos < text.size()) {
-    const char c = text[pos];
-    if (quoted) {
-      if (c == '"') {
-        if (pos + 1 < text.size() && text[pos + 1] == '"') {
-          field += '"';
-          pos += 2;
-          continue;
-        }
-        quoted = false;
-      } else {
-        if (c == '\n') ++lines_consumed;
-        field += c;
-      }
-      ++pos;
-      continue;
-    }
-    if (c == '"' && Trim(field).empty() && !was_quoted) {
-      quoted = was_quoted = true;
-      field.clear();
-    } else if (c == delimiter) {
-      fields.push_back(std::move(field));
-      field.clear();
-      was_quoted = false;
-    } else if (c == '\n') {
-      ++pos;
-      ++lines_consumed;
-      if (!field.empty() && field.back() == '\r') field.pop_back();
-      fields.push_back(std::move(field));
-      return true;
-    } else {
-      field += c;
-    }
-    ++pos;
-  }
-  if (quoted) {
-    error = "unterminated quoted field";
-    ++lines_consumed;
-    return false;
-  }
-  if (!field.empty() && field.back() == '\r') field.pop_back();
-  fields.push_back(std::move(field));
-  ++lines_consumed;
-  return true;
 }
 
 std::optional<double> ParseTimestamp(const std::string& raw) {

@@ -114,10 +114,4 @@ struct FrameName {
 // Accepts "<genre>_v_<id>_frame<digits>" and "<dataset>_<split>_<video>_<digits>".
 std::optional<FrameName> ParseFrameName(const std::string& name);
 
-// Splits one CSV/TSV record (RFC 4180 quoting) starting at `pos` in `text`,
-// advancing `pos` past its line end; quoted fields may span lines. Returns
-// false with `error` set for an unterminated quote.
-bool SplitRecord(const std::string& text, size_t& pos, char delimiter,
-                 std::vector<std::string>& fields, std::string& error, long& lines_consumed);
-
 }  // namespace doasido::ingest

@@ -9,7 +9,8 @@
 #include <thread>
 
 #include "core/config_check.h"
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 #include "db/database.h"  // Now(), the sidecar's download time
 #include "ingest/download_command.h"
 #include "ingest/file_sha256.h"
@@ -87,7 +88,8 @@ void WriteSidecar(const fs::path& file, const Json& sidecar) {
 }
 
 // Runs `fetch` up to 1 + retries times, waiting with doubling back-off
-// after transient failures. A PermanentError ends it at once.
+// after transient failures. A permanent error (IsPermanentError) ends it at
+// once.
 template <typename Fn>
 void WithRetries(const DownloadConfig& config, int& tries, Fn fetch) {
   for (int attempt = 0;; ++attempt) {
@@ -95,10 +97,8 @@ void WithRetries(const DownloadConfig& config, int& tries, Fn fetch) {
     try {
       fetch();
       return;
-    } catch (const PermanentError&) {
-      throw;
-    } catch (const Error&) {
-      if (attempt >= config.retries) throw;
+    } catch (const Error& e) {
+      if (IsPermanentError(e.code()) || attempt >= config.retries) throw;
       const double wait = config.retry_backoff_s * std::pow(2.0, attempt);
       std::this_thread::sleep_for(std::chrono::duration<double>(wait));
     }

@@ -14,7 +14,7 @@
 //    rate_limited, download_failed) are tried again within the run
 //    `retries` times, waiting retry_backoff_s, then twice that, ...; a
 //    failure a retry cannot fix (404, video_unavailable, geo_blocked) is a
-//    PermanentError, which the worker fails at once.
+//    permanent error (core/error_codes.h), which the worker fails at once.
 //  - Files land in <media>/<host>/: http as <16 hex of the URL>-<name>,
 //    command downloads as <video id>.mp4, each with a <file>.json sidecar
 //    written after it is complete ({url, size_bytes, sha256}). Many clips
@@ -37,8 +37,6 @@ namespace doasido::ingest {
 inline constexpr const char* kDownloadStageName = "download";
 
 // Error codes of the stage (besides those of http_fetch.h).
-inline constexpr const char* kVideoUnavailable = "video_unavailable";
-inline constexpr const char* kGeoBlocked = "geo_blocked";
 inline constexpr const char* kRateLimited = "rate_limited";
 inline constexpr const char* kDownloadFailed = "download_failed";
 inline constexpr const char* kDownloadTimeout = "download_timeout";

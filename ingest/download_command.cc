@@ -11,7 +11,8 @@
 
 #include "core/config.h"
 #include "core/file_text.h"
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 #include "core/shell_words.h"
 #include "ingest/http_fetch.h"
 
@@ -77,7 +78,7 @@ void RunDownloadCommand(const DownloadCommand& command, const std::string& url,
                         const fs::path& output, const fs::path& log) {
   const ErrorSite site{.file = url, .field = "command"};
   if (command.command_template.empty()) {
-    throw PermanentError("download_failed",
+    throw Error(kNoDownloadCommand,
                          "no download command is configured for this site (set download.command, "
                          "e.g. a yt-dlp template; see README)",
                          site);
@@ -107,13 +108,13 @@ void RunDownloadCommand(const DownloadCommand& command, const std::string& url,
   if (exit_code == kExitGeoBlocked ||
       Says(said, {"available in your country", "geo restrict", "geo-restrict",
                   "blocked it in your country"})) {
-    throw PermanentError("geo_blocked", how, site);
+    throw Error(kGeoBlocked, how, site);
   }
   if (exit_code == kExitVideoUnavailable ||
       Says(said, {"video unavailable", "private video", "has been removed",
                   "account associated with this video has been terminated",
                   "this video is not available", "video is unavailable"})) {
-    throw PermanentError("video_unavailable", how, site);
+    throw Error(kVideoUnavailable, how, site);
   }
   if (exit_code == kExitRateLimited ||
       Says(said, {"http error 429", "too many requests", "rate-limit", "rate limit"})) {

@@ -51,8 +51,9 @@ struct DownloadCommand {
 std::string VideoIdOf(const std::string& url);
 
 // Runs the command for `url`, writing to `output` and logging to `log`.
-// Throws the errors listed in the file comment (video_unavailable and
-// geo_blocked as PermanentError) naming `url`.
+// Throws the errors listed in the file comment (video_unavailable,
+// geo_blocked and no_download_command are permanent: core/error_codes.h)
+// naming `url`.
 void RunDownloadCommand(const DownloadCommand& command, const std::string& url,
                         const std::filesystem::path& output, const std::filesystem::path& log);
 

@@ -11,7 +11,8 @@
 #include <memory>
 #include <mutex>
 
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 #include "ingest/file_sha256.h"
 
 namespace doasido::ingest {
@@ -75,10 +76,10 @@ size_t OnBody(char* data, size_t size, size_t count, void* user) {
 [[noreturn]] void ThrowForStatus(long status, const std::string& url) {
   const ErrorSite site{.file = url};
   const std::string text = "HTTP " + std::to_string(status);
-  if (status == 404 || status == 410) throw PermanentError("http_not_found", text, site);
+  if (status == 404 || status == 410) throw Error(kHttpNotFound, text, site);
   if (status == 429) throw Error("rate_limited", text + " (too many requests)", site);
   if (status >= 400 && status < 500 && status != 408) {
-    throw PermanentError("http_error", text, site);
+    throw Error(kHttpRefused, text, site);
   }
   throw Error("http_error", text, site);
 }
@@ -96,7 +97,7 @@ size_t OnBody(char* data, size_t size, size_t count, void* user) {
       throw Error("connection_failed", text, site);
     case CURLE_UNSUPPORTED_PROTOCOL:
     case CURLE_URL_MALFORMAT:
-      throw PermanentError("bad_url", text, site);
+      throw Error(kBadUrl, text, site);
     default:
       if (kept_part) text += " (the partial file is kept and resumed next time)";
       throw Error("transfer_interrupted", text, site);

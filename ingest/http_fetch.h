@@ -34,8 +34,9 @@ struct HttpFetchResult {
 
 // Fetches `url` into `dest` (through `<dest>.part`; parent folders are
 // created). Follows redirects. Throws:
-//  - PermanentError "http_not_found" (404, 410) and "http_error" (other 4xx
-//    but 408 and 429): a retry gets the same answer;
+//  - "http_not_found" (404, 410), "http_refused" (other 4xx but 408 and
+//    429) and "bad_url": a retry gets the same answer (permanent codes,
+//    core/error_codes.h);
 //  - Error "download_timeout" (connect or low-speed timeout),
 //    "rate_limited" (429), "http_error" (5xx, 408), "connection_failed",
 //    "transfer_interrupted" (the connection closed early: .part is kept for

@@ -9,7 +9,6 @@
 #include "core/error_codes.h"
 #include "core/whole_output.h"
 #include "core/log.h"
-#include "core/permanent_error.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -134,9 +133,6 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
     db.PublishArtifacts(claim);
     StoreRelativePaths(report.result.measurements, work,
                        db.ArtifactDir(claim.clip_id, claim.stage), db.ArtifactRoot());
-  } catch (const PermanentError& e) {
-    report.error = e.what();
-    permanent = true;
   } catch (const Error& e) {
     report.error = e.what();
     permanent = IsPermanentError(e.code());
@@ -154,7 +150,7 @@ StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
                                std::to_string(kMaxMeasurementBytes) + " the database keeps",
                            {.clip = report.clip, .file = path})
                          .what();
-      permanent = true;
+      permanent = IsPermanentError(kMeasurementsTooLarge);
     }
   }
   if (!report.error.empty()) KeepFailedRunLogs(db, claim, work, report.error);

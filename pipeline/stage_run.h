@@ -29,8 +29,9 @@ struct StageRunReport {
 // Loads the clip's context, creates its artifact folder, runs `stage` on it
 // and records the outcome in one transaction: Complete (with `param_hash`)
 // or, when the stage threw, Fail (back to pending until `max_attempts`).
-// doasido::Error and any other std::exception count as a failed attempt; a
-// PermanentError (core/permanent_error.h) fails the run at once.
+// doasido::Error and any other std::exception count as a failed attempt; an
+// Error whose code a retry cannot fix (IsPermanentError, core/error_codes.h)
+// fails the run at once.
 // `in_same_commit` (may be empty) runs inside that transaction after the
 // record, so a worker can claim its next run in the same commit.
 StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,

@@ -62,20 +62,9 @@ void Write(const std::filesystem::path& path, const std::string& text,
   written.push_back(path);
 }
 
-}  // namespace
+// The parts of ReportToJson, one a section of report.json.
 
-std::string CsvField(const std::string& field) {
-  if (field.find_first_of(",\"\r\n") == std::string::npos) return field;
-  std::string out = "\"";
-  for (char c : field) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
-
-Json ReportToJson(const ReportData& d) {
-  const auto& f = d.funnel;
+Json FunnelToJson(const Funnel& f) {
   Json stages = Json::array();
   for (const auto& s : f.stages) {
     stages.push_back({{"stage", s.stage},
@@ -92,8 +81,16 @@ Json ReportToJson(const ReportData& d) {
                       {"passed_by_reason", s.passed_by_reason},
                       {"human_by_verdict", s.human_by_verdict}});
   }
+  return {{"pool", f.pool},
+          {"survivors", f.survivors},
+          {"survivors_pct", Percent(f.survivors, f.pool)},
+          {"without_runs", f.without_runs},
+          {"stages", stages}};
+}
+
+Json ScoresToJson(const std::vector<StageScores>& all) {
   Json scores = Json::array();
-  for (const auto& s : d.scores) {
+  for (const auto& s : all) {
     Json list = Json::array();
     for (const auto& dist : s.scores) {
       const ValueStats v = Stats(dist.values);
@@ -118,8 +115,12 @@ Json ReportToJson(const ReportData& d) {
                       {"with_scores", s.with_scores},
                       {"scores", list}});
   }
+  return scores;
+}
+
+Json SourcesToJson(const std::vector<SourceBreakdown>& all) {
   Json sources = Json::array();
-  for (const auto& b : d.sources) {
+  for (const auto& b : all) {
     Json rows = Json::array();
     for (const auto& r : b.rows) {
       rows.push_back({{"value", r.value},
@@ -133,8 +134,12 @@ Json ReportToJson(const ReportData& d) {
     }
     sources.push_back({{"key", b.key}, {"rows", rows}});
   }
+  return sources;
+}
+
+Json RunsToJson(const std::vector<StageRunStats>& all) {
   Json runs = Json::array();
-  for (const auto& s : d.runs) {
+  for (const auto& s : all) {
     Json failures = Json::array();
     for (const auto& [clip, error] : s.failures) {
       failures.push_back({{"clip", clip}, {"error", error}});
@@ -159,8 +164,12 @@ Json ReportToJson(const ReportData& d) {
                     {"errors", s.errors},
                     {"claims_by_worker", s.claims_by_worker}});
   }
+  return runs;
+}
+
+Json ThumbnailsToJson(const std::vector<ThumbnailStrip>& all) {
   Json thumbs = Json::array();
-  for (const auto& strip : d.thumbnails) {
+  for (const auto& strip : all) {
     Json items = Json::array();
     for (const auto& t : strip.items) {
       items.push_back({{"clip", t.clip},
@@ -175,20 +184,31 @@ Json ReportToJson(const ReportData& d) {
                       {"clips", strip.clips},
                       {"items", items}});
   }
+  return thumbs;
+}
+
+}  // namespace
+
+std::string CsvField(const std::string& field) {
+  if (field.find_first_of(",\"\r\n") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+Json ReportToJson(const ReportData& d) {
   return {{"database", d.database},
           {"generated_at", d.generated_at},
           {"pipeline", d.pipeline},
-          {"funnel",
-           {{"pool", f.pool},
-            {"survivors", f.survivors},
-            {"survivors_pct", Percent(f.survivors, f.pool)},
-            {"without_runs", f.without_runs},
-            {"stages", stages}}},
-          {"scores", scores},
-          {"sources", sources},
-          {"runs", runs},
+          {"funnel", FunnelToJson(d.funnel)},
+          {"scores", ScoresToJson(d.scores)},
+          {"sources", SourcesToJson(d.sources)},
+          {"runs", RunsToJson(d.runs)},
           {"downloads", d.downloads.ToJson()},
-          {"thumbnails", thumbs},
+          {"thumbnails", ThumbnailsToJson(d.thumbnails)},
           {"notes", d.notes}};
 }
 

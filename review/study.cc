@@ -6,41 +6,11 @@
 #include <map>
 #include <set>
 
+#include "core/csv.h"
 #include "core/error.h"
 
 namespace doasido::review {
 namespace {
-
-// One CSV record per line; double quotes protect commas and "" is a quote.
-std::vector<std::string> SplitCsvLine(const std::string& line) {
-  std::vector<std::string> fields(1);
-  bool quoted = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        fields.back() += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        fields.back() += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      fields.emplace_back();
-    } else if (c != '\r') {
-      fields.back() += c;
-    }
-  }
-  for (auto& f : fields) {
-    const auto a = f.find_first_not_of(" \t");
-    const auto b = f.find_last_not_of(" \t");
-    f = a == std::string::npos ? "" : f.substr(a, b - a + 1);
-  }
-  return fields;
-}
 
 std::uint64_t Fnv1a(std::uint64_t h, const std::string& s) {
   for (unsigned char c : s) {
@@ -60,37 +30,25 @@ std::uint64_t SplitMix64(std::uint64_t x) {
 }  // namespace
 
 std::vector<Database::StudyItemRecord> ReadStudyItems(const std::filesystem::path& csv) {
-  std::ifstream in(csv);
-  if (!in) throw Error("study_items", "cannot read the items file", {.file = csv.string()});
+  CsvReader reader = CsvReader::Open(csv, "study_items");
   const auto folder = std::filesystem::absolute(csv).parent_path();
-  std::string line;
-  long line_no = 0;
-  std::map<std::string, size_t> column;
-  const std::vector<std::string> required = {"item_id", "a_video",  "b_video",
-                                             "a_label", "b_label", "source_video"};
+  const std::vector<std::string> header = reader.Header();
+  for (const std::string name :
+       {"item_id", "a_video", "b_video", "a_label", "b_label", "source_video"}) {
+    if (CsvColumn(header, name) == header.size()) {
+      reader.Fail(reader.header_line(), name, "the header has no column '" + name + "'");
+    }
+  }
   std::vector<Database::StudyItemRecord> items;
   std::set<std::string> seen;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto fields = SplitCsvLine(line);
-    if (column.empty()) {
-      for (size_t i = 0; i < fields.size(); ++i) column[fields[i]] = i;
-      for (const auto& name : required) {
-        if (!column.count(name)) {
-          throw Error("study_items", "the header has no column '" + name + "'",
-                      {.file = csv.string(), .line = line_no, .field = name});
-        }
-      }
-      continue;
-    }
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (!record.error.empty()) reader.Fail(record.line, "", record.error);
+    if (record.Blank()) continue;
     auto get = [&](const std::string& name) {
-      const size_t i = column.at(name);
-      const std::string value = i < fields.size() ? fields[i] : "";
-      if (value.empty()) {
-        throw Error("study_items", "empty field",
-                    {.file = csv.string(), .line = line_no, .field = name});
-      }
+      const size_t i = CsvColumn(header, name);
+      const std::string value = i < record.fields.size() ? TrimCsvField(record.fields[i]) : "";
+      if (value.empty()) reader.Fail(record.line, name, "empty field");
       return value;
     };
     auto video = [&](const std::string& name) {
@@ -98,16 +56,14 @@ std::vector<Database::StudyItemRecord> ReadStudyItems(const std::filesystem::pat
       if (p.is_relative()) p = folder / p;
       p = p.lexically_normal();
       if (!std::filesystem::is_regular_file(p)) {
-        throw Error("study_items", "video file not found: " + p.string(),
-                    {.file = csv.string(), .line = line_no, .field = name});
+        reader.Fail(record.line, name, "video file not found: " + p.string());
       }
       return p.string();
     };
     Database::StudyItemRecord item;
     item.item_id = get("item_id");
     if (!seen.insert(item.item_id).second) {
-      throw Error("study_items", "duplicate item_id '" + item.item_id + "'",
-                  {.file = csv.string(), .line = line_no, .field = "item_id"});
+      reader.Fail(record.line, "item_id", "duplicate item_id '" + item.item_id + "'");
     }
     item.source_video = video("source_video");
     item.a_video = video("a_video");

@@ -295,36 +295,32 @@ std::string FormatDouble(double v) {
   return ss.str();
 }
 
-// Rewrites that need the compiled model: inheritrange and dampratio/kv.
-void ModelPass(XMLDocument& doc, const std::string& label, std::vector<CompatChange>& changes) {
-  XMLElement* root = doc.RootElement();
-  std::vector<XMLElement*> actuators;
-  std::vector<XMLElement*> joints;
-  ForEachElement(root, [&](XMLElement* e) {
-    if (IsUnder(e, "actuator")) actuators.push_back(e);
-    if (std::string(e->Name()) == "joint" && e->Attribute("name") && !IsUnder(e, "default")) {
-      joints.push_back(e);
-    }
-  });
+// The steps of ModelPass.
+
+// A position actuator with attributes MuJoCo 2.2.2 lacks, where each was
+// set (its file and, when inherited, from which default class).
+struct PendingActuator {
+  int id;
+  XMLElement* element;
+  std::optional<Resolved> dampratio, kv, inheritrange, kp;
+  std::string range_file, damp_file, range_desc, damp_desc;
+};
+
+std::vector<PendingActuator> PendingActuators(XMLElement* root, const std::string& label,
+                                              const std::vector<XMLElement*>& actuators) {
   DefaultClasses classes(root);
-  struct Pending {
-    int id;
-    XMLElement* element;
-    std::optional<Resolved> dampratio, kv, inheritrange, kp;
-    std::string range_file, damp_file, range_desc, damp_desc;
-  };
   auto source_file = [&](const XMLElement* e) {
     for (const XMLElement* x = e; x; x = x->Parent() ? x->Parent()->ToElement() : nullptr) {
       if (x->Attribute(kSourceAttr)) return Str(x->Attribute(kSourceAttr));
     }
     return label;
   };
-  std::vector<Pending> pending;
+  std::vector<PendingActuator> pending;
   for (int i = 0; i < static_cast<int>(actuators.size()); ++i) {
     XMLElement* a = actuators[i];
     if (std::string(a->Name()) != "position") continue;
-    Pending p{i, a, classes.Actuator(a, "dampratio"), classes.Actuator(a, "kv"),
-              classes.Actuator(a, "inheritrange"), classes.Actuator(a, "kp")};
+    PendingActuator p{i, a, classes.Actuator(a, "dampratio"), classes.Actuator(a, "kv"),
+                      classes.Actuator(a, "inheritrange"), classes.Actuator(a, "kp")};
     if (p.inheritrange) {
       p.range_file = source_file(p.inheritrange->where);
       if (p.inheritrange->where != a) p.range_desc = " (from " + Describe(p.inheritrange->where) + ")";
@@ -336,59 +332,57 @@ void ModelPass(XMLDocument& doc, const std::string& label, std::vector<CompatCha
     }
     if (p.dampratio || p.kv || p.inheritrange) pending.push_back(p);
   }
-  ForEachElement(root, [&](XMLElement* e) {
-    for (const char* a : {"dampratio", "inheritrange", kSourceAttr}) e->DeleteAttribute(a);
-    if (std::string(e->Name()) == "position") e->DeleteAttribute("kv");
-  });
-  if (pending.empty()) return;
+  return pending;
+}
 
-  ModelPtr m = CompileMjcfText(Print(doc), label);
-  std::map<int, double> extra_damping;  // joint id -> added damping
-  for (const Pending& p : pending) {
-    const std::string desc = Describe(p.element);
-    if (p.id >= m->nu) continue;
-    const bool joint_trn = m->actuator_trntype[p.id] == mjTRN_JOINT ||
-                           m->actuator_trntype[p.id] == mjTRN_JOINTINPARENT;
-    const int j = m->actuator_trnid[2 * p.id];
-    if (p.inheritrange) {
-      const std::string& file = p.range_file;
-      const std::string& where_for = p.range_desc;
-      if (!joint_trn || !m->jnt_limited[j]) {
-        Record(changes, {file, desc + where_for, "inheritrange", p.inheritrange->value,
-                         ""});
-        spdlog::warn("mjcf_compat: {} inheritrange dropped: needs a limited joint", desc);
-      } else {
-        const double r = std::stod(p.inheritrange->value);
-        const double lo = m->jnt_range[2 * j], hi = m->jnt_range[2 * j + 1];
-        const double mid = 0.5 * (lo + hi), half = 0.5 * r * (hi - lo);
-        const std::string range = FormatDouble(mid - half) + " " + FormatDouble(mid + half);
-        p.element->SetAttribute("ctrlrange", range.c_str());
-        p.element->SetAttribute("ctrllimited", "true");
-        Record(changes, {file, desc + where_for, "inheritrange", p.inheritrange->value,
-                         "ctrlrange=" + range});
-      }
-    }
-    const std::optional<Resolved>& damp = p.dampratio ? p.dampratio : p.kv;
-    if (damp) {
-      const char* attr = p.dampratio ? "dampratio" : "kv";
-      const std::string& file = p.damp_file;
-      const double value = std::stod(damp->value);
-      if (!joint_trn) {
-        Record(changes, {file, desc + p.damp_desc, attr, damp->value, ""});
-        continue;
-      }
-      const double kp = p.kp ? std::stod(p.kp->value) : 1.0;
-      const int dof = m->jnt_dofadr[j];
-      const double kv =
-          p.dampratio ? 2.0 * value * std::sqrt(kp * m->dof_M0[dof]) : value;
-      extra_damping[j] += kv;
-      const char* jname = mj_id2name(m.get(), mjOBJ_JOINT, j);
-      Record(changes, {file, desc + p.damp_desc, attr, damp->value,
-                       "joint " + Str(jname) + " damping += " + FormatDouble(kv)});
-    }
+// inheritrange as the ctrlrange it means on the actuator's limited joint
+// `j` (dropped, with a warning, when there is none).
+void ConvertInheritRange(const mjModel& m, const PendingActuator& p, bool joint_trn, int j,
+                         const std::string& desc, std::vector<CompatChange>& changes) {
+  const std::string& file = p.range_file;
+  const std::string& where_for = p.range_desc;
+  if (!joint_trn || !m.jnt_limited[j]) {
+    Record(changes, {file, desc + where_for, "inheritrange", p.inheritrange->value, ""});
+    spdlog::warn("mjcf_compat: {} inheritrange dropped: needs a limited joint", desc);
+    return;
   }
+  const double r = std::stod(p.inheritrange->value);
+  const double lo = m.jnt_range[2 * j], hi = m.jnt_range[2 * j + 1];
+  const double mid = 0.5 * (lo + hi), half = 0.5 * r * (hi - lo);
+  const std::string range = FormatDouble(mid - half) + " " + FormatDouble(mid + half);
+  p.element->SetAttribute("ctrlrange", range.c_str());
+  p.element->SetAttribute("ctrllimited", "true");
+  Record(changes, {file, desc + where_for, "inheritrange", p.inheritrange->value,
+                   "ctrlrange=" + range});
+}
+
+// dampratio or kv as damping added to the actuator's joint `j`
+// (`extra_damping`); dropped when the actuator drives no joint.
+void ConvertDamping(const mjModel& m, const PendingActuator& p, bool joint_trn, int j,
+                    const std::string& desc, std::vector<CompatChange>& changes,
+                    std::map<int, double>& extra_damping) {
+  const std::optional<Resolved>& damp = p.dampratio ? p.dampratio : p.kv;
+  const char* attr = p.dampratio ? "dampratio" : "kv";
+  const std::string& file = p.damp_file;
+  const double value = std::stod(damp->value);
+  if (!joint_trn) {
+    Record(changes, {file, desc + p.damp_desc, attr, damp->value, ""});
+    return;
+  }
+  const double kp = p.kp ? std::stod(p.kp->value) : 1.0;
+  const int dof = m.jnt_dofadr[j];
+  const double kv = p.dampratio ? 2.0 * value * std::sqrt(kp * m.dof_M0[dof]) : value;
+  extra_damping[j] += kv;
+  const char* jname = mj_id2name(&m, mjOBJ_JOINT, j);
+  Record(changes, {file, desc + p.damp_desc, attr, damp->value,
+                   "joint " + Str(jname) + " damping += " + FormatDouble(kv)});
+}
+
+// Writes each joint's damping plus what its actuators added.
+void AddJointDamping(const mjModel& m, const std::vector<XMLElement*>& joints,
+                     const std::map<int, double>& extra_damping) {
   for (const auto& [j, extra] : extra_damping) {
-    const char* jname = mj_id2name(m.get(), mjOBJ_JOINT, j);
+    const char* jname = mj_id2name(&m, mjOBJ_JOINT, j);
     XMLElement* je = nullptr;
     for (XMLElement* e : joints) {
       if (jname && Str(e->Attribute("name")) == jname) je = e;
@@ -397,9 +391,40 @@ void ModelPass(XMLDocument& doc, const std::string& label, std::vector<CompatCha
       spdlog::warn("mjcf_compat: joint {} has no name; damping not converted", j);
       continue;
     }
-    const double total = m->dof_damping[m->jnt_dofadr[j]] + extra;
+    const double total = m.dof_damping[m.jnt_dofadr[j]] + extra;
     je->SetAttribute("damping", FormatDouble(total).c_str());
   }
+}
+
+// Rewrites that need the compiled model: inheritrange and dampratio/kv.
+void ModelPass(XMLDocument& doc, const std::string& label, std::vector<CompatChange>& changes) {
+  XMLElement* root = doc.RootElement();
+  std::vector<XMLElement*> actuators;
+  std::vector<XMLElement*> joints;
+  ForEachElement(root, [&](XMLElement* e) {
+    if (IsUnder(e, "actuator")) actuators.push_back(e);
+    if (std::string(e->Name()) == "joint" && e->Attribute("name") && !IsUnder(e, "default")) {
+      joints.push_back(e);
+    }
+  });
+  const std::vector<PendingActuator> pending = PendingActuators(root, label, actuators);
+  ForEachElement(root, [&](XMLElement* e) {
+    for (const char* a : {"dampratio", "inheritrange", kSourceAttr}) e->DeleteAttribute(a);
+    if (std::string(e->Name()) == "position") e->DeleteAttribute("kv");
+  });
+  if (pending.empty()) return;
+  ModelPtr m = CompileMjcfText(Print(doc), label);
+  std::map<int, double> extra_damping;  // joint id -> added damping
+  for (const PendingActuator& p : pending) {
+    const std::string desc = Describe(p.element);
+    if (p.id >= m->nu) continue;
+    const bool joint_trn = m->actuator_trntype[p.id] == mjTRN_JOINT ||
+                           m->actuator_trntype[p.id] == mjTRN_JOINTINPARENT;
+    const int j = m->actuator_trnid[2 * p.id];
+    if (p.inheritrange) ConvertInheritRange(*m, p, joint_trn, j, desc, changes);
+    if (p.dampratio || p.kv) ConvertDamping(*m, p, joint_trn, j, desc, changes, extra_damping);
+  }
+  AddJointDamping(*m, joints, extra_damping);
 }
 
 void StripMarks(XMLElement* root) {

@@ -10,7 +10,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
-#include "core/permanent_error.h"
+#include "core/error_codes.h"
 #include "core/shell_words.h"
 #include "recon/bundle/bundle.h"
 #include "recon/bundle/model_command.h"
@@ -136,7 +136,7 @@ void BundleStage::RunServer(const ClipContext& context, const std::filesystem::p
     case ServerReply::Kind::kError: {
       const std::string message = reply.message.value("message", std::string("(no message)"));
       if (reply.message.value("permanent", false)) {
-        throw PermanentError(kErrorBundleCommandFailed, "the server: " + message, site);
+        throw Error(kBundleServerRefused, "the server: " + message, site);
       }
       throw Error(kErrorBundleCommandFailed, "the server: " + message + "\n" + reply.log_tail,
                   site);

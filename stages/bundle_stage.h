@@ -25,7 +25,9 @@
 //     whole process group after timeout_s), bad_bundle (ReadBundle's
 //     complaint naming file and field), no_bundle (no command configured,
 //     no bundle named and no hands found by the hands stage). bad_bundle
-//     and no_bundle are PermanentErrors (the worker does not retry them); a
+//     and no_bundle are permanent (core/error_codes.h: the worker does not
+//     retry them), like bundle_server_refused (a server's error reply that
+//     says "permanent": true); a
 //     failed or timed-out command may be transient (a busy GPU) and is
 //     retried.
 //   - Neither list bundle nor command output (a command that exits 0 and

@@ -1,7 +1,8 @@
 #include "stages/clip_inputs.h"
 
 #include "core/file_text.h"
-#include "core/permanent_error.h"
+#include "core/error.h"
+#include "core/error_codes.h"
 
 namespace doasido::recon {
 
@@ -65,7 +66,7 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
     out.dir = hands_dir;
     out.source = kBundleFromHands;
   } else {
-    throw PermanentError(kErrorNoBundle,
+    throw Error(kErrorNoBundle,
                          "the list names no bundle, no model command wrote one and the " +
                              std::string(kHandsStageFolder) + " stage found no hands",
                          {.clip = clip, .file = out.dir.string()});
@@ -80,7 +81,7 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
   if (HasHands(out.bundle) || !hands_found) return out;
   const ClipBundle hands = ReadClipBundle(hands_dir, clip);
   if (hands.frames != out.bundle.frames) {
-    throw PermanentError("bad_bundle",
+    throw Error(kBadBundle,
                          "the hands stage has " + std::to_string(hands.frames) +
                              " frames, the bundle " + std::to_string(out.bundle.frames) +
                              "; they must cover the same span",

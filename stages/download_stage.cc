@@ -2,7 +2,7 @@
 
 #include <filesystem>
 
-#include "core/permanent_error.h"
+#include "core/error.h"
 #include "db/database.h"
 
 namespace doasido::ingest {
@@ -44,10 +44,6 @@ StageResult DownloadStage::Run(const ClipContext& context) {
   DownloadOutcome out;
   try {
     out = DownloadVideo(url, media, context.artifact_dir, config_);
-  } catch (const PermanentError& e) {
-    ErrorSite site = e.site();
-    site.clip = ClipLabel(context);
-    throw PermanentError(e.code(), e.message(), site);
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = ClipLabel(context);

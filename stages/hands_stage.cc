@@ -4,7 +4,6 @@
 
 #include "core/error.h"
 #include "core/error_codes.h"
-#include "core/permanent_error.h"
 #include "filters/kept_shot.h"
 #include "filters/shot_boundary.h"
 #include "hands/hand_bundle_writer.h"
@@ -91,9 +90,8 @@ StageResult HandsStage::Run(const ClipContext& context) {
   DetectedFrames detected;
   try {
     detected = DetectVideo(context.video.path, KeptSpan(context, clip), config_.max_side, *landmarker_);
-  } catch (const PermanentError&) {
-    throw;
   } catch (const Error& e) {
+    if (IsPermanentError(e.code())) throw;
     // A detector that failed is started afresh on the next attempt; the
     // long-lived detector names the clip it started on, so name this one.
     if (e.code() == "hand_detector_failed") landmarker_.reset();
@@ -102,7 +100,7 @@ StageResult HandsStage::Run(const ClipContext& context) {
     throw Error(e.code(), e.message(), site);
   }
   if (detected.frames.empty()) {
-    throw PermanentError(kVideoTruncated, "the kept span holds no frame",
+    throw Error(kVideoTruncated, "the kept span holds no frame",
                          {.clip = clip, .file = context.video.path});
   }
   const Intrinsics intrinsics =

@@ -11,7 +11,6 @@
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "core/file_text.h"
-#include "core/permanent_error.h"
 #include "recon/bundle/bundle.h"
 #include "stages/clip_inputs.h"
 #include "recon/align/gravity.h"
@@ -127,10 +126,6 @@ StageInput LoadInput(const ClipContext& context, const std::string& clip) {
     }
     const recon::ResolvedBundle resolved = recon::LoadClipBundle(context);
     return FromBundle(resolved.bundle, resolved.dir);
-  } catch (const PermanentError& e) {
-    ErrorSite site = e.site();
-    site.clip = clip;
-    throw PermanentError(e.code(), e.message(), site);
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = clip;

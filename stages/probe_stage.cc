@@ -1,6 +1,6 @@
 #include "stages/probe_stage.h"
 
-#include "core/permanent_error.h"
+#include "core/error.h"
 
 namespace doasido::video {
 
@@ -12,7 +12,6 @@ StageResult ProbeStage::Run(const ClipContext& context) {
     ErrorSite site = e.site();
     site.clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                  : context.clip.external_id;
-    if (dynamic_cast<const PermanentError*>(&e)) throw PermanentError(e.code(), e.message(), site);
     throw Error(e.code(), e.message(), site);
   }
   StageResult result;

@@ -6,7 +6,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
-#include "core/permanent_error.h"
+#include "core/error_codes.h"
 #include "stages/clip_inputs.h"
 #include "recon/bundle/npy.h"
 
@@ -37,15 +37,15 @@ void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<P
       Pose pose{Quat(p[3], p[4], p[5], p[6]), Vec3(p[0], p[1], p[2])};
       if (!pose.t.allFinite() || !pose.q.coeffs().allFinite()) continue;
       if (std::abs(pose.q.norm() - 1) > 1e-3) {
-        throw Error("bad_track", "quaternion not unit in frame " + std::to_string(t),
+        throw Error(kBadTrack, "quaternion not unit in frame " + std::to_string(t),
                     {.file = name, .field = "poses"});
       }
       poses[t] = pose;
       valid[t] = true;
     }
   } catch (const Error& e) {
-    if (e.code() == "bad_track") throw;
-    throw Error("bad_track", e.message(), {.file = name, .field = e.site().field});
+    if (e.code() == kBadTrack) throw;
+    throw Error(kBadTrack, e.message(), {.file = name, .field = e.site().field});
   }
 }
 
@@ -74,7 +74,7 @@ StageResult ReconStage::Run(const ClipContext& context) {
   } catch (const Error& e) {
     ErrorSite site = e.site();
     site.clip = clip;
-    throw PermanentError(e.code(), e.message(), site);  // the same files fail again
+    throw Error(e.code(), e.message(), site);  // kBadTrack: the same files fail again
   }
   StageResult result;
   result.measurements["bundle"] = dir.string();

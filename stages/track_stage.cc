@@ -6,7 +6,7 @@
 
 #include "core/config_check.h"
 #include "core/error.h"
-#include "core/permanent_error.h"
+#include "core/error_codes.h"
 #include "core/shell_words.h"
 #include "recon/bundle/bundle.h"
 #include "stages/clip_inputs.h"
@@ -142,7 +142,7 @@ StageResult TrackStage::Run(const ClipContext& context) {
   std::unique_ptr<SilhouetteRenderer> renderer;
   if (config_.selection.method == kSelectClustering) {
     if (!b.object_mesh || !masks || b.K.empty()) {
-      throw PermanentError("bad_bundle",
+      throw Error(kBadBundle,
                            "clustering selection needs object/mesh, K and masks/object",
                            {.clip = clip, .file = dir.string()});
     }

@@ -498,123 +498,185 @@ Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const Han
   return ep;
 }
 
+namespace {
+
+// What every frame of a one-hand script shares: the clip's spec, the grasp
+// and the poses the wrist moves between.
+struct OneHandScript {
+  const EpisodeSpec& spec;
+  const Grasp& grasp;
+  Pose rest;       // the object at rest
+  double height;   // the object's top
+  Vec3 a;          // approach direction
+  double sx;       // +1 right hand, -1 left
+  Pose g0;         // the wrist holding the object at rest
+  Pose pre, start, hover, away;
+  double T;        // the last frame (at least 1)
+};
+
+// One frame of the active hand.
+struct WristFrame {
+  Pose wrist;
+  double curl = 0;
+  bool contact = false;
+};
+
+OneHandScript MakeOneHandScript(const EpisodeSpec& spec, const TriMesh& object,
+                                const Grasp& grasp) {
+  const Side side = spec.active;
+  const Pose rest = RestPose(spec);
+  const Pose rest_xy{Quat::Identity(), rest.t};  // grasp is relative to the yawed object
+  const Vec3 a = ApproachDirection(side, spec.approach_azimuth, spec.approach_elevation);
+  // The grasp was solved with the object yawed at the origin.
+  const Pose g0 = rest_xy *
+                  Pose{Quat(Eigen::AngleAxisd(spec.object_yaw, Vec3::UnitZ())), Vec3::Zero()} *
+                  grasp.wrist_in_object;
+  const double sx = side == Side::kRight ? 1.0 : -1.0;
+  return {spec,
+          grasp,
+          rest,
+          object.Max().z(),
+          a,
+          sx,
+          g0,
+          Translated(g0, a * 0.06),
+          Translated(g0, a * 0.16 + Vec3(0, 0, 0.04)),
+          Translated(g0, a * 0.035),
+          Translated(g0, Vec3(sx * 0.9, 0, 0.15)),
+          static_cast<double>(std::max(spec.frames - 1, 1))};
+}
+
+// A clip without touch: reach to hover beside the object, sway, retract.
+WristFrame HoverFrame(const OneHandScript& s, double f, EpisodeFrame& fr) {
+  const double T = s.T;
+  WristFrame out;
+  if (f <= 0.3 * T) {
+    out.wrist = Interpolate(s.start, s.hover, MinJerk(Seg(f, 0, 0.3 * T)));
+    fr.phase = "reach";
+  } else if (f <= 0.75 * T) {
+    const double w = std::sin(2 * kPi * (f - 0.3 * T) / (0.45 * T));
+    out.wrist = Translated(s.hover, Vec3(0, 0.008 * w, 0.004 * w));
+    fr.phase = "hover";
+  } else {
+    out.wrist = Interpolate(s.hover, s.start, MinJerk(Seg(f, 0.75 * T, T)));
+    fr.phase = "retract";
+  }
+  return out;
+}
+
+// After the release of a touching clip, from the object's final pose:
+// the hand leaves the frame and returns, or retracts.
+Pose AfterRelease(const OneHandScript& s, double f, const Pose& g1, double b_open,
+                  EpisodeFrame& fr) {
+  const double T = s.T;
+  const Pose pre1 = Translated(g1, s.a * 0.06);
+  const Pose start1 = Translated(g1, s.a * 0.16 + Vec3(0, 0, 0.04));
+  if (s.spec.leave == LeaveFrame::kHand) {
+    const Pose away1 = Translated(g1, s.away.t - s.g0.t);
+    if (f <= 0.65 * T) {
+      fr.phase = "exit";
+      return Interpolate(g1, away1, MinJerk(Seg(f, b_open * T, 0.65 * T)));
+    }
+    if (f <= 0.80 * T) {
+      fr.phase = "away";
+      return away1;
+    }
+    fr.phase = "return";
+    return Interpolate(away1, start1, MinJerk(Seg(f, 0.80 * T, T)));
+  }
+  const double r = Seg(f, b_open * T, T);
+  fr.phase = "retract";
+  return r < 0.4 ? Interpolate(g1, pre1, MinJerk(r / 0.4))
+                 : Interpolate(pre1, start1, MinJerk((r - 0.4) / 0.6));
+}
+
+// A touching clip: reach, approach, grasp, manipulate the object, release.
+WristFrame TouchFrame(const OneHandScript& s, double f, EpisodeFrame& fr) {
+  const EpisodeSpec& spec = s.spec;
+  const double T = s.T;
+  // Phase boundaries as fractions of the clip.
+  double b_reach = 0.20, b_appr = 0.30, b_close = 0.38, b_manip = 0.78, b_open = 0.86;
+  if (spec.leave == LeaveFrame::kHand) {
+    b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.50, b_open = 0.55;
+  } else if (spec.leave == LeaveFrame::kObject) {
+    b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.86, b_open = 0.92;
+  }
+  auto object_at = [&](double u) {
+    return spec.leave == LeaveFrame::kObject
+               ? CarryOutPose(s.rest, s.sx, u)
+               : VerbPose(spec.verb, s.rest, s.height, s.sx, spec.manipulation_scale, u);
+  };
+  auto grasp_at = [&](const Pose& object_pose) { return object_pose * s.grasp.wrist_in_object; };
+  const Pose final_object = object_at(1.0);
+  const Pose g1 = grasp_at(final_object);
+  WristFrame out;
+  if (f <= b_reach * T) {
+    out.wrist = Interpolate(s.start, s.pre, MinJerk(Seg(f, 0, b_reach * T)));
+    fr.phase = "reach";
+  } else if (f <= b_appr * T) {
+    out.wrist = Interpolate(s.pre, s.g0, MinJerk(Seg(f, b_reach * T, b_appr * T)));
+    fr.phase = "approach";
+  } else if (f < b_close * T) {
+    out.wrist = s.g0;
+    out.curl = MinJerk(Seg(f, b_appr * T, b_close * T));
+    fr.phase = "grasp";
+  } else if (f <= b_manip * T) {
+    fr.object_pose = object_at(Seg(f, b_close * T, b_manip * T));
+    out.wrist = grasp_at(fr.object_pose);
+    out.curl = 1;
+    out.contact = true;
+    fr.phase = "manipulate";
+  } else {
+    fr.object_pose = final_object;
+    const double open_s = Seg(f, b_manip * T, b_open * T);
+    out.curl = 1 - MinJerk(open_s);
+    out.contact = open_s <= 0.0;
+    if (f <= b_open * T) {
+      out.wrist = g1;
+      fr.phase = "release";
+    } else {
+      out.wrist = AfterRelease(s, f, g1, b_open, fr);
+    }
+  }
+  return out;
+}
+
+// The idle hand of a two-hand clip: relaxed beside the object, drifting.
+HandPose IdleHand(const OneHandScript& s, double f) {
+  const double drift = s.spec.static_scene ? 0.0 : std::sin(2 * kPi * 1.3 * f / s.T);
+  const Vec3 pos(s.rest.t.x() - s.sx * s.spec.second_hand_offset + 0.01 * drift,
+                 s.rest.t.y() - 0.06, 0.045);
+  const Vec3 d = Vec3(s.sx * 0.35, 1, 0).normalized();
+  return RelaxedPose(Pose{Quat(HandFrame(d, -Vec3::UnitZ())), pos});
+}
+
+}  // namespace
+
 Episode ScriptEpisode(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {
   if (spec.two_hand_task != TwoHandTask::kNone) return ScriptTwoHands(spec, object, shape);
   Episode ep;
   ep.spec = spec;
   const Side side = spec.active;
   const int s_idx = static_cast<int>(side);
-  const double sx = side == Side::kRight ? 1.0 : -1.0;
   ep.grasp = SolveGraspOfType(spec.grasp, object, side, spec.approach_azimuth, spec.approach_elevation,
                               spec.object_yaw, shape);
-  const Pose rest = RestPose(spec);
-  const Pose rest_xy{Quat::Identity(), rest.t};  // grasp is relative to the yawed object
-  const double height = object.Max().z();
-  const Vec3 a = ApproachDirection(side, spec.approach_azimuth, spec.approach_elevation);
-  // The grasp was solved with the object yawed at the origin.
-  const Pose g0 = rest_xy *
-                  Pose{Quat(Eigen::AngleAxisd(spec.object_yaw, Vec3::UnitZ())), Vec3::Zero()} *
-                  ep.grasp.wrist_in_object;
-  auto grasp_at = [&](const Pose& object_pose) { return object_pose * ep.grasp.wrist_in_object; };
-  const Pose pre = Translated(g0, a * 0.06);
-  const Pose start = Translated(g0, a * 0.16 + Vec3(0, 0, 0.04));
-  const Pose hover = Translated(g0, a * 0.035);
-  const Pose away = Translated(g0, Vec3(sx * 0.9, 0, 0.15));
-  const double T = std::max(spec.frames - 1, 1);
-
+  const OneHandScript script = MakeOneHandScript(spec, object, ep.grasp);
   for (int i = 0; i < spec.frames; ++i) {
     const double f = i;
     EpisodeFrame fr;
-    fr.object_pose = rest;
-    Pose wrist = start;
-    double s_curl = 0;
-    bool contact = false;
+    fr.object_pose = script.rest;
+    WristFrame hand;
     if (spec.static_scene) {
-      wrist = Translated(g0, a * 0.05);
+      hand.wrist = Translated(script.g0, script.a * 0.05);
       fr.phase = "static";
-    } else if (!spec.touch) {
-      if (f <= 0.3 * T) {
-        wrist = Interpolate(start, hover, MinJerk(Seg(f, 0, 0.3 * T)));
-        fr.phase = "reach";
-      } else if (f <= 0.75 * T) {
-        const double w = std::sin(2 * kPi * (f - 0.3 * T) / (0.45 * T));
-        wrist = Translated(hover, Vec3(0, 0.008 * w, 0.004 * w));
-        fr.phase = "hover";
-      } else {
-        wrist = Interpolate(hover, start, MinJerk(Seg(f, 0.75 * T, T)));
-        fr.phase = "retract";
-      }
     } else {
-      // Phase boundaries as fractions of the clip.
-      double b_reach = 0.20, b_appr = 0.30, b_close = 0.38, b_manip = 0.78, b_open = 0.86;
-      if (spec.leave == LeaveFrame::kHand) {
-        b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.50, b_open = 0.55;
-      } else if (spec.leave == LeaveFrame::kObject) {
-        b_reach = 0.14, b_appr = 0.20, b_close = 0.26, b_manip = 0.86, b_open = 0.92;
-      }
-      auto object_at = [&](double u) {
-        return spec.leave == LeaveFrame::kObject
-                   ? CarryOutPose(rest, sx, u)
-                   : VerbPose(spec.verb, rest, height, sx, spec.manipulation_scale, u);
-      };
-      const Pose final_object = object_at(1.0);
-      const Pose g1 = grasp_at(final_object);
-      if (f <= b_reach * T) {
-        wrist = Interpolate(start, pre, MinJerk(Seg(f, 0, b_reach * T)));
-        fr.phase = "reach";
-      } else if (f <= b_appr * T) {
-        wrist = Interpolate(pre, g0, MinJerk(Seg(f, b_reach * T, b_appr * T)));
-        fr.phase = "approach";
-      } else if (f < b_close * T) {
-        wrist = g0;
-        s_curl = MinJerk(Seg(f, b_appr * T, b_close * T));
-        fr.phase = "grasp";
-      } else if (f <= b_manip * T) {
-        const double u = Seg(f, b_close * T, b_manip * T);
-        fr.object_pose = object_at(u);
-        wrist = grasp_at(fr.object_pose);
-        s_curl = 1;
-        contact = true;
-        fr.phase = "manipulate";
-      } else {
-        fr.object_pose = final_object;
-        const double open_s = Seg(f, b_manip * T, b_open * T);
-        s_curl = 1 - MinJerk(open_s);
-        contact = open_s <= 0.0;
-        const Pose pre1 = Translated(g1, a * 0.06);
-        const Pose start1 = Translated(g1, a * 0.16 + Vec3(0, 0, 0.04));
-        if (f <= b_open * T) {
-          wrist = g1;
-          fr.phase = "release";
-        } else if (spec.leave == LeaveFrame::kHand) {
-          const Pose away1 = Translated(g1, away.t - g0.t);
-          if (f <= 0.65 * T) {
-            wrist = Interpolate(g1, away1, MinJerk(Seg(f, b_open * T, 0.65 * T)));
-            fr.phase = "exit";
-          } else if (f <= 0.80 * T) {
-            wrist = away1;
-            fr.phase = "away";
-          } else {
-            wrist = Interpolate(away1, start1, MinJerk(Seg(f, 0.80 * T, T)));
-            fr.phase = "return";
-          }
-        } else {
-          const double r = Seg(f, b_open * T, T);
-          wrist = r < 0.4 ? Interpolate(g1, pre1, MinJerk(r / 0.4))
-                          : Interpolate(pre1, start1, MinJerk((r - 0.4) / 0.6));
-          fr.phase = "retract";
-        }
-      }
+      hand = spec.touch ? TouchFrame(script, f, fr) : HoverFrame(script, f, fr);
     }
-    fr.hands[s_idx] = Closed(wrist, ep.grasp, s_curl);
-    fr.contact[s_idx] = contact;
+    fr.hands[s_idx] = Closed(hand.wrist, ep.grasp, hand.curl);
+    fr.contact[s_idx] = hand.contact;
     if (spec.two_hands) {
       const Side other = side == Side::kRight ? Side::kLeft : Side::kRight;
-      const double drift = spec.static_scene ? 0.0 : std::sin(2 * kPi * 1.3 * f / T);
-      const Vec3 pos(rest.t.x() - sx * spec.second_hand_offset + 0.01 * drift, rest.t.y() - 0.06, 0.045);
-      const Vec3 d = Vec3(sx * 0.35, 1, 0).normalized();
-      fr.hands[static_cast<int>(other)] =
-          RelaxedPose(Pose{Quat(HandFrame(d, -Vec3::UnitZ())), pos});
+      fr.hands[static_cast<int>(other)] = IdleHand(script, f);
     }
     ep.frames.push_back(std::move(fr));
   }

@@ -52,80 +52,74 @@ bool SameView(const BackgroundCache& c, const Camera& cam, const Pose& cw) {
          c.camera_from_world.t == cw.t;
 }
 
-}  // namespace
+// The steps of RenderFrame.
 
-RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const FrameState& state,
-                          const RasterOptions& options, BackgroundCache* cache) {
-  const Camera& cam = state.camera;
-  const Pose& cw = state.camera_from_world;
-  const Pose wc = cw.Inverse();
-  const Vec3 light = cw.R() * world.light_dir;
-  auto shade = [&](const Vec3& n_in, const Vec3& p, const Rgb& albedo) {
+// Lambert shading of a point `p` in camera coordinates, the light given in
+// camera coordinates too; a surface seen from behind (a mug's interior) is
+// lit as its other side.
+struct Shader {
+  const World& world;
+  Vec3 light;
+
+  cv::Vec3b operator()(const Vec3& n_in, const Vec3& p, const Rgb& albedo) const {
     Vec3 n = n_in;
-    if (n.dot(p) > 0) n = -n;  // seen from behind (mug interior)
+    if (n.dot(p) > 0) n = -n;
     const Rgb c = albedo * (world.ambient + world.diffuse * std::max(0.0, n.dot(light)));
     return cv::Vec3b(ToByte(c.z()), ToByte(c.y()), ToByte(c.x()));
-  };
+  }
+};
 
-  RenderedFrame out;
-  if (cache != nullptr && SameView(*cache, cam, cw)) {
-    out.bgr = cache->frame.bgr.clone();
-    out.raster.depth = cache->frame.raster.depth.clone();
-    out.raster.surface = cache->frame.raster.surface.clone();
-    out.raster.face = cache->frame.raster.face.clone();
-  } else {
-    out.raster.Reset(cam.width, cam.height);
-    TriMesh table = MakePlane(2 * world.table_half, world.wall_y + world.table_half);
-    table = table.Transformed(
-        cw * Pose{Quat::Identity(), Vec3(0, (world.wall_y - world.table_half) / 2, 0)});
-    TriMesh wall = MakePlane(2 * world.table_half, 2.0);
-    const Mat3 wall_rot = (Mat3() << 1, 0, 0, 0, 0, -1, 0, 1, 0).finished();  // +z -> -y
-    wall = wall.Transformed(cw * Pose{Quat(wall_rot), Vec3(0, world.wall_y, 0.99)});
-    Rasterize(table, cam, kSurfaceTable, out.raster, options);
-    Rasterize(wall, cam, kSurfaceWall, out.raster, options);
-    out.bgr.create(cam.height, cam.width, CV_8UC3);
-    const Vec3 n_table = cw.R() * Vec3::UnitZ(), n_wall = cw.R() * -Vec3::UnitY();
-    for (int y = 0; y < cam.height; ++y) {
-      const float* drow = out.raster.depth.ptr<float>(y);
-      const std::uint8_t* srow = out.raster.surface.ptr<std::uint8_t>(y);
-      cv::Vec3b* crow = out.bgr.ptr<cv::Vec3b>(y);
-      for (int x = 0; x < cam.width; ++x) {
-        if (srow[x] == kSurfaceNone) {
-          crow[x] = cv::Vec3b(0, 0, 0);
-          continue;
-        }
-        const Vec3 p = cam.Unproject(x, y, drow[x]);
-        const Vec3 w = wc * p;
-        crow[x] = srow[x] == kSurfaceTable
-                      ? shade(n_table, p, TableTexture(world.style, w.x(), w.y()))
-                      : shade(n_wall, p, WallTexture(world.style, w.x(), w.z()));
+// A deep copy of a frame's picture and rasters.
+void CopyFrame(const RenderedFrame& from, RenderedFrame& to) {
+  to.bgr = from.bgr.clone();
+  to.raster.depth = from.raster.depth.clone();
+  to.raster.surface = from.raster.surface.clone();
+  to.raster.face = from.raster.face.clone();
+}
+
+// The table and the wall behind it, rasterised and shaded with their
+// textures into a fresh frame.
+void RenderBackground(const World& world, const Camera& cam, const Pose& cw,
+                      const RasterOptions& options, const Shader& shade, RenderedFrame& out) {
+  const Pose wc = cw.Inverse();
+  out.raster.Reset(cam.width, cam.height);
+  TriMesh table = MakePlane(2 * world.table_half, world.wall_y + world.table_half);
+  table = table.Transformed(
+      cw * Pose{Quat::Identity(), Vec3(0, (world.wall_y - world.table_half) / 2, 0)});
+  TriMesh wall = MakePlane(2 * world.table_half, 2.0);
+  const Mat3 wall_rot = (Mat3() << 1, 0, 0, 0, 0, -1, 0, 1, 0).finished();  // +z -> -y
+  wall = wall.Transformed(cw * Pose{Quat(wall_rot), Vec3(0, world.wall_y, 0.99)});
+  Rasterize(table, cam, kSurfaceTable, out.raster, options);
+  Rasterize(wall, cam, kSurfaceWall, out.raster, options);
+  out.bgr.create(cam.height, cam.width, CV_8UC3);
+  const Vec3 n_table = cw.R() * Vec3::UnitZ(), n_wall = cw.R() * -Vec3::UnitY();
+  for (int y = 0; y < cam.height; ++y) {
+    const float* drow = out.raster.depth.ptr<float>(y);
+    const std::uint8_t* srow = out.raster.surface.ptr<std::uint8_t>(y);
+    cv::Vec3b* crow = out.bgr.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < cam.width; ++x) {
+      if (srow[x] == kSurfaceNone) {
+        crow[x] = cv::Vec3b(0, 0, 0);
+        continue;
       }
-    }
-    if (cache != nullptr) {
-      cache->valid = true;
-      cache->camera = cam;
-      cache->camera_from_world = cw;
-      cache->frame.bgr = out.bgr.clone();
-      cache->frame.raster.depth = out.raster.depth.clone();
-      cache->frame.raster.surface = out.raster.surface.clone();
-      cache->frame.raster.face = out.raster.face.clone();
+      const Vec3 p = cam.Unproject(x, y, drow[x]);
+      const Vec3 w = wc * p;
+      crow[x] = srow[x] == kSurfaceTable
+                    ? shade(n_table, p, TableTexture(world.style, w.x(), w.y()))
+                    : shade(n_wall, p, WallTexture(world.style, w.x(), w.z()));
     }
   }
+}
 
-  TriMesh object_cam;
-  const Pose object_cam_pose = cw * state.object_pose;
-  if (state.object_present) {
-    object_cam = object_mesh.Transformed(object_cam_pose);
-    Rasterize(object_cam, cam, kSurfaceObject, out.raster, options);
-  }
-  std::array<TriMesh, 2> hand_cam;
-  for (int s = 0; s < 2; ++s) {
-    if (!state.hands[s]) continue;
-    hand_cam[s] = state.hands[s]->mesh.Transformed(cw);
-    Rasterize(hand_cam[s], cam, s == 0 ? kSurfaceHandLeft : kSurfaceHandRight, out.raster, options);
-  }
-
-  const Pose object_from_cam = object_cam_pose.Inverse();
+// Shades the pixels the object and the hands (already rasterised, in
+// camera coordinates) won: the object by its faces, a hand by the capsule
+// under the pixel (smooth normals), each with its texture.
+void ShadeForeground(const World& world, const FrameState& state, const TriMesh& object_cam,
+                     const std::array<TriMesh, 2>& hand_cam, const Shader& shade,
+                     RenderedFrame& out) {
+  const Camera& cam = state.camera;
+  const Pose& cw = state.camera_from_world;
+  const Pose object_from_cam = (cw * state.object_pose).Inverse();
   std::array<Pose, 2> hand_from_cam = {(cw * state.hand_wrist[0]).Inverse(),
                                        (cw * state.hand_wrist[1]).Inverse()};
   for (int y = 0; y < cam.height; ++y) {
@@ -152,6 +146,39 @@ RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const 
       crow[x] = shade(n, p, SkinTexture(world.style, hand_from_cam[s] * p));
     }
   }
+}
+
+}  // namespace
+
+RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const FrameState& state,
+                          const RasterOptions& options, BackgroundCache* cache) {
+  const Camera& cam = state.camera;
+  const Pose& cw = state.camera_from_world;
+  const Shader shade{world, cw.R() * world.light_dir};
+  RenderedFrame out;
+  if (cache != nullptr && SameView(*cache, cam, cw)) {
+    CopyFrame(cache->frame, out);
+  } else {
+    RenderBackground(world, cam, cw, options, shade, out);
+    if (cache != nullptr) {
+      cache->valid = true;
+      cache->camera = cam;
+      cache->camera_from_world = cw;
+      CopyFrame(out, cache->frame);
+    }
+  }
+  TriMesh object_cam;
+  if (state.object_present) {
+    object_cam = object_mesh.Transformed(cw * state.object_pose);
+    Rasterize(object_cam, cam, kSurfaceObject, out.raster, options);
+  }
+  std::array<TriMesh, 2> hand_cam;
+  for (int s = 0; s < 2; ++s) {
+    if (!state.hands[s]) continue;
+    hand_cam[s] = state.hands[s]->mesh.Transformed(cw);
+    Rasterize(hand_cam[s], cam, s == 0 ? kSurfaceHandLeft : kSurfaceHandRight, out.raster, options);
+  }
+  ShadeForeground(world, state, object_cam, hand_cam, shade, out);
   return out;
 }
 

@@ -32,6 +32,22 @@ using testing::RunDoasido;
 using testing::Shell;
 using testing::TempDir;
 
+// Cancels task 0 of array job `array` once its shard (database `shard0`)
+// has finished 3 stage runs, so it stops with work left; false when that
+// never happened within a minute.
+bool CancelTaskZeroMidRun(const std::filesystem::path& shard0, const std::string& array) {
+  for (int i = 0; i < 1200; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (!std::filesystem::exists(shard0)) continue;
+    const auto done = QueryRows(shard0, "SELECT COUNT(*) FROM stage_runs WHERE state = 'done'");
+    if (!done.empty() && std::stoi(done[0]) >= 3) {
+      Shell("scancel " + array + "_0");
+      return true;
+    }
+  }
+  return false;
+}
+
 TEST(Slurm, ArrayAndMergeEqualOneMachineAfterACancelledTaskIsResumed) {
   ASSERT_EQ(geteuid(), 0u) << "the test starts slurmctld and slurmd as root";
   TempDir dir;
@@ -63,17 +79,7 @@ TEST(Slurm, ArrayAndMergeEqualOneMachineAfterACancelledTaskIsResumed) {
 
   // Cancel task 0 once its shard has started but not finished.
   const auto shard0 = dir / "parent/shards/shard-000/doasido.db";
-  bool cancelled = false;
-  for (int i = 0; i < 1200 && !cancelled; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (!std::filesystem::exists(shard0)) continue;
-    const auto done = QueryRows(shard0, "SELECT COUNT(*) FROM stage_runs WHERE state = 'done'");
-    if (!done.empty() && std::stoi(done[0]) >= 3) {
-      Shell("scancel " + array + "_0");
-      cancelled = true;
-    }
-  }
-  ASSERT_TRUE(cancelled);
+  ASSERT_TRUE(CancelTaskZeroMidRun(shard0, array));
   ASSERT_TRUE(cluster.WaitEmpty(300)) << Shell("squeue") << cluster.Logs();
   const auto open = QueryRows(shard0, "SELECT COUNT(*) FROM stage_runs WHERE state IN"
                                       " ('pending', 'running')");
@@ -167,17 +173,7 @@ TEST(Slurm, StageGroupsOnTheirOwnResourcesEqualOneMachineAfterAGroupTaskIsResume
 
   // Cancel the filters' task 0 once its shard has started but not finished.
   const auto shard0 = dir / "parent/shards/shard-000/doasido.db";
-  bool cancelled = false;
-  for (int i = 0; i < 1200 && !cancelled; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (!std::filesystem::exists(shard0)) continue;
-    const auto done = QueryRows(shard0, "SELECT COUNT(*) FROM stage_runs WHERE state = 'done'");
-    if (!done.empty() && std::stoi(done[0]) >= 3) {
-      Shell("scancel " + filters + "_0");
-      cancelled = true;
-    }
-  }
-  ASSERT_TRUE(cancelled);
+  ASSERT_TRUE(CancelTaskZeroMidRun(shard0, filters));
   // The other shards go through all groups; shard 0's later tasks wait forever.
   bool settled = false;
   for (int i = 0; i < 1200 && !settled; ++i) {

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <thread>
 
-#include "core/permanent_error.h"
+#include "core/error_codes.h"
 #include "ingest/download_command.h"
 #include "stages/download_stage.h"
 #include "ingest/host_slots.h"
@@ -50,10 +50,8 @@ std::pair<std::string, bool> Outcome(const TempDir& dir, const std::string& scri
   try {
     RunDownloadCommand(command, "https://youtu.be/abcdefghijk", dir / "out" / "v.mp4",
                        dir / "log.txt");
-  } catch (const PermanentError& e) {
-    return {e.code(), true};
   } catch (const Error& e) {
-    return {e.code(), false};
+    return {e.code(), IsPermanentError(e.code())};
   }
   return {"", false};
 }

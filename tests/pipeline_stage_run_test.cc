@@ -1,13 +1,17 @@
 // RunClaimedStage, the one path from a claim to a recorded result that the
 // worker loop and re-thresholding share: results complete the run, any
 // exception is a failed attempt (retried up to the limit, then failed with
-// its message), and a lost lease drops the result.
+// its message) unless its code is permanent (then failed at once), and a
+// lost lease drops the result.
 #include "pipeline/stage_run.h"
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <stdexcept>
 
+#include "core/error.h"
+#include "core/error_codes.h"
 #include "db/database.h"
 #include "stages/stage_registry.h"
 #include "tests/test_util.h"
@@ -31,6 +35,20 @@ class PickyStage : public Stage {
     r.measurements = {{"seen", context.clip.id}};
     return r;
   }
+};
+
+// Throws Error(code) for every clip.
+class FailingStage : public Stage {
+ public:
+  explicit FailingStage(std::string code) : code_(std::move(code)) {}
+  std::string Name() const override { return "picky"; }
+  Json Params() const override { return Json::object(); }
+  StageResult Run(const ClipContext& context) override {
+    throw Error(code_, "fails every time", {.clip = context.clip.external_id});
+  }
+
+ private:
+  std::string code_;
 };
 
 ClipId AddClip(Database& db, const std::string& name) {
@@ -80,6 +98,36 @@ TEST(StageRun, ResultCompletesAndAnyExceptionIsAnAttempt) {
   EXPECT_FALSE(std::filesystem::exists(db.ArtifactDir(good, "picky").parent_path()));
   for (const auto& run : runs) {
     EXPECT_FALSE(std::filesystem::exists(db.ArtifactRoot() / std::to_string(run.clip_id)));
+  }
+}
+
+// The error code alone decides (core/error_codes.h): a video the site says
+// is gone fails at its first attempt, a rate limit spends every attempt.
+TEST(StageRun, APermanentErrorIsNotRetriedAndATransientOneIs) {
+  ASSERT_TRUE(IsPermanentError(kVideoUnavailable));
+  ASSERT_FALSE(IsPermanentError("rate_limited"));
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"picky"});
+  const ClipId gone = AddClip(db, "gone");
+  const ClipId busy = AddClip(db, "busy");
+  FailingStage permanent(kVideoUnavailable), transient("rate_limited");
+  std::map<ClipId, int> tries;
+  while (auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
+    Stage& stage = claim->clip_id == gone ? static_cast<Stage&>(permanent) : transient;
+    const StageRunReport r = RunClaimedStage(db, stage, *claim, "w", "h", kDefaultMaxAttempts);
+    EXPECT_EQ(r.outcome, RunOutcome::kFailed);
+    ++tries[claim->clip_id];
+  }
+  ASSERT_GT(kDefaultMaxAttempts, 1);
+  EXPECT_EQ(tries[gone], 1);
+  EXPECT_EQ(tries[busy], kDefaultMaxAttempts);
+  for (const auto& run : db.ListRuns({.stage = "picky"})) {
+    EXPECT_EQ(run.state, RunState::kFailed);
+    EXPECT_EQ(run.attempts, run.clip_id == gone ? 1 : kDefaultMaxAttempts);
+    EXPECT_NE(run.error.find(run.clip_id == gone ? kVideoUnavailable : "rate_limited"),
+              std::string::npos)
+        << run.error;
   }
 }
 

@@ -8,7 +8,7 @@
 
 #include <algorithm>
 
-#include "core/permanent_error.h"
+#include "core/error_codes.h"
 #include "recon/bundle/bundle.h"
 #include "stages/clip_inputs.h"
 #include "stages/bundle_stage.h"
@@ -60,9 +60,8 @@ ClipBundle WithoutHands(ClipBundle b) {
 std::string PermanentCode(const std::function<void()>& f) {
   try {
     f();
-  } catch (const PermanentError& e) {
-    return e.code() + " " + e.site().field;
   } catch (const Error& e) {
+    if (IsPermanentError(e.code())) return e.code() + " " + e.site().field;
     return "transient " + e.code();
   }
   return "none";

@@ -3,7 +3,7 @@
 // the count its container declares (containers round it; phone recordings
 // often declare one or two frames more than decode, while ffmpeg decodes
 // every packet without error). A shorter file is truncated or corrupt, a
-// deterministic failure (PermanentError: no retry).
+// deterministic failure (kVideoTruncated, permanent: no retry).
 #pragma once
 
 #include <cstdint>

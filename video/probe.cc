@@ -10,8 +10,8 @@ extern "C" {
 }
 
 #include "core/config_check.h"
+#include "core/error.h"
 #include "core/error_codes.h"
-#include "core/permanent_error.h"
 #include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
@@ -101,7 +101,7 @@ void CheckConfig(const ProbeConfig& c, const std::string& section) {
 VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
   const ErrorSite site{.file = path.string()};
   if (path.string().find("://") != std::string::npos) {
-    throw PermanentError(kVideoNotDownloaded,
+    throw Error(kVideoNotDownloaded,
                          "the video is a URL that was not downloaded (put the `download` stage "
                          "before probe in the pipeline)",
                          site);
@@ -110,7 +110,7 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   const auto status = std::filesystem::status(path, ec);
   if (!std::filesystem::exists(status)) throw Error("video_missing", "no such file", site);
   if (!std::filesystem::is_regular_file(status)) {
-    throw PermanentError(kNotARegularFile,
+    throw Error(kNotARegularFile,
                          std::string("a ") + FileKind(status.type()) +
                              ", not a regular file: it may never end, so it is not opened",
                          site);
@@ -118,17 +118,17 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   Container c;
   if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
       avformat_find_stream_info(c.format, nullptr) < 0) {
-    throw PermanentError(kVideoUnreadable,
+    throw Error(kVideoUnreadable,
                          "FFmpeg cannot open it (corrupt, truncated or not a video)", site);
   }
   const int index = av_find_best_stream(c.format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
   if (index < 0) {
     const bool audio = av_find_best_stream(c.format, AVMEDIA_TYPE_AUDIO, -1, -1, nullptr, 0) >= 0;
-    if (audio) throw PermanentError(kUnsupportedVideo, "audio only: no video stream", site);
-    throw PermanentError(kVideoUnreadable, "no video stream", site);
+    if (audio) throw Error(kUnsupportedVideo, "audio only: no video stream", site);
+    throw Error(kVideoUnreadable, "no video stream", site);
   }
   if (IsStillImage(c.format, c.format->streams[index])) {
-    throw PermanentError(kUnsupportedVideo,
+    throw Error(kUnsupportedVideo,
                          std::string("a still image (") + c.format->iformat->name +
                              "), not a video, whatever its name says",
                          site);
@@ -144,14 +144,14 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   info.fps = rate.den > 0 ? av_q2d(rate) : 0;
   info.codec = CodecOf(par);
   if (info.width <= 0 || info.height <= 0) {
-    throw PermanentError(kVideoUnreadable, "no video stream with a frame size", site);
+    throw Error(kVideoUnreadable, "no video stream with a frame size", site);
   }
   if (!(info.fps > 0) || !std::isfinite(info.fps)) {
-    throw PermanentError(kVideoUnreadable, "no frame rate in the container",
+    throw Error(kVideoUnreadable, "no frame rate in the container",
                          {.file = path.string(), .field = "fps"});
   }
   if (const std::string why = CannotBeJudged(info); !why.empty()) {
-    throw PermanentError(kUnsupportedVideo, why, site);
+    throw Error(kUnsupportedVideo, why, site);
   }
   const std::int64_t declared = stream->nb_frames;
   info.frame_count = declared;
@@ -170,7 +170,7 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
     av_packet_free(&packet);
     const auto counted = static_cast<std::int64_t>(pts.size());
     if (counted < kMinFrames) {
-      throw PermanentError(kUnsupportedVideo,
+      throw Error(kUnsupportedVideo,
                            counted == 0 ? "the video stream holds no frames"
                                         : "a single frame: no motion to judge",
                            {.file = path.string(), .field = "frame_count"});
@@ -179,7 +179,7 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
         MissingFramesAllowed(declared),
         static_cast<std::int64_t>(std::ceil(config.max_missing_fraction * static_cast<double>(declared))));
     if (declared > 0 && counted < declared - allowed) {
-      throw PermanentError(kVideoTruncated,
+      throw Error(kVideoTruncated,
                            "holds " + std::to_string(counted) + " of the " +
                                std::to_string(declared) +
                                " frames the container declares (truncated or corrupt file)",

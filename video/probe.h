@@ -30,7 +30,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ProbeConfig, count_frames, vfr_t
 void CheckConfig(const ProbeConfig& c, const std::string& section);
 
 // Throws Error naming the file: "video_missing" (may appear later: retried),
-// and PermanentError for what a retry cannot change (core/error_codes.h):
+// and these codes a retry cannot change (permanent, core/error_codes.h):
 // kNotARegularFile (a FIFO, device or folder: refused without opening it),
 // kVideoUnreadable (FFmpeg cannot open it), kUnsupportedVideo (no stage
 // could judge it: under 16 or over 16384 pixels a side, over 1000 fps,

@@ -5,7 +5,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "core/permanent_error.h"
 #include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
@@ -58,6 +57,78 @@ namespace {
 
 double Rational(AVRational r) { return r.den != 0 ? av_q2d(r) : 0.0; }
 
+// The steps of VideoDecoder's constructor.
+
+// Opens `path`, finds its best video stream and opens a one-thread decoder
+// for it, or throws Error("video_open_failed") naming `site`.
+void OpenDecoder(const std::filesystem::path& path, bool skip_loop_filter, const ErrorSite& site,
+                 AVFormatContext*& format, AVCodecContext*& context, int& stream) {
+  if (avformat_open_input(&format, path.c_str(), nullptr, nullptr) < 0 ||
+      avformat_find_stream_info(format, nullptr) < 0) {
+    throw Error("video_open_failed",
+                "FFmpeg could not open the file as a video (not a video, or truncated before "
+                "its index)",
+                site);
+  }
+  const AVCodec* decoder = nullptr;
+  stream = av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
+  if (stream < 0 || decoder == nullptr) {
+    throw Error("video_open_failed", "the file has no video stream FFmpeg can decode", site);
+  }
+  context = avcodec_alloc_context3(decoder);
+  if (context == nullptr ||
+      avcodec_parameters_to_context(context, format->streams[stream]->codecpar) < 0) {
+    throw Error("video_open_failed", "cannot set up the video decoder", site);
+  }
+  context->thread_count = 1;
+  if (skip_loop_filter) context->skip_loop_filter = AVDISCARD_ALL;
+  if (avcodec_open2(context, decoder, nullptr) < 0) {
+    throw Error("video_open_failed", "cannot open the video decoder", site);
+  }
+}
+
+// The stream's geometry in display orientation (what players show; the
+// coded frames are turned in Convert), its rate, its declared frame count
+// and the analysis size.
+VideoGeometry StreamGeometry(const AVFormatContext& format, const AVStream& stream,
+                             const AVCodecContext& context, int rotation, int analysis_size,
+                             const ErrorSite& site) {
+  VideoGeometry g;
+  const bool sideways = rotation == 90 || rotation == 270;
+  g.full_width = sideways ? context.height : context.width;
+  g.full_height = sideways ? context.width : context.height;
+  g.fps = Rational(stream.avg_frame_rate);
+  if (g.fps <= 0) g.fps = Rational(stream.r_frame_rate);
+  g.declared_frames = stream.nb_frames;
+  if (g.declared_frames <= 0 && g.fps > 0) {
+    // As OpenCV's FFmpeg backend counts a stream without a frame count.
+    double duration_s = stream.duration != AV_NOPTS_VALUE
+                            ? static_cast<double>(stream.duration) * Rational(stream.time_base)
+                            : static_cast<double>(format.duration) / AV_TIME_BASE;
+    g.declared_frames =
+        duration_s > 0 ? static_cast<std::int64_t>(std::floor(duration_s * g.fps + 0.5)) : 0;
+  }
+  if (g.full_width <= 0 || g.full_height <= 0) {
+    throw Error("video_open_failed", "the video stream has no frame size", site);
+  }
+  const cv::Size size = AnalysisSize(g.full_width, g.full_height, analysis_size);
+  g.width = size.width;
+  g.height = size.height;
+  g.downscale = AnalysisDownscale(g.full_width, g.full_height, analysis_size);
+  return g;
+}
+
+// A span given in seconds as frames at `fps`.
+void ResolveSpan(double fps, DecoderOptions& options) {
+  if (!(fps > 0)) return;
+  if (options.first_frame == 0 && options.first_s > 0) {
+    options.first_frame = std::llround(options.first_s * fps);
+  }
+  if (options.last_frame < 0 && options.last_s >= 0) {
+    options.last_frame = std::llround(options.last_s * fps);
+  }
+}
+
 }  // namespace
 
 VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptions& options)
@@ -68,69 +139,15 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const DecoderOptio
   }
   av_log_set_level(AV_LOG_FATAL);  // our own errors name the clip and file
   Codec& c = *codec_;
-  if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
-      avformat_find_stream_info(c.format, nullptr) < 0) {
-    throw Error("video_open_failed",
-                "FFmpeg could not open the file as a video (not a video, or truncated before "
-                "its index)",
-                site);
-  }
-  const AVCodec* decoder = nullptr;
-  c.stream = av_find_best_stream(c.format, AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
-  if (c.stream < 0 || decoder == nullptr) {
-    throw Error("video_open_failed", "the file has no video stream FFmpeg can decode", site);
-  }
+  OpenDecoder(path, options.skip_loop_filter, site, c.format, c.context, c.stream);
   AVStream* stream = c.format->streams[c.stream];
-  c.context = avcodec_alloc_context3(decoder);
-  if (c.context == nullptr ||
-      avcodec_parameters_to_context(c.context, stream->codecpar) < 0) {
-    throw Error("video_open_failed", "cannot set up the video decoder", site);
-  }
-  c.context->thread_count = 1;
-  if (options.skip_loop_filter) c.context->skip_loop_filter = AVDISCARD_ALL;
-  if (avcodec_open2(c.context, decoder, nullptr) < 0) {
-    throw Error("video_open_failed", "cannot open the video decoder", site);
-  }
   c.packet = av_packet_alloc();
   c.frame = av_frame_alloc();
   c.time_base = Rational(stream->time_base);
   c.start_pts = stream->start_time != AV_NOPTS_VALUE ? stream->start_time : 0;
-
   rotation_ = DisplayRotation(stream);
-  const bool sideways = rotation_ == 90 || rotation_ == 270;
-  // Geometry is in display orientation (what players show); the coded
-  // frames are turned in Convert.
-  geometry_.full_width = sideways ? c.context->height : c.context->width;
-  geometry_.full_height = sideways ? c.context->width : c.context->height;
-  geometry_.fps = Rational(stream->avg_frame_rate);
-  if (geometry_.fps <= 0) geometry_.fps = Rational(stream->r_frame_rate);
-  geometry_.declared_frames = stream->nb_frames;
-  if (geometry_.declared_frames <= 0 && geometry_.fps > 0) {
-    // As OpenCV's FFmpeg backend counts a stream without a frame count.
-    double duration_s = stream->duration != AV_NOPTS_VALUE
-                            ? static_cast<double>(stream->duration) * c.time_base
-                            : static_cast<double>(c.format->duration) / AV_TIME_BASE;
-    geometry_.declared_frames =
-        duration_s > 0 ? static_cast<std::int64_t>(std::floor(duration_s * geometry_.fps + 0.5))
-                       : 0;
-  }
-  if (geometry_.full_width <= 0 || geometry_.full_height <= 0) {
-    throw Error("video_open_failed", "the video stream has no frame size", site);
-  }
-  const cv::Size size =
-      AnalysisSize(geometry_.full_width, geometry_.full_height, options.analysis_size);
-  geometry_.width = size.width;
-  geometry_.height = size.height;
-  geometry_.downscale =
-      AnalysisDownscale(geometry_.full_width, geometry_.full_height, options.analysis_size);
-  if (geometry_.fps > 0) {
-    if (options_.first_frame == 0 && options_.first_s > 0) {
-      options_.first_frame = std::llround(options_.first_s * geometry_.fps);
-    }
-    if (options_.last_frame < 0 && options_.last_s >= 0) {
-      options_.last_frame = std::llround(options_.last_s * geometry_.fps);
-    }
-  }
+  geometry_ = StreamGeometry(*c.format, *stream, *c.context, rotation_, options.analysis_size, site);
+  ResolveSpan(geometry_.fps, options_);
   if (options_.first_frame < 0) {
     throw Error("bad_span", "first frame is negative",
                 {.clip = options.clip, .file = path.string(), .field = "start_frame"});
@@ -286,7 +303,7 @@ void VideoDecoder::ThrowTruncated(std::int64_t frame, const std::string& why) co
     message += " of " + std::to_string(geometry_.declared_frames) + " declared";
   }
   message += "); the file is truncated or corrupt";
-  throw PermanentError(
+  throw Error(
       kVideoTruncated, message,
       {.clip = options_.clip, .file = path_.string(), .field = "frame " + std::to_string(frame)});
 }

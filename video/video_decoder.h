@@ -27,7 +27,7 @@
 // that ends before the number of frames the container declares, or before
 // the requested span ends, by more than the shared allowance of
 // video/frame_count.h, is a truncated or corrupt file: Next() throws
-// PermanentError("video_truncated") naming the file and the first frame it
+// Error(kVideoTruncated) (permanent) naming the file and the first frame it
 // could not decode. A span that runs into an allowed short tail just ends
 // early (delivered() tells how many frames came).
 #pragma once

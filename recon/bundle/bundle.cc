@@ -112,38 +112,26 @@ void WriteObjExact(const TriMesh& mesh, const fs::path& path) {
   WriteText(path, text);
 }
 
-}  // namespace
 
-std::string FrameFileName(int t, const std::string& extension) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%06d.", t);
-  return buf + extension;
+// The parts of WriteBundle, each checked against the bundle's frame count
+// and size before it is written.
+
+// K.npz: one 3x3 matrix, or one a frame.
+void WriteIntrinsics(const ClipBundle& b, const fs::path& dir) {
+  if (b.K.size() != 1) CheckLength(b.K.size(), b.frames, "K");
+  std::vector<double> k;
+  for (const Mat3& m : b.K) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) k.push_back(m(r, c));
+    }
+  }
+  const std::vector<std::int64_t> shape =
+      b.K.size() == 1 ? std::vector<std::int64_t>{3, 3} : std::vector<std::int64_t>{b.frames, 3, 3};
+  WriteNpz(dir / "K.npz", {{"K", MakeArray<double>(shape, k)}});
 }
 
-void WriteBundle(const ClipBundle& b, const fs::path& dir) {
-  if (b.width <= 0 || b.height <= 0) BadStruct("width", "image size must be positive");
-  if (b.frames <= 0) BadStruct("frames", "must be positive");
-  if (!(b.fps > 0)) BadStruct("fps", "must be positive");
-  MakeDir(dir);
-
-  Json meta = {{"width", b.width}, {"height", b.height}, {"frames", b.frames},
-               {"fps", b.fps},     {"units", "m"},        {"producers", b.producers}};
-  WriteText(dir / "meta.json", meta.dump(2) + "\n");
-
-  if (!b.K.empty()) {
-    if (b.K.size() != 1) CheckLength(b.K.size(), b.frames, "K");
-    std::vector<double> k;
-    for (const Mat3& m : b.K) {
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) k.push_back(m(r, c));
-      }
-    }
-    const std::vector<std::int64_t> shape =
-        b.K.size() == 1 ? std::vector<std::int64_t>{3, 3}
-                        : std::vector<std::int64_t>{b.frames, 3, 3};
-    WriteNpz(dir / "K.npz", {{"K", MakeArray<double>(shape, k)}});
-  }
-
+// Per-frame images (depth and points as EXR, masks as PNG), one folder each.
+void WriteImages(const ClipBundle& b, const fs::path& dir) {
   auto check_image = [&](const cv::Mat& m, int type, const std::string& field, int t) {
     if (m.type() != type || m.cols != b.width || m.rows != b.height) {
       BadStruct(field, "frame " + std::to_string(t) + " is not a " + std::to_string(b.width) +
@@ -177,15 +165,10 @@ void WriteBundle(const ClipBundle& b, const fs::path& dir) {
       WriteMaskPng(folder / FrameFileName(t, "png"), masks[static_cast<size_t>(t)]);
     }
   }
+}
 
-  if (b.hand_left || b.hand_right) {
-    NpzArchive npz;
-    npz["joint_order"] = MakeStringArray("openpose21");
-    if (b.hand_left) AddHand(npz, "left", *b.hand_left, b.frames);
-    if (b.hand_right) AddHand(npz, "right", *b.hand_right, b.frames);
-    WriteNpz(dir / "hands.npz", npz);
-  }
-
+// object/: the mesh, its poses and the candidate poses with their scales.
+void WriteObject(const ClipBundle& b, const fs::path& dir) {
   if (b.object_mesh || !b.object_poses.empty() || !b.candidates.empty()) MakeDir(dir / "object");
   if (b.object_mesh) WriteObjExact(*b.object_mesh, dir / "object" / "mesh.obj");
   if (!b.object_poses.empty()) {
@@ -194,44 +177,71 @@ void WriteBundle(const ClipBundle& b, const fs::path& dir) {
     for (const Pose& p : b.object_poses) AppendPose(poses, p);
     WriteNpz(dir / "object" / "poses.npz", {{"poses", MakeArray<double>({b.frames, 7}, poses)}});
   }
-  if (!b.candidates.empty()) {
-    CheckLength(b.candidates.size(), b.frames, "candidates");
-    const size_t n = b.candidates[0].size();
-    std::vector<double> poses, scale;
-    for (const auto& frame : b.candidates) {
-      if (frame.size() != n) BadStruct("candidates", "sample count changes between frames");
-      for (const PoseSample& s : frame) {
-        AppendPose(poses, s.pose);
-        scale.push_back(s.scale);
-      }
+  if (b.candidates.empty()) return;
+  CheckLength(b.candidates.size(), b.frames, "candidates");
+  const size_t n = b.candidates[0].size();
+  std::vector<double> poses, scale;
+  for (const auto& frame : b.candidates) {
+    if (frame.size() != n) BadStruct("candidates", "sample count changes between frames");
+    for (const PoseSample& s : frame) {
+      AppendPose(poses, s.pose);
+      scale.push_back(s.scale);
     }
-    const auto nn = static_cast<std::int64_t>(n);
-    WriteNpz(dir / "object" / "candidates.npz",
-             {{"poses", MakeArray<double>({b.frames, nn, 7}, poses)},
-              {"scale", MakeArray<double>({b.frames, nn}, scale)}});
   }
+  const auto nn = static_cast<std::int64_t>(n);
+  WriteNpz(dir / "object" / "candidates.npz",
+           {{"poses", MakeArray<double>({b.frames, nn, 7}, poses)},
+            {"scale", MakeArray<double>({b.frames, nn}, scale)}});
+}
 
-  if (b.tracks) {
-    const PointTracks& tr = *b.tracks;
-    const Eigen::Index n = tr.x.rows();
-    if (tr.x.cols() != b.frames || tr.y.rows() != n || tr.y.cols() != b.frames ||
-        tr.visible.rows() != n || tr.visible.cols() != b.frames || tr.query.rows() != n) {
-      BadStruct("tracks", "x, y, visible must be (N, frames) and query (N, 3)");
-    }
-    std::vector<float> xy, query;
-    std::vector<std::uint8_t> vis;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      for (int t = 0; t < b.frames; ++t) {
-        xy.insert(xy.end(), {tr.x(i, t), tr.y(i, t)});
-        vis.push_back(tr.visible(i, t) != 0 ? 1 : 0);
-      }
-      query.insert(query.end(), {tr.query(i, 0), tr.query(i, 1), tr.query(i, 2)});
-    }
-    WriteNpz(dir / "tracks.npz", {{"xy", MakeArray<float>({n, b.frames, 2}, xy)},
-                                  {"visible", MakeArray<std::uint8_t>({n, b.frames}, vis)},
-                                  {"query", MakeArray<float>({n, 3}, query)}});
+// tracks.npz: N point tracks over the frames and their queries.
+void WriteTracks(const PointTracks& tr, int frames, const fs::path& dir) {
+  const Eigen::Index n = tr.x.rows();
+  if (tr.x.cols() != frames || tr.y.rows() != n || tr.y.cols() != frames ||
+      tr.visible.rows() != n || tr.visible.cols() != frames || tr.query.rows() != n) {
+    BadStruct("tracks", "x, y, visible must be (N, frames) and query (N, 3)");
   }
+  std::vector<float> xy, query;
+  std::vector<std::uint8_t> vis;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int t = 0; t < frames; ++t) {
+      xy.insert(xy.end(), {tr.x(i, t), tr.y(i, t)});
+      vis.push_back(tr.visible(i, t) != 0 ? 1 : 0);
+    }
+    query.insert(query.end(), {tr.query(i, 0), tr.query(i, 1), tr.query(i, 2)});
+  }
+  WriteNpz(dir / "tracks.npz", {{"xy", MakeArray<float>({n, frames, 2}, xy)},
+                                {"visible", MakeArray<std::uint8_t>({n, frames}, vis)},
+                                {"query", MakeArray<float>({n, 3}, query)}});
+}
 
+}  // namespace
+
+std::string FrameFileName(int t, const std::string& extension) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%06d.", t);
+  return buf + extension;
+}
+
+void WriteBundle(const ClipBundle& b, const fs::path& dir) {
+  if (b.width <= 0 || b.height <= 0) BadStruct("width", "image size must be positive");
+  if (b.frames <= 0) BadStruct("frames", "must be positive");
+  if (!(b.fps > 0)) BadStruct("fps", "must be positive");
+  MakeDir(dir);
+  Json meta = {{"width", b.width}, {"height", b.height}, {"frames", b.frames},
+               {"fps", b.fps},     {"units", "m"},        {"producers", b.producers}};
+  WriteText(dir / "meta.json", meta.dump(2) + "\n");
+  if (!b.K.empty()) WriteIntrinsics(b, dir);
+  WriteImages(b, dir);
+  if (b.hand_left || b.hand_right) {
+    NpzArchive npz;
+    npz["joint_order"] = MakeStringArray("openpose21");
+    if (b.hand_left) AddHand(npz, "left", *b.hand_left, b.frames);
+    if (b.hand_right) AddHand(npz, "right", *b.hand_right, b.frames);
+    WriteNpz(dir / "hands.npz", npz);
+  }
+  WriteObject(b, dir);
+  if (b.tracks) WriteTracks(*b.tracks, b.frames, dir);
   if (!b.gravity_up.empty()) {
     CheckLength(b.gravity_up.size(), b.frames, "gravity_up");
     std::vector<double> up;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/error_codes.h"
 #include "recon/bundle/bundle.h"
 
 namespace doasido::recon {
@@ -20,7 +21,7 @@ inline constexpr const char* kBundleStageName = "bundle";
 inline constexpr const char* kHandsStageFolder = "hands";
 
 // No bundle named, none written by a command and no hands found (permanent).
-inline constexpr const char* kErrorNoBundle = "no_bundle";
+inline constexpr const char* kErrorNoBundle = kNoBundle;
 
 // Where a clip's bundle came from (the bundle stage's "source" measurement).
 inline constexpr const char* kBundleFromList = "list";

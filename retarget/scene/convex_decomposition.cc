@@ -294,23 +294,29 @@ static std::vector<std::vector<int>> HacdPatches(const TriMesh& input, const Dec
   return patches;
 }
 
-std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const DecompositionConfig& config) {
-  if (mesh.num_faces() == 0) throw Error("bad_mesh", "empty mesh has no convex decomposition");
+namespace {
+
+// The steps of ConvexDecomposition.
+
+// The welded mesh, clustered (the cell halved until it fits) when it has
+// more triangles than the budget.
+TriMesh BudgetedInput(const TriMesh& mesh, const DecompositionConfig& config) {
   const double diagonal = (mesh.Max() - mesh.Min()).norm();
   TriMesh input = WeldVertices(mesh);
-  // Halve the cell until the clustered mesh fits the triangle budget.
-  if (input.num_faces() > config.max_input_triangles) {
-    double cell = diagonal / 20;
-    TriMesh best = ClusterVertices(input, cell);
-    for (int i = 0; i < 12; ++i) {
-      TriMesh finer = ClusterVertices(input, cell * 0.8);
-      if (finer.num_faces() > config.max_input_triangles) break;
-      best = std::move(finer);
-      cell *= 0.8;
-    }
-    input = std::move(best);
+  if (input.num_faces() <= config.max_input_triangles) return input;
+  double cell = diagonal / 20;
+  TriMesh best = ClusterVertices(input, cell);
+  for (int i = 0; i < 12; ++i) {
+    TriMesh finer = ClusterVertices(input, cell * 0.8);
+    if (finer.num_faces() > config.max_input_triangles) break;
+    best = std::move(finer);
+    cell *= 0.8;
   }
-  const bool closed = IsClosed(input);
+  return best;
+}
+
+// The surface patches to make solid: HACD's clusters, or the whole mesh.
+std::vector<std::vector<int>> InitialPatches(const TriMesh& input, const DecompositionConfig& config) {
   std::vector<std::vector<int>> patches;
   if (config.method == "hacd") {
     patches = HacdPatches(input, config);
@@ -321,18 +327,15 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
     throw Error("bad_config", "decomposition method must be \"split\" or \"hacd\"",
                 {.field = "decomposition.method"});
   }
-  // HACD's clusters are surface patches, and the hull of a patch of a thin
-  // wall is a thin plate. Each patch is made solid by adding, for every
-  // vertex of its triangles, the point where a ray into the solid (against
-  // the face normal) leaves it again: a mug wall patch then spans the wall's
-  // thickness. A patch whose solid hull would swallow empty space (a flat
-  // rim ring spans the mug's opening) is split in two along its longest
-  // extent until its hull is at least 90% solid.
-  // Per triangle: its corners, and where rays cast into the solid from
-  // inside it (against its normal) leave the solid again. Rays start inside
-  // the triangle: from a corner they would graze the neighbouring faces (a
-  // rim edge) and cross the cavity.
-  const recon::RayCaster caster(input.vertices, input.faces);
+  return patches;
+}
+
+// Per triangle: its corners, and (for a closed mesh, when solidifying)
+// where rays cast into the solid from inside it (against its normal) leave
+// the solid again. Rays start inside the triangle: from a corner they would
+// graze the neighbouring faces (a rim edge) and cross the cavity.
+std::vector<std::vector<Vec3>> SolidPoints(const TriMesh& input, const recon::RayCaster& caster,
+                                           bool solidify) {
   std::vector<std::vector<Vec3>> solid_points(input.num_faces());
   for (int f = 0; f < input.num_faces(); ++f) {
     const Vec3 a = input.vertices.row(input.faces(f, 0)).transpose();
@@ -342,13 +345,82 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
     if (n.norm() < 1e-18) continue;
     const Vec3 c = (a + b + d) / 3;
     solid_points[f] = {a, b, d};
-    if (!closed || !config.solidify) continue;
+    if (!solidify) continue;
     for (const Vec3& p : {c, Vec3(c + 0.8 * (a - c)), Vec3(c + 0.8 * (b - c)),
                           Vec3(c + 0.8 * (d - c))}) {
       // t_min steps off triangle f itself.
       if (const auto t = caster.FirstHit(p, -n, 1e-6)) solid_points[f].push_back(p - *t * n.normalized());
     }
   }
+  return solid_points;
+}
+
+// The hull of a patch's solid points. A flat patch (a mug's bottom disc)
+// has no volume: it gets 1 mm of thickness into the solid (added to
+// `points`), so it still becomes a collision piece. Empty when the patch
+// has no area.
+TriMesh PatchHull(const TriMesh& input, const std::vector<int>& tris, std::vector<Vec3>& points) {
+  TriMesh h = ConvexHull(points);
+  if (h.num_faces() >= 4) return h;
+  Vec3 normal = Vec3::Zero();
+  for (int f : tris) {
+    normal += (Vec3(input.vertices.row(input.faces(f, 1)).transpose()) -
+               Vec3(input.vertices.row(input.faces(f, 0)).transpose()))
+                  .cross(Vec3(input.vertices.row(input.faces(f, 2)).transpose()) -
+                         Vec3(input.vertices.row(input.faces(f, 0)).transpose()));
+  }
+  if (normal.norm() < 1e-18) return TriMesh();
+  const size_t n = points.size();
+  for (size_t i = 0; i < n; ++i) points.push_back(points[i] - 0.001 * normal.normalized());
+  return ConvexHull(points);
+}
+
+// A patch's triangles in two halves along the longest extent of their
+// centroids.
+std::pair<std::vector<int>, std::vector<int>> SplitPatch(const TriMesh& input,
+                                                         const std::vector<int>& tris) {
+  Vec3 lo = Vec3::Constant(1e30), hi = Vec3::Constant(-1e30);
+  std::vector<std::pair<double, int>> keyed;
+  for (int f : tris) {
+    const Vec3 c = (Vec3(input.vertices.row(input.faces(f, 0)).transpose()) +
+                    Vec3(input.vertices.row(input.faces(f, 1)).transpose()) +
+                    Vec3(input.vertices.row(input.faces(f, 2)).transpose())) / 3;
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  int axis = 0;
+  (hi - lo).maxCoeff(&axis);
+  for (int f : tris) {
+    const double c = (input.vertices(input.faces(f, 0), axis) +
+                      input.vertices(input.faces(f, 1), axis) +
+                      input.vertices(input.faces(f, 2), axis)) / 3;
+    keyed.emplace_back(c, f);
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::pair<std::vector<int>, std::vector<int>> halves;
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    (i < keyed.size() / 2 ? halves.first : halves.second).push_back(keyed[i].second);
+  }
+  return halves;
+}
+
+}  // namespace
+
+std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const DecompositionConfig& config) {
+  if (mesh.num_faces() == 0) throw Error("bad_mesh", "empty mesh has no convex decomposition");
+  const TriMesh input = BudgetedInput(mesh, config);
+  const bool closed = IsClosed(input);
+  std::vector<std::vector<int>> patches = InitialPatches(input, config);
+  // HACD's clusters are surface patches, and the hull of a patch of a thin
+  // wall is a thin plate. Each patch is made solid by adding, for every
+  // vertex of its triangles, the point where a ray into the solid (against
+  // the face normal) leaves it again: a mug wall patch then spans the wall's
+  // thickness. A patch whose solid hull would swallow empty space (a flat
+  // rim ring spans the mug's opening) is split in two along its longest
+  // extent until its hull is at least 90% solid.
+  const recon::RayCaster caster(input.vertices, input.faces);
+  const std::vector<std::vector<Vec3>> solid_points =
+      SolidPoints(input, caster, closed && config.solidify);
   std::mt19937 rng(1);
   std::vector<TriMesh> hulls;
   std::vector<std::vector<Vec3>> hull_points;
@@ -368,47 +440,11 @@ std::vector<TriMesh> ConvexDecomposition(const TriMesh& mesh, const Decompositio
       for (auto& piece : pieces) work.emplace_back(std::move(piece), depth);
       continue;
     }
-    TriMesh h = ConvexHull(points);
-    if (h.num_faces() < 4) {
-      // A flat patch (a mug's bottom disc) has no volume: give it 1 mm of
-      // thickness into the solid, so it still becomes a collision piece.
-      Vec3 normal = Vec3::Zero();
-      for (int f : tris) {
-        normal += (Vec3(input.vertices.row(input.faces(f, 1)).transpose()) -
-                   Vec3(input.vertices.row(input.faces(f, 0)).transpose()))
-                      .cross(Vec3(input.vertices.row(input.faces(f, 2)).transpose()) -
-                             Vec3(input.vertices.row(input.faces(f, 0)).transpose()));
-      }
-      if (normal.norm() < 1e-18) continue;
-      const size_t n = points.size();
-      for (size_t i = 0; i < n; ++i) points.push_back(points[i] - 0.001 * normal.normalized());
-      h = ConvexHull(points);
-    }
+    TriMesh h = PatchHull(input, tris, points);
     if (h.num_faces() < 4 || h.Volume() < 1e-12) continue;  // flat sliver
     const bool splittable = tris.size() > 1 && depth < config.max_depth;
     if (closed && splittable && SolidFraction(caster, h, rng) < config.min_solidity) {
-      Vec3 lo = Vec3::Constant(1e30), hi = Vec3::Constant(-1e30);
-      std::vector<std::pair<double, int>> keyed;
-      for (int f : tris) {
-        const Vec3 c = (Vec3(input.vertices.row(input.faces(f, 0)).transpose()) +
-                        Vec3(input.vertices.row(input.faces(f, 1)).transpose()) +
-                        Vec3(input.vertices.row(input.faces(f, 2)).transpose())) / 3;
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
-      }
-      int axis = 0;
-      (hi - lo).maxCoeff(&axis);
-      for (int f : tris) {
-        const double c = (input.vertices(input.faces(f, 0), axis) +
-                          input.vertices(input.faces(f, 1), axis) +
-                          input.vertices(input.faces(f, 2), axis)) / 3;
-        keyed.emplace_back(c, f);
-      }
-      std::sort(keyed.begin(), keyed.end());
-      std::vector<int> left, right;
-      for (size_t i = 0; i < keyed.size(); ++i) {
-        (i < keyed.size() / 2 ? left : right).push_back(keyed[i].second);
-      }
+      auto [left, right] = SplitPatch(input, tris);
       work.emplace_back(std::move(left), depth + 1);
       work.emplace_back(std::move(right), depth + 1);
       continue;

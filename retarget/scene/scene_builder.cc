@@ -50,18 +50,12 @@ MassProperties Combine(const std::vector<TriMesh>& hulls) {
   return total;
 }
 
-}  // namespace
+// The steps of BuildObjectScene.
 
-ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneConfig& config,
-                             const std::filesystem::path& out_dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw Error("io", "cannot create scene folder: " + ec.message(), {.file = out_dir.string()});
-
-  const std::vector<TriMesh> hulls = ConvexDecomposition(mesh, config.decomposition);
-  ObjectScene scene;
-
-  // Mass properties: the mesh itself when it is closed, else the hulls.
+// Mass, centre of mass and inertia at `config.density`: of the mesh itself
+// when it is closed, else of the hulls.
+void SetMassProperties(const TriMesh& mesh, const std::vector<TriMesh>& hulls,
+                       const SceneConfig& config, ObjectScene& scene) {
   MassProperties mp;
   if (const TriMesh welded = WeldVertices(mesh); IsClosed(welded)) mp = ComputeMassProperties(welded);
   if (!(mp.volume > 0) || !PositiveDefinite(mp.inertia)) {
@@ -72,26 +66,33 @@ ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneC
   scene.mass = config.density * mp.volume;
   scene.com = mp.com;
   scene.inertia = config.density * mp.inertia;
+}
 
-  std::vector<TriMesh> dilated;
-  for (const TriMesh& h : hulls) dilated.push_back(DilateConvex(h, config.dilation));
-
-  // World-frame extent of the dilated object at `pose`, for the plate and
-  // the placement.
+// World-frame extent of the dilated object at `pose`, for the plate and
+// the placement.
+struct Extent {
   Vec3 lo = Vec3::Constant(1e30), hi = Vec3::Constant(-1e30);
+};
+
+Extent WorldExtent(const std::vector<TriMesh>& dilated, const Pose& pose) {
+  Extent e;
   for (const TriMesh& h : dilated) {
     for (int v = 0; v < h.num_vertices(); ++v) {
       const Vec3 w = pose * Vec3(h.vertices.row(v).transpose());
-      lo = lo.cwiseMin(w);
-      hi = hi.cwiseMax(w);
+      e.lo = e.lo.cwiseMin(w);
+      e.hi = e.hi.cwiseMax(w);
     }
   }
-  const double bottom = config.base_plate ? lo.z() - config.plate_thickness : lo.z();
-  scene.pose = pose;
-  if (config.place_on_floor) scene.pose.t.z() -= bottom;
-  const double shift = scene.pose.t.z() - pose.t.z();
+  return e;
+}
 
-  auto write = [&](const Pose& at) {
+// Writes the scene's MJCF with the object at `at` (and, the first time,
+// its hull meshes); `shift` is how far placing it on the floor raised it.
+void WriteSceneXml(const std::vector<TriMesh>& dilated, const SceneConfig& config,
+                   const std::filesystem::path& out_dir, const Extent& extent, double shift,
+                   const Pose& at, ObjectScene& scene) {
+  const Vec3& lo = extent.lo;
+  const Vec3& hi = extent.hi;
   std::ostringstream xml;
   xml << "<mujoco model=\"doasido_object_scene\">\n"
       << "  <option timestep=\"" << Num(config.timestep)
@@ -143,21 +144,45 @@ ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneC
   std::ofstream out(scene.xml_path);
   out << xml.str();
   if (!out) throw Error("io", "cannot write scene", {.file = scene.xml_path.string()});
-  };
-  write(scene.pose);
+}
+
+// The object's pose after `seconds` of simulation of the scene at
+// `xml_path`, which let it settle on the floor.
+Pose SettledPose(const std::filesystem::path& xml_path, double seconds) {
+  ModelPtr m = CompileMjcfText(PrepareMjcf(xml_path).xml, xml_path.string());
+  DataPtr d = MakeData(m.get());
+  const int steps = static_cast<int>(std::lround(seconds / m->opt.timestep));
+  for (int i = 0; i < steps; ++i) mj_step(m.get(), d.get());
+  const int body = NameToId(m.get(), mjOBJ_BODY, "object");
+  return {Quat(d->xquat[4 * body], d->xquat[4 * body + 1], d->xquat[4 * body + 2],
+               d->xquat[4 * body + 3]).normalized(),
+          Vec3(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2])};
+}
+
+}  // namespace
+
+ObjectScene BuildObjectScene(const TriMesh& mesh, const Pose& pose, const SceneConfig& config,
+                             const std::filesystem::path& out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw Error("io", "cannot create scene folder: " + ec.message(), {.file = out_dir.string()});
+  const std::vector<TriMesh> hulls = ConvexDecomposition(mesh, config.decomposition);
+  ObjectScene scene;
+  SetMassProperties(mesh, hulls, config, scene);
+  std::vector<TriMesh> dilated;
+  for (const TriMesh& h : hulls) dilated.push_back(DilateConvex(h, config.dilation));
+  const Extent extent = WorldExtent(dilated, pose);
+  const double bottom = config.base_plate ? extent.lo.z() - config.plate_thickness : extent.lo.z();
+  scene.pose = pose;
+  if (config.place_on_floor) scene.pose.t.z() -= bottom;
+  const double shift = scene.pose.t.z() - pose.t.z();
+  WriteSceneXml(dilated, config, out_dir, extent, shift, scene.pose, scene);
   if (config.place_on_floor && config.settle_seconds > 0) {
-    ModelPtr m = CompileMjcfText(PrepareMjcf(scene.xml_path).xml, scene.xml_path.string());
-    DataPtr d = MakeData(m.get());
-    const int steps = static_cast<int>(std::lround(config.settle_seconds / m->opt.timestep));
-    for (int i = 0; i < steps; ++i) mj_step(m.get(), d.get());
-    const int body = NameToId(m.get(), mjOBJ_BODY, "object");
-    const Pose settled{Quat(d->xquat[4 * body], d->xquat[4 * body + 1], d->xquat[4 * body + 2],
-                            d->xquat[4 * body + 3]).normalized(),
-                       Vec3(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2])};
+    const Pose settled = SettledPose(scene.xml_path, config.settle_seconds);
     scene.settle_shift = (settled.t - scene.pose.t).norm();
     scene.settle_angle = RotationAngle(settled.q, scene.pose.q);
     scene.pose = settled;
-    write(scene.pose);
+    WriteSceneXml(dilated, config, out_dir, extent, shift, scene.pose, scene);
   }
   spdlog::info("scene: {} hulls, mass {:.3f} kg ({}), written to {}", dilated.size(), scene.mass,
                scene.inertia_from_hulls ? "from hulls" : "from mesh", scene.xml_path.string());

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 
 namespace doasido::retarget {
@@ -141,38 +142,30 @@ void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& pa
 }
 
 std::vector<Keypoints21> ReadKeypointCsv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("bad_keypoints", "cannot read", {.file = path.string()});
-  std::string line;
-  std::getline(in, line);
-  if (line.rfind("k0_x", 0) != 0) {
-    throw Error("bad_keypoints", "header must start with k0_x,k0_y,k0_z",
-                {.file = path.string(), .line = 1});
+  CsvReader reader = CsvReader::Open(path, "bad_keypoints");
+  const std::vector<std::string> header = reader.Header();
+  if (header.empty() || header[0] != "k0_x") {
+    reader.Fail(reader.header_line(), "", "header must start with k0_x,k0_y,k0_z");
   }
   std::vector<Keypoints21> out;
-  long lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty()) continue;
-    std::stringstream ss(line);
-    std::string cell;
+  CsvRecord record;
+  while (reader.Next(record)) {
+    if (!record.error.empty()) reader.Fail(record.line, "", record.error);
+    if (record.Blank()) continue;
     std::vector<double> v;
-    while (std::getline(ss, cell, ',')) {
+    for (const std::string& cell : record.fields) {
       try {
         v.push_back(std::stod(cell));
       } catch (const std::exception&) {
-        throw Error("bad_keypoints", "not a number: '" + cell + "'",
-                    {.file = path.string(), .line = lineno, .field = "column " + std::to_string(v.size() + 1)});
+        reader.Fail(record.line, "column " + std::to_string(v.size() + 1),
+                    "not a number: '" + cell + "'");
       }
     }
     if (v.size() != 63) {
-      throw Error("bad_keypoints", "expected 63 values, got " + std::to_string(v.size()),
-                  {.file = path.string(), .line = lineno});
+      reader.Fail(record.line, "", "expected 63 values, got " + std::to_string(v.size()));
     }
     for (double x : v) {
-      if (!std::isfinite(x)) {
-        throw Error("bad_keypoints", "NaN or infinite coordinate", {.file = path.string(), .line = lineno});
-      }
+      if (!std::isfinite(x)) reader.Fail(record.line, "", "NaN or infinite coordinate");
     }
     out.push_back(Eigen::Map<const Keypoints21>(v.data()));
   }

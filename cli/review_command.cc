@@ -4,6 +4,7 @@
 #include "cli/option_checks.h"
 #include "db/database.h"
 #include "review/server.h"
+#include "cli/review_reasons.h"
 #include "review/study.h"
 #include "stages/stage_registry.h"
 
@@ -36,6 +37,12 @@ void PrintSummary(const review::StudySummary& s) {
 
 }  // namespace
 
+void AddStageReasons(review::ServeOptions& options) {
+  // The page offers every reason code a stage can give (the registry's).
+  for (const auto& r : pipeline::StageReasons()) options.stage_reasons.push_back({r.code, r.label});
+  options.default_reasons = pipeline::ReviewDefaultReasons();
+}
+
 void AddReviewCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "review", "Review flagged clips in a local web app, and run preference studies");
@@ -66,11 +73,7 @@ void AddReviewCommand(CLI::App& app) {
       "Example:\n"
       "  doasido review serve --db work/doasido.db --reviewer alice --port 8470");
   srv->callback([serve] {
-    // The page offers every reason code a stage can give (the registry's).
-    for (const auto& r : pipeline::StageReasons()) {
-      serve->serve.stage_reasons.push_back({r.code, r.label});
-    }
-    serve->serve.default_reasons = pipeline::ReviewDefaultReasons();
+    AddStageReasons(serve->serve);
     review::ReviewServer server(serve->db.db, serve->serve);
     // Ctrl-C ends the process: every decision is its own committed
     // transaction, so there is nothing to flush.

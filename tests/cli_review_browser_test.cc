@@ -9,10 +9,11 @@
 #include <map>
 #include <set>
 
-#include "stages/stage_registry.h"
+#include "cli/review_reasons.h"
 #include "db/database.h"
 #include "review/fleiss_kappa.h"
 #include "review/server.h"
+#include "stages/stage_registry.h"
 #include "tests/test_util.h"
 #include "tests/webdriver.h"
 
@@ -109,7 +110,9 @@ TEST_F(BrowserTest, ReviewPagePlaysAClipAndTheKeyboardDecides) {
   const auto flagged = FlagAll(db);
   ASSERT_EQ(flagged.size(), 5u);
 
-  review::ReviewServer server(db_path, {.port = 0, .reviewer = "ann"});
+  review::ServeOptions options{.port = 0, .reviewer = "ann"};
+  cli::AddStageReasons(options);  // as `doasido review serve` does
+  review::ReviewServer server(db_path, options);
   server.Start();
   WebDriverSession session(*driver_);
   session.Navigate(server.Origin() + "/");

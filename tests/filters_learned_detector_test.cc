@@ -1,4 +1,5 @@
-// The learned hand detector (MediaPipe Hands, native by default; the WebAssembly runtime through Node as the reference) on real footage
+// The learned hand detector (MediaPipe Hands, native by default; the
+// WebAssembly runtime through Node is the reference) on real footage
 // made by others (../shared/data/videos; labels in its README): where it
 // finds hands against boxes labelled by hand here, and the verdicts it
 // leads to: every positive passes interaction, every negative is rejected

@@ -2,7 +2,7 @@
 // of the Database class that returns clips (internal to db/).
 #pragma once
 
-#include "db/records.h"
+#include "core/records.h"
 #include "db/statement.h"
 
 namespace doasido::db {

@@ -35,12 +35,6 @@ int BusyHandler(void* arg, int count) {
 
 }  // namespace
 
-double Now() {
-  timespec ts;
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec) + ts.tv_nsec * 1e-9;
-}
-
 const char* ToString(RunState s) {
   switch (s) {
     case RunState::kPending: return "pending";

@@ -22,8 +22,9 @@
 #include <string_view>
 #include <vector>
 
+#include "core/clock.h"  // Now(), the clock of every timestamp here
 #include "core/output_path.h"
-#include "db/records.h"
+#include "core/records.h"
 #include "db/stage_records.h"
 
 struct sqlite3;
@@ -646,8 +647,5 @@ class Database {
   std::set<std::string> flag_continues_cache_;
   int transaction_depth_ = 0;
 };
-
-// Seconds since the epoch, the clock of every timestamp in the database.
-double Now();
 
 }  // namespace doasido

@@ -16,7 +16,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "db/records.h"
+#include "core/records.h"
 #include "video/video_decoder.h"
 
 namespace doasido::filters {

@@ -34,7 +34,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/records.h"
+#include "core/records.h"
 #include "filters/activity.h"
 #include "filters/frame_analyzer.h"
 #include "filters/hand_landmarker.h"

@@ -45,7 +45,7 @@
 #include <string>
 #include <vector>
 
-#include "db/records.h"
+#include "core/records.h"
 
 namespace doasido::ingest {
 

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <thread>
 
+#include "core/clock.h"
 #include "core/config_check.h"
 #include "core/error.h"
 #include "core/error_codes.h"
-#include "db/database.h"  // Now(), the sidecar's download time
 #include "ingest/download_command.h"
 #include "ingest/file_sha256.h"
 #include "ingest/host_slots.h"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "db/records.h"
+#include "core/records.h"
 #include "reports/funnel.h"
 
 namespace doasido::reports {

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/records.h"
+#include "core/records.h"
 
 namespace doasido::reports {
 

@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "core/config.h"
-#include "db/records.h"
+#include "core/records.h"
 
 namespace doasido::video {
 

@@ -1,4 +1,6 @@
-#include "db/records.h"
+#include "core/records.h"
+
+#include "core/error.h"
 
 namespace doasido {
 

@@ -1,6 +1,10 @@
 // Plain rows of the doasido database, as the stages and commands see them.
 // Paths are absolute here; the database stores them relative to its folder
-// so that a database folder can be moved as a whole.
+// so that a database folder can be moved as a whole. They live in core, not
+// db/, because the domain folders fill them without a database: the probe
+// (video/probe.h) a VideoInfo, the list readers (ingest/clip_list.h) a
+// ClipRecord, the detectors (filters/) Detections and the verdict rules a
+// Verdict; db/ stores and loads them.
 #pragma once
 
 #include <cstdint>

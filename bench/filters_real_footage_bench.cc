@@ -18,15 +18,17 @@
 
 #include "core/log.h"
 #include "filters/activity.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
+#include "stages/verdict_stages.h"
 
 using namespace doasido;
 using namespace doasido::filters;
+using namespace doasido::stages;
 
 namespace {
 

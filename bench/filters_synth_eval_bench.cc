@@ -38,12 +38,15 @@
 #include <vector>
 
 #include "core/config_check.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/kept_shot.h"
+#include "stages/verdict_stages.h"
 #include "synth/generator.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 std::vector<Detection> SynthDetections(const std::vector<synth::VocFrame>& voc) {
   std::vector<Detection> out;

@@ -32,11 +32,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench/child_cpu.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/frame_analyzer.h"
+#include "stages/verdict_stages.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 using bench::Seconds;
 

@@ -24,7 +24,7 @@
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 #include "stages/probe_stage.h"
 
 namespace fs = std::filesystem;

@@ -5,7 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 namespace {
@@ -105,9 +105,7 @@ double ActiveFraction(const ActivitySignals& s, double min_moving, std::int64_t 
   return static_cast<double>(active) / static_cast<double>(last - first + 1);
 }
 
-namespace {
-
-StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
+FilterVerdict DecideActivity(const Json& measurements, const ActivityConfig& c) {
   RequireAnalysis(measurements, kActivityStageName);
   const ActivitySignals s = ActivitySignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.energy.size()));
@@ -119,7 +117,7 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
     ++n;
   }
   n = std::max(n, 1.0);
-  StageResult result;
+  FilterVerdict result;
   result.measurements = measurements;
   result.measurements["summary"] = {{"active_fraction", active},
                                     {"mean_energy", mean_energy / n},
@@ -132,10 +130,5 @@ StageResult DecideActivity(const Json& measurements, const ActivityConfig& c) {
   }
   return result;
 }
-
-}  // namespace
-
-ActivityStage::ActivityStage(ActivityConfig config)
-    : MeasuredVerdictStage(kActivityStageName, std::move(config), DecideActivity) {}
 
 }  // namespace doasido::filters

@@ -8,7 +8,7 @@
 // has no predecessor and records 0. `hands_region` is 1 where the region came
 // from hand boxes.
 //
-// Decision (ActivityStage): a frame is active when moving >=
+// Decision (DecideActivity): a frame is active when moving >=
 // min_moving_fraction; the clip is active when at least min_active_fraction
 // of its frames (of the kept shot, when the shot filter trimmed it) are.
 // Otherwise reject "no_activity".
@@ -23,9 +23,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/frame_analyzer.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -86,11 +85,10 @@ void CheckConfig(const ActivityConfig& c, const std::string& section);
 double ActiveFraction(const ActivitySignals& s, double min_moving, std::int64_t first,
                       std::int64_t last);
 
-// Stage "activity": decides from the "activity" section of the analysis
-// stage's measurements.
-class ActivityStage : public MeasuredVerdictStage<ActivityConfig> {
- public:
-  explicit ActivityStage(ActivityConfig config = {});
-};
+// The rule of stage "activity" (see the file comment) on its
+// measurements {"clip", "signals": the "activity" section of the analysis,
+// "shot"} (filters/verdict.h): reject "no_activity", else pass. Throws
+// Error("bad_measurements") when they lack a field it reads.
+FilterVerdict DecideActivity(const Json& measurements, const ActivityConfig& config);
 
 }  // namespace doasido::filters

@@ -7,7 +7,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "core/error.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 namespace {
@@ -31,7 +31,6 @@ void ExcludeBoxes(const std::vector<cv::Rect2d>& boxes, double margin, cv::Mat& 
     mask(grown & frame).setTo(0);
   }
 }
-
 
 // The steps of CameraMotionExtractor::Consume.
 
@@ -230,15 +229,13 @@ CameraMotionSummary SummarizeCameraMotion(const CameraMotionSignals& s, const Sh
   return out;
 }
 
-namespace {
-
-StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfig& c) {
+FilterVerdict DecideCameraMotion(const Json& measurements, const CameraMotionConfig& c) {
   RequireAnalysis(measurements, kCameraMotionStageName);
   const CameraMotionSignals s = CameraMotionSignalsFromJson(measurements.at("signals"));
   const std::int64_t frames =
       static_cast<std::int64_t>(NumberOr(measurements.at("clip"), "frames", 0));
   const CameraMotionSummary m = SummarizeCameraMotion(s, SpanOf(measurements, frames));
-  StageResult result;
+  FilterVerdict result;
   result.measurements = measurements;
   result.measurements["summary"] = {{"pairs", m.pairs},
                                     {"duration_s", m.duration_s},
@@ -286,10 +283,5 @@ StageResult DecideCameraMotion(const Json& measurements, const CameraMotionConfi
   }
   return result;
 }
-
-}  // namespace
-
-CameraMotionStage::CameraMotionStage(CameraMotionConfig config)
-    : MeasuredVerdictStage(kCameraMotionStageName, std::move(config), DecideCameraMotion) {}
 
 }  // namespace doasido::filters

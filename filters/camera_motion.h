@@ -21,7 +21,7 @@
 // coordinates) and scale change (log of the area scale's square root), the
 // tracked and inlier point counts, and whether the fit succeeded.
 //
-// Decision (CameraMotionStage), over the pairs of the kept shot (when the
+// Decision (DecideCameraMotion), over the pairs of the kept shot (when the
 // shot filter ran first) that keep clear of shot boundaries (by max(3,
 // step/2) frames, as a boundary sits in the middle of a dissolve): rates per
 // second over the clip (cumulative
@@ -37,9 +37,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/frame_analyzer.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -140,11 +139,11 @@ struct CameraMotionSummary {
 // Over the pairs inside `span` that do not straddle one of its boundaries.
 CameraMotionSummary SummarizeCameraMotion(const CameraMotionSignals& s, const ShotSpan& span);
 
-// Stage "camera_motion": decides from the "camera_motion" section of the
-// analysis stage's measurements.
-class CameraMotionStage : public MeasuredVerdictStage<CameraMotionConfig> {
- public:
-  explicit CameraMotionStage(CameraMotionConfig config = {});
-};
+// The rule of stage "camera_motion" (see the file comment) on its
+// measurements {"clip", "signals": the "camera_motion" section of the
+// analysis, "shot"} (filters/verdict.h): reject or flag "camera_motion",
+// flag "camera_motion_unknown", else pass. Throws Error("bad_measurements")
+// when they lack a field it reads.
+FilterVerdict DecideCameraMotion(const Json& measurements, const CameraMotionConfig& config);
 
 }  // namespace doasido::filters

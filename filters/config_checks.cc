@@ -5,7 +5,7 @@
 
 #include "core/config_check.h"
 #include "filters/activity.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
 #include "filters/hand_models.h"

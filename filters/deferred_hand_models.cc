@@ -32,21 +32,23 @@ void SampleKeeper::Consume(FrameContext& context) {
 
 std::string CheapVerdictRejection(const Json& analysis, const CheapVerdictConfigs& verdicts,
                                   const std::string& clip, ShotSpan* kept) {
-  ClipContext context;
-  context.clip.external_id = clip;
-  context.measurements[kAnalyzeStageName] = analysis;
-  ShotBoundaryStage shot(verdicts.shot);
-  const StageResult shot_result = shot.Run(context);
-  context.measurements[kShotBoundaryStageName] = shot_result.measurements;
-  if (shot_result.verdict == Verdict::kReject) {
-    return std::string(kShotBoundaryStageName) + " (" + shot_result.reason + ")";
+  // As the verdict stages judge the clip: the shot boundary first, then
+  // camera motion on the shot it keeps.
+  const auto input = [&](const char* section, const Json* shot_verdict) {
+    const ErrorSite site{.clip = clip.empty() ? "0" : clip,
+                         .field = std::string(kAnalyzeStageName) + "." + section};
+    return VerdictInput(analysis, section, shot_verdict, site);
+  };
+  const FilterVerdict shot = DecideShots(input(kShotBoundaryStageName, nullptr), verdicts.shot);
+  if (shot.verdict == Verdict::kReject) {
+    return std::string(kShotBoundaryStageName) + " (" + shot.reason + ")";
   }
-  CameraMotionStage camera(verdicts.camera_motion);
-  const StageResult camera_result = camera.Run(context);
-  if (camera_result.verdict == Verdict::kReject) {
-    return std::string(kCameraMotionStageName) + " (" + camera_result.reason + ")";
+  const FilterVerdict camera =
+      DecideCameraMotion(input(kCameraMotionStageName, &shot.measurements), verdicts.camera_motion);
+  if (camera.verdict == Verdict::kReject) {
+    return std::string(kCameraMotionStageName) + " (" + camera.reason + ")";
   }
-  *kept = SpanOf(camera_result.measurements, analysis.at("clip").at("frames").get<std::int64_t>());
+  *kept = SpanOf(camera.measurements, analysis.at("clip").at("frames").get<std::int64_t>());
   return "";
 }
 

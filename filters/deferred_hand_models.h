@@ -26,7 +26,8 @@
 #include <map>
 #include <string>
 
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 

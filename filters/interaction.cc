@@ -12,7 +12,7 @@
 #include "core/json_input.h"
 #include "core/shell_words.h"
 #include "filters/out_of_frame.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 namespace {
@@ -44,7 +44,6 @@ std::vector<Component> Components(const cv::Mat& mask, cv::Mat& labels) {
             [](const Component& a, const Component& b) { return a.area > b.area; });
   return out;
 }
-
 
 // The steps of BuiltinHandObjectDetector::Consume.
 
@@ -267,9 +266,7 @@ double InteractionFraction(const InteractionSignals& s, const std::vector<int>& 
   return covered > 0 ? static_cast<double>(interacting) / static_cast<double>(covered) : 0.0;
 }
 
-namespace {
-
-StageResult DecideInteraction(const Json& measurements, const InteractionConfig& c) {
+FilterVerdict DecideInteraction(const Json& measurements, const InteractionConfig& c) {
   RequireAnalysis(measurements, kInteractionStageName);
   const InteractionSignals s = InteractionSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
@@ -282,7 +279,7 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
   const double n = std::max<double>(1.0, static_cast<double>(span.last - span.first + 1));
   const double covered_fraction = static_cast<double>(covered) / n;
   const double fraction = InteractionFraction(s, c.contact_states, span.first, span.last);
-  StageResult result;
+  FilterVerdict result;
   result.measurements = measurements;
   result.measurements["summary"] = {
       {"covered_fraction", covered_fraction},
@@ -300,11 +297,6 @@ StageResult DecideInteraction(const Json& measurements, const InteractionConfig&
   }
   return result;
 }
-
-}  // namespace
-
-InteractionStage::InteractionStage(InteractionConfig config)
-    : MeasuredVerdictStage(kInteractionStageName, std::move(config), DecideInteraction) {}
 
 std::vector<Detection> ReadDetectorOutput(const std::filesystem::path& path, double min_score,
                                           const std::string& source) {
@@ -402,28 +394,6 @@ std::vector<Detection> RunExternalDetector(const ExternalDetectorConfig& config,
     throw Error("detector_failed", "external detector wrote no output file: " + command, site);
   }
   return ReadDetectorOutput(output, config.min_score, "detector:external");
-}
-
-StageResult ExternalDetectorStage::Run(const ClipContext& context) {
-  StageResult result;
-  if (config_.command.empty()) {
-    result.reason = kReasonNoDetector;
-    result.measurements = {{"ran", false}};
-    return result;
-  }
-  const std::int64_t first = context.clip.start_frame.value_or(0);
-  const std::int64_t last = context.clip.end_frame.value_or(-1);
-  std::filesystem::create_directories(context.artifact_dir);
-  const auto output = context.artifact_dir / "detections.jsonl";
-  const std::string clip =
-      context.clip.external_id.empty() ? std::to_string(context.clip.id) : context.clip.external_id;
-  result.detections = RunExternalDetector(config_, context.video.path, first, last, output, clip);
-  std::map<std::int64_t, int> per_frame;
-  for (const Detection& d : result.detections) per_frame[d.frame] += d.kind == "hand";
-  result.measurements = {
-      {"ran", true}, {"detections", result.detections.size()}, {"frames", per_frame.size()}};
-  result.artifacts.emplace_back("detections_jsonl", "detections.jsonl");
-  return result;
 }
 
 }  // namespace doasido::filters

@@ -3,9 +3,9 @@
 // Three sources of hand/object boxes, in order of preference:
 //  1. The clip's detections with contact states (100DOH annotations, the
 //     synthetic world's ground truth, or an external detector's output
-//     stored by ExternalDetectorStage).
+//     stored by the hand_object_detector stage, stages/detector_stage.h).
 //  2. An external detector command (the seam for a learned detector such as
-//     100DOH's hand_object_detector), run by ExternalDetectorStage before the
+//     100DOH's hand_object_detector), run by stage hand_object_detector before the
 //     analysis pass. Contract:
 //       - `command` is run by /bin/sh after replacing {video} (absolute path),
 //         {first_frame}, {last_frame} (inclusive 0-based file frame indices;
@@ -40,7 +40,7 @@
 // hands, objects, and contact: a bit mask of the hands' contact states
 // (bit s set when some hand has state s; bit 5 when the state is unknown).
 //
-// Decision (InteractionStage): a covered frame interacts when one of its
+// Decision (DecideInteraction): a covered frame interacts when one of its
 // hands has a state in `contact_states` (frames of the kept shot only, when
 // the shot filter trimmed the clip). Pass when at least
 // min_interaction_fraction of the covered frames interact, else reject
@@ -55,9 +55,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/frame_analyzer.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -65,7 +64,7 @@ namespace doasido::filters {
 // analysis stage's measurements.
 inline constexpr const char* kInteractionStageName = "interaction";
 // Reason codes: reject without hand-object contact (no_detections, flag:
-// filters/stage_support.h).
+// filters/verdict.h).
 inline constexpr const char* kReasonNoInteraction = "no_interaction";
 
 struct BuiltinDetectorConfig {
@@ -149,12 +148,12 @@ void CheckConfig(const InteractionConfig& c, const std::string& section);
 double InteractionFraction(const InteractionSignals& s, const std::vector<int>& contact_states,
                            std::int64_t first, std::int64_t last);
 
-// Stage "interaction": decides from the "interaction" section of the
-// analysis stage's measurements.
-class InteractionStage : public MeasuredVerdictStage<InteractionConfig> {
- public:
-  explicit InteractionStage(InteractionConfig config = {});
-};
+// The rule of stage "interaction" (see the file comment) on its
+// measurements {"clip", "signals": the "interaction" section of the
+// analysis, "shot"} (filters/verdict.h): reject "no_interaction", flag
+// "no_detections", else pass. Throws Error("bad_measurements") when they
+// lack a field it reads.
+FilterVerdict DecideInteraction(const Json& measurements, const InteractionConfig& config);
 
 inline constexpr const char* kExternalDetectorStageName = "hand_object_detector";
 // Reason code: flag, no detector command is configured.
@@ -181,20 +180,5 @@ std::vector<Detection> RunExternalDetector(const ExternalDetectorConfig& config,
                                            std::int64_t first_frame, std::int64_t last_frame,
                                            const std::filesystem::path& output,
                                            const std::string& clip);
-
-// Stage "hand_object_detector": runs the external detector on the clip and
-// returns its boxes as StageResult::detections (source "detector:external")
-// with a per-frame count in the measurements. Runs before the analysis
-// stage so that the analysis pass sees the boxes.
-class ExternalDetectorStage : public Stage {
- public:
-  explicit ExternalDetectorStage(ExternalDetectorConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return kExternalDetectorStageName; }
-  Json Params() const override { return config_; }
-  StageResult Run(const ClipContext& context) override;
-
- private:
-  ExternalDetectorConfig config_;
-};
 
 }  // namespace doasido::filters

@@ -6,7 +6,7 @@
 #include <map>
 
 #include "core/error.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -135,14 +135,12 @@ OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t f
   return out;
 }
 
-namespace {
-
-StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c) {
+FilterVerdict DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c) {
   RequireAnalysis(measurements, kOutOfFrameStageName);
   const OutOfFrameSignals s = OutOfFrameSignalsFromJson(measurements.at("signals"));
   const ShotSpan span = SpanOf(measurements, static_cast<std::int64_t>(s.covered.size()));
   const OutOfFrameSummary m = SummarizeOutOfFrame(s, span.first, span.last);
-  StageResult result;
+  FilterVerdict result;
   result.measurements = measurements;
   result.measurements["summary"] = {{"covered_fraction", m.covered_fraction},
                                     {"expected_hands", m.expected_hands},
@@ -170,10 +168,5 @@ StageResult DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& c
   }
   return result;
 }
-
-}  // namespace
-
-OutOfFrameStage::OutOfFrameStage(OutOfFrameConfig config)
-    : MeasuredVerdictStage(kOutOfFrameStageName, std::move(config), DecideOutOfFrame) {}
 
 }  // namespace doasido::filters

@@ -14,7 +14,7 @@
 // "Reaches the border" means within border_margin (fraction of the image
 // width/height) of an edge.
 //
-// Decision (OutOfFrameStage), over the covered frames (of the kept shot when
+// Decision (DecideOutOfFrame), over the covered frames (of the kept shot when
 // the shot filter trimmed the clip):
 //   expected hands  the largest hand count seen in >= 20% of those frames
 //   missing         fewer hands than expected (a hand left the picture), or
@@ -43,9 +43,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/frame_analyzer.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -53,7 +52,7 @@ namespace doasido::filters {
 // analysis stage's measurements.
 inline constexpr const char* kOutOfFrameStageName = "out_of_frame";
 // Reason code: reject or flag, the hand or touched object leaves the frame
-// (no_detections, flag: filters/stage_support.h).
+// (no_detections, flag: filters/verdict.h).
 inline constexpr const char* kReasonOutOfFrame = "out_of_frame";
 
 struct OutOfFrameSignalConfig {
@@ -116,11 +115,11 @@ struct OutOfFrameSummary {
 OutOfFrameSummary SummarizeOutOfFrame(const OutOfFrameSignals& s, std::int64_t first,
                                       std::int64_t last);
 
-// Stage "out_of_frame": decides from the "out_of_frame" section of the
-// analysis stage's measurements.
-class OutOfFrameStage : public MeasuredVerdictStage<OutOfFrameConfig> {
- public:
-  explicit OutOfFrameStage(OutOfFrameConfig config = {});
-};
+// The rule of stage "out_of_frame" (see the file comment) on its
+// measurements {"clip", "signals": the "out_of_frame" section of the
+// analysis, "shot"} (filters/verdict.h): reject or flag "out_of_frame",
+// flag "no_detections", else pass. Throws Error("bad_measurements") when
+// they lack a field it reads.
+FilterVerdict DecideOutOfFrame(const Json& measurements, const OutOfFrameConfig& config);
 
 }  // namespace doasido::filters

@@ -6,7 +6,7 @@
 #include <set>
 
 #include "core/error.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 namespace {
@@ -437,9 +437,7 @@ std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
               {.field = "shot_boundary.boundary_detectors"});
 }
 
-namespace {
-
-StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& config) {
+FilterVerdict DecideShots(const Json& measurements, const ShotBoundaryConfig& config) {
   RequireAnalysis(measurements, kShotBoundaryStageName);
   const ShotSignals signals = ShotSignalsFromJson(measurements.at("signals"));
   const Json& clip = measurements.at("clip");
@@ -487,7 +485,7 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
     }
   }
   const double segment_s = static_cast<double>(best_end - best_start) / (fps > 0 ? fps : 30.0);
-  StageResult result;
+  FilterVerdict result;
   Json summary = {{"cuts", cuts_by},
                   {"boundaries", Json::array()},
                   {"longest_segment",
@@ -516,10 +514,5 @@ StageResult DecideShots(const Json& measurements, const ShotBoundaryConfig& conf
   result.measurements["summary"] = summary;
   return result;
 }
-
-}  // namespace
-
-ShotBoundaryStage::ShotBoundaryStage(ShotBoundaryConfig config)
-    : MeasuredVerdictStage(kShotBoundaryStageName, std::move(config), DecideShots) {}
 
 }  // namespace doasido::filters

@@ -73,7 +73,7 @@
 //     frame is at least min_scene_len frames after the previous fade-in (or
 //     the first frame).
 //
-// Policy (ShotBoundaryStage): boundaries are the union of the cut lists
+// Policy (DecideShots): boundaries are the union of the cut lists
 // named in `boundary_detectors`; when "fade" is among them, the end of a
 // dark run at the clip's start and the beginning of a dark run at its end
 // are boundaries too (the clip fades in from or out to black). No boundary:
@@ -89,9 +89,8 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/frame_analyzer.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -222,11 +221,11 @@ std::vector<std::int64_t> FadeCuts(const std::vector<double>& mean_intensity, do
 std::vector<std::int64_t> CutsOf(const std::string& name, const ShotSignals& s,
                                  const ShotBoundaryConfig& c);
 
-// Stage "shot_boundary": decides from the "shot_boundary" section of the
-// analysis stage's measurements.
-class ShotBoundaryStage : public MeasuredVerdictStage<ShotBoundaryConfig> {
- public:
-  explicit ShotBoundaryStage(ShotBoundaryConfig config = {});
-};
+// The rule of stage "shot_boundary" (see the file comment) on its
+// measurements {"clip", "signals": the "shot_boundary" section of the
+// analysis} (filters/verdict.h): pass, pass "trimmed" to the longest shot
+// (summary["trim"]), or reject "shot_boundary". Throws
+// Error("bad_measurements") when they lack a field it reads.
+FilterVerdict DecideShots(const Json& measurements, const ShotBoundaryConfig& config);
 
 }  // namespace doasido::filters

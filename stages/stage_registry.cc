@@ -4,13 +4,9 @@
 #include <type_traits>
 
 #include "core/config_check.h"
-#include "filters/activity.h"
-#include "filters/analyze_stage.h"
-#include "filters/camera_motion.h"
-#include "filters/interaction.h"
-#include "filters/out_of_frame.h"
-#include "filters/shot_boundary.h"
+#include "stages/analyze_stage.h"
 #include "stages/bundle_stage.h"
+#include "stages/detector_stage.h"
 #include "stages/download_stage.h"
 #include "stages/dynamic_stage.h"
 #include "stages/hands_stage.h"
@@ -20,6 +16,7 @@
 #include "stages/recon_stage.h"
 #include "stages/stage_timeouts.h"
 #include "stages/track_stage.h"
+#include "stages/verdict_stages.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -58,6 +55,7 @@ StageEntry Entry(const std::string& name, std::string summary, std::vector<Stage
 
 const std::vector<StageEntry>& StageTable() {
   using namespace filters;
+  using namespace stages;
   constexpr double kMinute = 60, kHour = 3600;
   static const std::vector<StageEntry> kTable = [&] {
     std::vector<StageEntry> table = {

@@ -5,14 +5,17 @@
 // a cut gets the models on its kept shot only.
 #include <gtest/gtest.h>
 
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/hand_landmarker.h"
 #include "filters/kept_shot.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
+#include "stages/verdict_stages.h"
 #include "test_util.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 Json Analyze(const std::filesystem::path& video, std::int64_t first, std::int64_t last,
              const std::string& detector, bool deferred) {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/shot_boundary.h"
 #include "test_util.h"
 

@@ -6,11 +6,15 @@
 
 #include "core/error.h"
 #include "filters/interaction.h"
+#include "stages/detector_stage.h"
+#include "stages/verdict_stages.h"
 #include "synth/generator.h"
 #include "tests/test_util.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 // A detector "command" that writes two frames of output, as a user's wrapper
 // around 100DOH's hand_object_detector would.

@@ -12,14 +12,17 @@
 #include <string>
 
 #include "core/error.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/hand_landmarker.h"
 #include "filters/learned_hand_detector.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
+#include "stages/verdict_stages.h"
 #include "test_util.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 std::filesystem::path Video(const std::string& name) {
   return testing::SharedData() / "videos" / name;

@@ -9,15 +9,18 @@
 
 #include "core/error.h"
 #include "filters/activity.h"
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 #include "filters/hand_landmarker.h"
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
+#include "stages/verdict_stages.h"
 #include "test_util.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 Json Analyze(const std::string& video, bool thinned) {
   AnalyzeConfig config;

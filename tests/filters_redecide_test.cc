@@ -8,12 +8,15 @@
 #include <set>
 #include <string>
 
-#include "filters/analyze_stage.h"
-#include "filters/stage_support.h"
+#include "filters/analyze.h"
+#include "filters/verdict.h"
+#include "stages/verdict_stages.h"
 #include "test_util.h"
 
 namespace doasido::filters {
 namespace {
+
+using namespace doasido::stages;  // the filters' queue stages
 
 const Json& Analysis(const std::string& path) {
   static std::map<std::string, Json> cache;

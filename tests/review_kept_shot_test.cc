@@ -7,9 +7,11 @@
 #include <filesystem>
 
 #include "db/database.h"
-#include "filters/analyze_stage.h"
-#include "filters/stage_support.h"
+#include "filters/analyze.h"
+#include "filters/verdict.h"
 #include "review/server.h"
+#include "stages/analyze_stage.h"
+#include "stages/verdict_stages.h"
 #include "tests/test_util.h"
 
 namespace doasido::review {
@@ -34,8 +36,8 @@ TEST(ReviewKeptShot, ThePageSpanIsTheShotTheFiltersJudged) {
     // and keeps no trim, so the longest segment is what later filters judge.
     filters::ShotBoundaryConfig strict;
     strict.min_segment_s = 1000;
-    filters::AnalyzeStage analyze;
-    filters::ShotBoundaryStage shots(strict);
+    stages::AnalyzeStage analyze;
+    stages::ShotBoundaryStage shots(strict);
     for (Stage* stage : std::initializer_list<Stage*>{&analyze, &shots}) {
       const auto claim = db.ClaimNext("w", {stage->Name()}, 60, 3);
       ASSERT_TRUE(claim) << stage->Name();
@@ -57,7 +59,7 @@ TEST(ReviewKeptShot, ThePageSpanIsTheShotTheFiltersJudged) {
   later.measurements[filters::kAnalyzeStageName] =
       *db.GetMeasurements(clip, filters::kAnalyzeStageName);
   later.measurements[filters::kShotBoundaryStageName] = shot;
-  const Json judged = filters::CopyAnalysis(later, filters::kInteractionStageName).at("shot");
+  const Json judged = stages::CopyAnalysis(later, filters::kInteractionStageName).at("shot");
   EXPECT_EQ(judged.at("trim").at("start_frame"), summary.at("longest_segment").at("start_frame"));
   EXPECT_EQ(judged.at("trim").at("end_frame"), summary.at("longest_segment").at("end_frame"));
 

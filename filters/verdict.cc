@@ -1,4 +1,4 @@
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,24 +9,14 @@
 
 namespace doasido::filters {
 
-Json CopyAnalysis(const ClipContext& context, const std::string& section) {
-  const ErrorSite site{.clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
-                                                                : context.clip.external_id,
-                       .file = context.video.path,
-                       .field = std::string(kAnalyzeStageName) + "." + section};
-  auto it = context.measurements.find(kAnalyzeStageName);
-  if (it == context.measurements.end()) {
-    throw Error("missing_measurements",
-                std::string("stage ") + kAnalyzeStageName + " has not run on this clip", site);
-  }
-  const Json& analysis = it->second;
+Json VerdictInput(const Json& analysis, const std::string& section, const Json* shot_verdict,
+                  const ErrorSite& site) {
   if (!analysis.is_object() || !analysis.contains("clip") || !analysis.contains(section)) {
     throw Error("missing_measurements", "the analysis measurements lack this section", site);
   }
   Json out{{"clip", analysis.at("clip")}, {"signals", analysis.at(section)}};
-  auto shot = context.measurements.find(kShotBoundaryStageName);
-  if (shot != context.measurements.end()) {
-    if (const auto kept = ReadKeptShot(shot->second)) out["shot"] = ToJson(*kept);
+  if (shot_verdict != nullptr) {
+    if (const auto kept = ReadKeptShot(*shot_verdict)) out["shot"] = ToJson(*kept);
   }
   return out;
 }

@@ -1,4 +1,5 @@
-// Stage "filters_analyze": the one decode of a clip that every filter needs.
+// The analysis: the one decode of a clip that every filter needs (stage
+// "filters_analyze", stages/analyze_stage.h, runs it in the queue).
 //
 // It decodes the clip's span once at analysis resolution and runs, per
 // frame and in this order: a hand/object detector (only when the clip has no
@@ -12,14 +13,10 @@
 //    "hands": {...} (the learned detector's samples with keypoints, when it ran),
 //    "shot_boundary": {...}, "activity": {...}, "camera_motion": {...},
 //    "out_of_frame": {...}, "interaction": {...}}
-// and its verdict is always pass: the verdict stages (ShotBoundaryStage,
-// ActivityStage, CameraMotionStage, OutOfFrameStage, InteractionStage) run
-// after it and decide from these measurements without decoding.
-// Detections found by the detector are returned in StageResult::detections
-// (source "detector:learned" or "detector:builtin").
+// and the five verdict rules (DecideShots, DecideActivity,
+// DecideCameraMotion, DecideOutOfFrame, DecideInteraction) decide from
+// these measurements without decoding.
 //
-// The clip span is ClipRecord start_frame/end_frame (inclusive), else
-// start_s/end_s converted at the stream's frame rate, else the whole file.
 // A missing, unreadable or truncated file throws Error naming the clip, the
 // file and the frame (video/video_decoder.h).
 #pragma once
@@ -27,13 +24,13 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/activity.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
 #include "filters/learned_hand_detector.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -74,10 +71,10 @@ struct CheapVerdictConfigs {
   CameraMotionConfig camera_motion;
 };
 
-// Everything one analysis pass produced (for callers outside the queue,
-// such as benchmarks and tests).
+// Everything one analysis pass produced (the filters_analyze stage stores
+// it; benchmarks and tests call AnalyzeClip directly).
 struct ClipAnalysis {
-  Json measurements;                          // as stored by AnalyzeStage
+  Json measurements;                          // see the file comment
   std::vector<Detection> builtin_detections;  // the detector's boxes; empty when none ran
 };
 
@@ -89,21 +86,5 @@ struct ClipAnalysis {
 ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOptions& options,
                          const std::vector<Detection>& detections, const AnalyzeConfig& config,
                          const CheapVerdictConfigs& verdicts = {});
-
-class AnalyzeStage : public Stage {
- public:
-  explicit AnalyzeStage(AnalyzeConfig config = {}) : config_(std::move(config)) {}
-  // `whole_config`: the configuration file, for the cheap verdicts' sections.
-  AnalyzeStage(AnalyzeConfig config, const Json& whole_config);
-  std::string Name() const override { return kAnalyzeStageName; }
-  // The config, and the cheap verdicts' configs when they decide whether
-  // the models run.
-  Json Params() const override;
-  StageResult Run(const ClipContext& context) override;
-
- private:
-  AnalyzeConfig config_;
-  CheapVerdictConfigs verdicts_;
-};
 
 }  // namespace doasido::filters

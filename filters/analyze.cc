@@ -1,11 +1,10 @@
-#include "filters/analyze_stage.h"
+#include "filters/analyze.h"
 
 #include <memory>
 
-#include "core/config_check.h"
 #include "core/error.h"
 #include "filters/deferred_hand_models.h"
-#include "filters/stage_support.h"
+#include "filters/verdict.h"
 
 namespace doasido::filters {
 
@@ -92,43 +91,6 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
     }
   }
   return out;
-}
-
-AnalyzeStage::AnalyzeStage(AnalyzeConfig config, const Json& whole_config)
-    : config_(std::move(config)) {
-  ReadCheckedSection(whole_config, kShotBoundaryStageName, verdicts_.shot);
-  ReadCheckedSection(whole_config, kCameraMotionStageName, verdicts_.camera_motion);
-}
-
-Json AnalyzeStage::Params() const {
-  Json params = config_;
-  if (config_.hand_detector == "learned" && config_.learned_detector.after_cheap_verdicts) {
-    params["cheap_verdicts"] = {{kShotBoundaryStageName, verdicts_.shot},
-                                {kCameraMotionStageName, verdicts_.camera_motion}};
-  }
-  return params;
-}
-
-StageResult AnalyzeStage::Run(const ClipContext& context) {
-  DecoderOptions options;
-  options.clip =
-      context.clip.external_id.empty() ? std::to_string(context.clip.id) : context.clip.external_id;
-  if (context.clip.start_frame) {
-    options.first_frame = *context.clip.start_frame;
-  } else if (context.clip.start_s) {
-    options.first_s = *context.clip.start_s;
-  }
-  if (context.clip.end_frame) {
-    options.last_frame = *context.clip.end_frame;
-  } else if (context.clip.end_s) {
-    options.last_s = *context.clip.end_s;
-  }
-  ClipAnalysis analysis =
-      AnalyzeClip(context.video.path, options, context.detections, config_, verdicts_);
-  StageResult result;
-  result.measurements = std::move(analysis.measurements);
-  result.detections = std::move(analysis.builtin_detections);
-  return result;
 }
 
 }  // namespace doasido::filters

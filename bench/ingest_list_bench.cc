@@ -12,7 +12,7 @@
 
 #include "core/log.h"
 #include "db/database.h"
-#include "ingest/ingest.h"
+#include "pipeline/ingest.h"
 #include "stages/probe_stage.h"
 
 namespace fs = std::filesystem;
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   doasido::Database db(dir / "ingest.db");
   db.SetPipeline({doasido::video::kProbeStageName});
-  const auto summary = doasido::ingest::IngestList(db, list);
+  const auto summary = doasido::pipeline::IngestList(db, list);
   const double ours = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const auto t1 = std::chrono::steady_clock::now();

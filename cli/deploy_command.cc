@@ -19,6 +19,7 @@
 #include "deploy/plan.h"
 #include "deploy/stream.h"
 #include "stages/kinematic_stage.h"
+#include "review/trajectory_lookup.h"
 #include "robot/embodiment.h"
 #include "robot/trajectory/format.h"
 #include "robot/trajectory/source.h"
@@ -96,7 +97,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   } else {
     Database db(a.db.db, Database::OpenMode::kExisting);
     std::string why;
-    auto found = retarget::FindTrajectoryFiles(db, a.clip, &why);
+    auto found = review::FindTrajectoryFiles(db, a.clip, &why);
     if (!found) {
       throw Error("no_trajectory", "no trajectory to plan: " + why,
                   {.clip = std::to_string(a.clip), .file = db.path().string()});

@@ -5,7 +5,7 @@
 #include "cli/ingest_options.h"
 #include "stages/stage_registry.h"
 #include "db/database.h"
-#include "ingest/ingest.h"
+#include "pipeline/ingest.h"
 
 namespace doasido::cli {
 
@@ -42,7 +42,7 @@ bool IngestLists(Database& db, const IngestOptions& opt) {
   bool ok = true;
   for (const auto& list : opt.lists) {
     try {
-      const auto s = ingest::IngestList(db, list, opt.list);
+      const auto s = pipeline::IngestList(db, list, opt.list);
       if (opt.json) {
         all.push_back(s.ToJson());
         continue;

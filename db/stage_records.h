@@ -1,7 +1,7 @@
 // The records of one stage run that the database loads and records: the
 // clip's context a run starts from (Database::LoadContext) and the result
 // it ends with (Database::Complete). The Stage interface that turns
-// one into the other is db/stage.h; the stages themselves are in stages/.
+// one into the other, and the stages themselves, are in stages/ (stages/stage.h).
 #pragma once
 
 #include <filesystem>

@@ -1,10 +1,10 @@
-#include "ingest/ingest.h"
+#include "pipeline/ingest.h"
 
 #include <chrono>
 
 #include "core/progress.h"
 
-namespace doasido::ingest {
+namespace doasido::pipeline {
 
 std::map<std::string, std::int64_t> IngestSummary::RefusedByField() const {
   std::map<std::string, std::int64_t> counts;
@@ -84,4 +84,4 @@ IngestSummary IngestList(Database& db, const std::filesystem::path& list,
   return summary;
 }
 
-}  // namespace doasido::ingest
+}  // namespace doasido::pipeline

@@ -1,4 +1,6 @@
-// Loading a clip list into the database.
+// Loading a clip list into the database: the list readers are ingest/
+// (clip_list.h, which knows no database); here their rows become clips
+// queued for the pipeline's first stage.
 #pragma once
 
 #include <cstdint>
@@ -10,7 +12,10 @@
 #include "db/database.h"
 #include "ingest/clip_list.h"
 
-namespace doasido::ingest {
+namespace doasido::pipeline {
+
+using ingest::ListOptions;
+using ingest::RowError;
 
 struct IngestSummary {
   std::string list;
@@ -34,4 +39,4 @@ struct IngestSummary {
 IngestSummary IngestList(Database& db, const std::filesystem::path& list,
                          const ListOptions& options = {});
 
-}  // namespace doasido::ingest
+}  // namespace doasido::pipeline

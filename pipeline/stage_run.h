@@ -8,7 +8,7 @@
 #include <string>
 
 #include "db/database.h"
-#include "db/stage.h"
+#include "stages/stage.h"
 
 namespace doasido::pipeline {
 

@@ -9,6 +9,7 @@
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "core/file_text.h"
+#include "review/trajectory_lookup.h"
 #include "robot/embodiment.h"
 #include "robot/trajectory/format.h"
 #include "robot/trajectory/source.h"
@@ -109,7 +110,7 @@ Json Replay(const mjModel* m, const retarget::HandTrajectory& t) {
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
   std::string why;
-  std::optional<retarget::TrajectoryFiles> files = retarget::FindTrajectoryFiles(db, clip, &why, true);
+  std::optional<retarget::TrajectoryFiles> files = FindTrajectoryFiles(db, clip, &why, true);
   if (files && files->stage != stage) {
     why = "stage " + stage + " is not the trajectory stage (" + files->stage + ")";
     files.reset();
@@ -228,7 +229,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
       // says which one it showed (trajectory_sha256) is refused when the
       // trajectory changed since.
       std::string why;
-      const auto files = retarget::FindTrajectoryFiles(d, clip, &why, true);
+      const auto files = FindTrajectoryFiles(d, clip, &why, true);
       if (!files || files->stage != stage) {
         res.status = 409;
         res.set_content(Json({{"error", "no trajectory to verify: " + why}}).dump(),

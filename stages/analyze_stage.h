@@ -13,8 +13,8 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/analyze.h"
+#include "stages/stage.h"
 
 namespace doasido::stages {
 

@@ -43,9 +43,9 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
-#include "stages/clip_inputs.h"
 #include "recon/bundle/model_server.h"
+#include "stages/clip_inputs.h"
+#include "stages/stage.h"
 
 namespace doasido::recon {
 

@@ -10,8 +10,8 @@
 #include <utility>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/interaction.h"
+#include "stages/stage.h"
 
 namespace doasido::stages {
 

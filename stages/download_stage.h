@@ -11,8 +11,8 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "ingest/download.h"
+#include "stages/stage.h"
 
 namespace doasido::ingest {
 

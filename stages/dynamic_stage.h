@@ -28,9 +28,9 @@
 
 #include <string>
 
-#include "db/stage.h"
-#include "stages/recon_stage.h"
 #include "retarget/dynamic/dynamic_retarget.h"
+#include "stages/recon_stage.h"
+#include "stages/stage.h"
 
 namespace doasido::retarget {
 

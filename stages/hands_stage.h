@@ -29,10 +29,10 @@
 
 #include <memory>
 
-#include "db/stage.h"
 #include "filters/hand_landmarker.h"
 #include "hands/hand_intrinsics.h"
 #include "hands/hands_config.h"
+#include "stages/stage.h"
 
 namespace doasido::hands {
 

@@ -31,10 +31,10 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "retarget/config_checks.h"
 #include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/scene/scene_builder.h"
+#include "stages/stage.h"
 
 namespace doasido::retarget {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "db/stage.h"
+#include "stages/stage.h"
 
 namespace doasido::pipeline {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
+#include "stages/stage.h"
 #include "video/probe.h"
 
 namespace doasido::video {

@@ -31,9 +31,9 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "recon/align/reconstruct.h"
 #include "stages/clip_inputs.h"
+#include "stages/stage.h"
 #include "stages/track_stage.h"
 
 namespace doasido::recon {

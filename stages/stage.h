@@ -2,7 +2,8 @@
 //
 // A stage is a pure function of one clip and its parameters: the worker
 // loads a ClipContext from the database, calls Run, and records the
-// StageResult in the same transaction that completes the stage run. Stages
+// StageResult in the same transaction that completes the stage run (both
+// records are db/stage_records.h: what the database loads and stores). Stages
 // never open the database and never call each other; they meet through the
 // database (detections, earlier stages' measurements) and the clip's
 // artifact folder.

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/config.h"
-#include "db/stage.h"
+#include "stages/stage.h"
 
 namespace doasido::pipeline {
 

@@ -30,10 +30,10 @@
 #include <string>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "recon/track/adaptive_guidance.h"
 #include "recon/track/guided_flow.h"
 #include "recon/track/pose_selection.h"
+#include "stages/stage.h"
 
 namespace doasido::recon {
 

@@ -10,13 +10,13 @@
 #include <utility>
 
 #include "core/config.h"
-#include "db/stage.h"
 #include "filters/activity.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
 #include "filters/out_of_frame.h"
 #include "filters/shot_boundary.h"
 #include "filters/verdict.h"
+#include "stages/stage.h"
 
 namespace doasido::stages {
 

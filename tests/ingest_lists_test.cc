@@ -8,12 +8,13 @@
 
 #include "db/database.h"
 #include "ingest/clip_list.h"
-#include "ingest/ingest.h"
+#include "pipeline/ingest.h"
 #include "tests/test_util.h"
 
 namespace doasido::ingest {
 namespace {
 
+using doasido::pipeline::IngestList;
 using doasido::testing::SharedData;
 using doasido::testing::TempDir;
 using doasido::testing::WriteFile;

@@ -1,16 +1,14 @@
-// Where a clip's robot trajectory is: the output of the clip's run of its
-// trajectory stage (TrajectoryStageOf, robot/trajectory/format.h) that the
-// database records as done with verdict pass (Database::RecordedOutput).
-// Both trajectory stages write HandTrajectory JSON; the scene the
-// trajectory was retargeted in is kSceneFolder/kSceneFile beside it (or in
-// the kinematic stage's folder).
+// The files of a robot trajectory: the HandTrajectory JSON both trajectory
+// stages write, and the scene it was retargeted in (kSceneFolder/kSceneFile
+// beside it, or in the kinematic stage's folder). Where a clip's trajectory
+// is in a database (its trajectory stage's recorded run) is
+// review/trajectory_lookup.h, above the database.
 #pragma once
 
 #include <filesystem>
 #include <optional>
 #include <string>
 
-#include "db/database.h"
 
 namespace doasido::retarget {
 
@@ -24,14 +22,6 @@ struct TrajectoryFiles {
 
 // For a trajectory.json given directly: scene/ beside it when present.
 TrajectoryFiles FilesBeside(const std::filesystem::path& trajectory_json);
-// For a clip of `db`: the trajectory of the recorded run of the trajectory
-// stage, when that run is done with verdict pass (or flag, when
-// `allow_flag`: /verify shows those) and wrote trajectory.json; else
-// std::nullopt with *why (when given) naming the run and what it is.
-std::optional<TrajectoryFiles> FindTrajectoryFiles(Database& db, ClipId clip,
-                                                   std::string* why = nullptr,
-                                                   bool allow_flag = false);
-
 // The text of <scene_dir>/scene.xml, or "" when scene_dir is empty.
 std::string ReadSceneXml(const std::filesystem::path& scene_dir);
 

@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   if (argc > 3) ReadSection(LoadConfigFile(argv[3]), "filters_analyze", config);
   if (argc > 2) config.hand_detector = argv[2];
   std::vector<std::string> found;
-  std::vector<std::unique_ptr<Stage>> stages;
+  std::vector<std::unique_ptr<stages::Stage>> stages;
   stages.push_back(std::make_unique<ShotBoundaryStage>());
   stages.push_back(std::make_unique<InteractionStage>());
   stages.push_back(std::make_unique<OutOfFrameStage>());

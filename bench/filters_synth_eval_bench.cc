@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
   OutOfFrameStage out(section(kOutOfFrameStageName, OutOfFrameConfig{}));
   ActivityStage activity(section(kActivityStageName, ActivityConfig{}));
   InteractionStage interaction(section(kInteractionStageName, InteractionConfig{}));
-  const std::map<std::string, const Stage*> stages = {{kShotBoundaryStageName, &shots},
+  const std::map<std::string, const stages::Stage*> stages = {{kShotBoundaryStageName, &shots},
                                                       {kCameraMotionStageName, &camera},
                                                       {kOutOfFrameStageName, &out},
                                                       {kActivityStageName, &activity},

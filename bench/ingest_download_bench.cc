@@ -38,7 +38,7 @@ double DbCycle(const fs::path& dir, int clips, bool with_file) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   doasido::Database db(dir / "d.db");
-  db.SetPipeline({doasido::ingest::kDownloadStageName, doasido::video::kProbeStageName});
+  db.SetPipeline({doasido::ingest::kDownloadStageName, doasido::stages::kProbeStageName});
   {
     doasido::Database::Transaction tx(db);
     for (int i = 0; i < clips; ++i) {

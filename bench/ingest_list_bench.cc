@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   doasido::Database db(dir / "ingest.db");
-  db.SetPipeline({doasido::video::kProbeStageName});
+  db.SetPipeline({doasido::stages::kProbeStageName});
   const auto summary = doasido::pipeline::IngestList(db, list);
   const double ours = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

@@ -34,7 +34,7 @@ using namespace doasido;
 namespace {
 
 const std::vector<std::string> kPipeline = {
-    doasido::video::kProbeStageName,          doasido::filters::kAnalyzeStageName,
+    doasido::stages::kProbeStageName,          doasido::filters::kAnalyzeStageName,
     doasido::filters::kInteractionStageName,  doasido::filters::kOutOfFrameStageName,
     doasido::filters::kShotBoundaryStageName, doasido::filters::kActivityStageName,
     doasido::filters::kCameraMotionStageName};

@@ -31,7 +31,7 @@ Json LoadConfig(const DbOptions& options) {
   if (options.config.empty()) return Json::object();
   const Json config = LoadConfigFile(options.config);
   try {
-    pipeline::CheckStageConfig(config, {reports::kReportSection});
+    stages::CheckStageConfig(config, {reports::kReportSection});
     reports::ReportOptions report;
     ReadCheckedSection(config, reports::kReportSection, report);
   } catch (const Error& e) {

@@ -35,8 +35,8 @@ void AddIngestOptions(CLI::App& cmd, IngestOptions& opt) {
 
 bool IngestLists(Database& db, const IngestOptions& opt) {
   if (db.Pipeline().empty()) {
-    const auto stages = pipeline::DefaultPipeline();
-    db.SetPipeline(stages, pipeline::FlagContinuingStages(stages));
+    const auto stages = stages::DefaultPipeline();
+    db.SetPipeline(stages, stages::FlagContinuingStages(stages));
   }
   Json all = Json::array();
   bool ok = true;

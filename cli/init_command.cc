@@ -15,7 +15,7 @@ void AddInitCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("init", "Create a database (or upgrade one) and set its pipeline");
   AddDbOptions(*cmd, opt->db);
   std::string stages;
-  for (const auto& entry : pipeline::StageTable()) {
+  for (const auto& entry : stages::StageTable()) {
     const double limit = entry.timeout_s;
     const std::string limit_text =
         limit >= 3600 ? std::to_string(static_cast<int>(limit / 3600)) + " h"
@@ -50,13 +50,13 @@ void AddInitCommand(CLI::App& app) {
         pipeline.push_back(name);
         continue;
       }
-      for (const auto& stage : pipeline::DefaultPipeline()) pipeline.push_back(stage);
+      for (const auto& stage : stages::DefaultPipeline()) pipeline.push_back(stage);
     }
-    for (const auto& name : pipeline) pipeline::MakeStage(name, Json::object());  // known names
+    for (const auto& name : pipeline) stages::MakeStage(name, Json::object());  // known names
     if (opt->pipeline.empty() && !db.Pipeline().empty()) {
       pipeline = db.Pipeline();  // re-running init keeps an existing pipeline
     }
-    db.SetPipeline(pipeline, pipeline::FlagContinuingStages(pipeline));
+    db.SetPipeline(pipeline, stages::FlagContinuingStages(pipeline));
     std::string joined;
     for (const auto& s : pipeline) joined += (joined.empty() ? "" : " -> ") + s;
     std::printf("%s: schema %d, pipeline %s\n", db.path().c_str(), db.SchemaVersion(),

@@ -39,8 +39,8 @@ void PrintSummary(const review::StudySummary& s) {
 
 void AddStageReasons(review::ServeOptions& options) {
   // The page offers every reason code a stage can give (the registry's).
-  for (const auto& r : pipeline::StageReasons()) options.stage_reasons.push_back({r.code, r.label});
-  options.default_reasons = pipeline::ReviewDefaultReasons();
+  for (const auto& r : stages::StageReasons()) options.stage_reasons.push_back({r.code, r.label});
+  options.default_reasons = stages::ReviewDefaultReasons();
 }
 
 void AddReviewCommand(CLI::App& app) {

@@ -28,7 +28,7 @@ struct ClipContext {
   std::filesystem::path artifact_dir;
   // Published folders of the clip's earlier stages whose recorded runs are
   // done with verdict pass or flag (Database::RecordedOutput), by stage;
-  // read them through recon::SiblingArtifactDir.
+  // read them through stages::SiblingArtifactDir.
   std::map<std::string, std::filesystem::path> inputs;
 };
 

@@ -27,7 +27,7 @@ bool HumanVerdict(Database& db, ClipId clip, const std::string& stage) {
 }
 
 // Re-decides the finished runs of `stage` (in batches of one transaction).
-void RedecideFinished(Database& db, const Stage& stage, const std::string& hash, bool dry_run,
+void RedecideFinished(Database& db, const stages::Stage& stage, const std::string& hash, bool dry_run,
                       RethresholdTally& tally) {
   const std::string name = stage.Name();
   const auto runs = db.ListRuns({.stage = name, .state = ToString(RunState::kDone)});
@@ -71,7 +71,7 @@ std::vector<std::string> RethresholdStages(Database& db, const std::vector<std::
   std::vector<std::string> names;
   for (const auto& stage : db.Pipeline()) {
     bool eligible = false;
-    for (const auto& entry : StageTable()) {
+    for (const auto& entry : stages::StageTable()) {
       if (entry.name == stage) eligible = entry.decides_from_measurements;
     }
     const bool asked =
@@ -91,7 +91,7 @@ std::vector<std::string> RethresholdStages(Database& db, const std::vector<std::
 RethresholdTally RethresholdStage(Database& db, const std::string& name, const Json& config,
                                   bool dry_run) {
   RethresholdTally tally;
-  const auto stage = MakeStage(name, config);
+  const auto stage = stages::MakeStage(name, config);
   const std::string hash = ParamHash(stage->Params());
   RedecideFinished(db, *stage, hash, dry_run, tally);
   if (dry_run) return tally;

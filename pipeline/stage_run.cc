@@ -111,7 +111,7 @@ void KeepFailedRunLogs(Database& db, const Claim& claim, const std::filesystem::
 
 }  // namespace
 
-StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
+StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& claim,
                                const std::string& worker, const std::string& param_hash,
                                int max_attempts, const std::function<void()>& in_same_commit) {
   StageRunReport report;

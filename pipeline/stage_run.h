@@ -34,7 +34,7 @@ struct StageRunReport {
 // fails the run at once.
 // `in_same_commit` (may be empty) runs inside that transaction after the
 // record, so a worker can claim its next run in the same commit.
-StageRunReport RunClaimedStage(Database& db, Stage& stage, const Claim& claim,
+StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& claim,
                                const std::string& worker, const std::string& param_hash,
                                int max_attempts,
                                const std::function<void()>& in_same_commit = {});

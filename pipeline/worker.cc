@@ -51,7 +51,7 @@ class RunWatch {
  public:
   RunWatch(const std::string& db_path, std::string worker, const WorkerOptions& options)
       : worker_(std::move(worker)), options_(options),
-        no_progress_s_(NoProgressLimit(options.config)),
+        no_progress_s_(stages::NoProgressLimit(options.config)),
         thread_([this, db_path] { Loop(db_path); }) {}
   ~RunWatch() {
     {
@@ -68,7 +68,7 @@ class RunWatch {
     if (!claim) return;
     started_ = moved_ = std::chrono::steady_clock::now();
     count_at_start_ = count_ = StageProgressCount();
-    limit_s_ = StageTimeout(options_.config, claim->stage);
+    limit_s_ = stages::StageTimeout(options_.config, claim->stage);
     permanent_ = IsDeterministic(claim->stage);
   }
 
@@ -76,7 +76,7 @@ class RunWatch {
   using Clock = std::chrono::steady_clock;
 
   static bool IsDeterministic(const std::string& stage) {
-    for (const auto& entry : StageTable()) {
+    for (const auto& entry : stages::StageTable()) {
       if (entry.name == stage) return entry.deterministic;
     }
     return true;
@@ -89,7 +89,7 @@ class RunWatch {
     char text[160];
     if (Seconds(now - started_) > limit_s_) {
       std::snprintf(text, sizeof text, "ran past its limit of %g s (%s.%s in the config)", limit_s_,
-                    kTimeoutsSection, claim_->stage.c_str());
+                    stages::kTimeoutsSection, claim_->stage.c_str());
       return text;
     }
     const std::uint64_t count = StageProgressCount();
@@ -101,7 +101,7 @@ class RunWatch {
       std::snprintf(text, sizeof text,
                     "made no progress for %g s after %llu steps (%s.%s in the config)",
                     no_progress_s_, static_cast<unsigned long long>(count_ - count_at_start_),
-                    kTimeoutsSection, kNoProgressKey);
+                    stages::kTimeoutsSection, stages::kNoProgressKey);
       return text;
     }
     return "";
@@ -175,10 +175,10 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   const std::string worker = WorkerName();
   const auto pipeline = db.Pipeline();
   const std::vector<std::string> names = options.stages.empty() ? pipeline : options.stages;
-  std::map<std::string, std::unique_ptr<Stage>> stages;
+  std::map<std::string, std::unique_ptr<stages::Stage>> stages;
   std::map<std::string, std::string> hashes;
   for (const auto& name : names) {
-    stages[name] = MakeStage(name, options.config);
+    stages[name] = stages::MakeStage(name, options.config);
     hashes[name] = ParamHash(stages[name]->Params());
   }
   RunWatch watch(options.db, worker, options);
@@ -221,7 +221,7 @@ int RunWorkers(const WorkerOptions& options) {
                   {.file = options.db});
     }
     for (const auto& name : options.stages.empty() ? pipeline : options.stages) {
-      const auto stage = MakeStage(name, options.config);
+      const auto stage = stages::MakeStage(name, options.config);
       std::int64_t downstream = 0;
       const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()), &downstream);
       if (changed > 0) {

@@ -15,7 +15,9 @@
 #include "recon/bundle/bundle.h"
 #include "recon/bundle/model_command.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
+
+using namespace recon;  // the algorithms this stage runs
 namespace {
 
 // The placeholders' values for a clip, by placeholder name (without braces).
@@ -189,4 +191,4 @@ StageResult BundleStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

@@ -47,7 +47,7 @@
 #include "stages/clip_inputs.h"
 #include "stages/stage.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
 
 struct BundleStageConfig {
   std::string command;       // empty: only clips whose list names a bundle pass
@@ -67,7 +67,7 @@ inline constexpr const char* kErrorBundleTimeout = "bundle_timeout";
 class BundleStage : public Stage {
  public:
   explicit BundleStage(BundleStageConfig config = {});
-  std::string Name() const override { return kBundleStageName; }
+  std::string Name() const override { return recon::kBundleStageName; }
   // The config; the server keys only in server mode, so that configs
   // written before server mode keep their parameter hash.
   Json Params() const override;
@@ -79,7 +79,7 @@ class BundleStage : public Stage {
   void RunServer(const ClipContext& context, const std::filesystem::path& dir);
 
   BundleStageConfig config_;
-  std::unique_ptr<ModelServer> server_;  // started on the first clip
+  std::unique_ptr<recon::ModelServer> server_;  // started on the first clip
 };
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

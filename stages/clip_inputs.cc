@@ -4,7 +4,9 @@
 #include "core/error.h"
 #include "core/error_codes.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
+
+using namespace recon;  // the algorithms this stage runs
 
 bool ListNamesBundle(const ClipContext& context) {
   const Json& meta = context.clip.metadata;
@@ -99,4 +101,4 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
   return out;
 }
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

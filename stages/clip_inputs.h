@@ -12,7 +12,7 @@
 #include "recon/bundle/bundle.h"
 #include "recon/bundle/bundle_location.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
 
 // The clip metadata's "bundle" entry when present (absolute, or relative to
 // the folder of the list the clip was ingested from), else
@@ -41,7 +41,7 @@ std::string ClipName(const ClipContext& context);
 // Errors are ReadClipBundle's (permanent, clip named); Error("no_bundle")
 // (permanent) when there is no bundle at all.
 struct ResolvedBundle {
-  ClipBundle bundle;
+  recon::ClipBundle bundle;
   std::filesystem::path dir;       // the bundle read (the hands folder for kBundleFromHands)
   std::string source;              // kBundleFromList, kBundleFromCommand or kBundleFromHands
   std::string hands_source;        // "bundle", kBundleFromHands, or "none"
@@ -53,4 +53,4 @@ struct ResolvedBundle {
 ResolvedBundle LoadClipBundle(const ClipContext& context,
                               const std::filesystem::path& model_output = {});
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

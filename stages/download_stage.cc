@@ -5,7 +5,9 @@
 #include "core/error.h"
 #include "db/database.h"
 
-namespace doasido::ingest {
+namespace doasido::stages {
+
+using namespace ingest;  // the algorithms this stage runs
 namespace {
 
 namespace fs = std::filesystem;
@@ -60,4 +62,4 @@ StageResult DownloadStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::ingest
+}  // namespace doasido::stages

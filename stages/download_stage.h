@@ -14,17 +14,17 @@
 #include "ingest/download.h"
 #include "stages/stage.h"
 
-namespace doasido::ingest {
+namespace doasido::stages {
 
 class DownloadStage : public Stage {
  public:
-  explicit DownloadStage(DownloadConfig config = {});
-  std::string Name() const override { return kDownloadStageName; }
+  explicit DownloadStage(ingest::DownloadConfig config = {});
+  std::string Name() const override { return ingest::kDownloadStageName; }
   Json Params() const override;
   StageResult Run(const ClipContext& context) override;
 
  private:
-  DownloadConfig config_;
+  ingest::DownloadConfig config_;
 };
 
-}  // namespace doasido::ingest
+}  // namespace doasido::stages

@@ -9,7 +9,9 @@
 #include "retarget/dynamic/bimanual_retarget.h"
 #include "stages/kinematic_stage.h"
 
-namespace doasido::retarget {
+namespace doasido::stages {
+
+using namespace retarget;  // the algorithms this stage runs
 
 DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : config_(std::move(config)) {
   CheckConfig(config_, kRetargetStageName);
@@ -18,7 +20,7 @@ DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : confi
 StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   const std::string clip = context.clip.external_id.empty() ? std::to_string(context.clip.id)
                                                             : context.clip.external_id;
-  const std::filesystem::path dir = recon::SiblingArtifactDir(context, recon::kReconStageName);
+  const std::filesystem::path dir = SiblingArtifactDir(context, recon::kReconStageName);
   recon::Reconstruction r;
   TriMesh mesh;
   try {
@@ -113,4 +115,4 @@ std::optional<StageResult> DynamicRetargetStage::Redecide(const Json& measuremen
   return r;
 }
 
-}  // namespace doasido::retarget
+}  // namespace doasido::stages

@@ -30,28 +30,29 @@
 
 #include "retarget/dynamic/dynamic_retarget.h"
 #include "stages/recon_stage.h"
+#include "stages/shared_reasons.h"
 #include "stages/stage.h"
 
-namespace doasido::retarget {
+namespace doasido::stages {
 
 // The stage's name (kRetargetStageName, robot/trajectory/format.h with the
 // trajectory file names) is its queue name, config section and artifact folder.
 
-// Reason codes of the stage's verdicts.
+// Reason codes of the stage's verdicts (and kReasonNoObject,
+// stages/shared_reasons.h).
 inline constexpr const char* kReasonTrackingFailed = "tracking_failed";
 inline constexpr const char* kReasonNoRightHand = "no_right_hand";
-inline constexpr const char* kReasonNoObject = "no_object";
 
 class DynamicRetargetStage : public Stage {
  public:
-  explicit DynamicRetargetStage(DynamicRetargetConfig config = {});
-  std::string Name() const override { return kRetargetStageName; }
+  explicit DynamicRetargetStage(retarget::DynamicRetargetConfig config = {});
+  std::string Name() const override { return retarget::kRetargetStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 
  private:
-  DynamicRetargetConfig config_;
+  retarget::DynamicRetargetConfig config_;
 };
 
-}  // namespace doasido::retarget
+}  // namespace doasido::stages

@@ -11,7 +11,9 @@
 #include "hands/hand_reconstruction.h"
 #include "stages/clip_inputs.h"
 
-namespace doasido::hands {
+namespace doasido::stages {
+
+using namespace hands;  // the algorithms this stage runs
 namespace {
 
 // The kept span as decoder options (see the header).
@@ -51,9 +53,9 @@ HandsStage::~HandsStage() = default;
 
 Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
                           double default_fov_deg) {
-  const std::string clip = recon::ClipName(context);
-  if (recon::ListNamesBundle(context)) {
-    const auto dir = recon::BundleDir(context);
+  const std::string clip = ClipName(context);
+  if (ListNamesBundle(context)) {
+    const auto dir = BundleDir(context);
     if (std::filesystem::exists(dir / "K.npz")) {
       const recon::ClipBundle b = recon::ReadClipBundle(dir, clip);
       return {.K = ScaleK(b.KAt(0), b.width, b.height, width, height),
@@ -68,12 +70,12 @@ Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
 }
 
 StageResult HandsStage::Run(const ClipContext& context) {
-  const std::string clip = recon::ClipName(context);
-  if (recon::ListNamesBundle(context) && std::filesystem::exists(recon::BundleDir(context) / "hands.npz")) {
+  const std::string clip = ClipName(context);
+  if (ListNamesBundle(context) && std::filesystem::exists(BundleDir(context) / "hands.npz")) {
     // The list's bundle wins and already has hands: nothing to fill in.
     StageResult skipped;
     skipped.measurements = {{"skipped", "the bundle the list names has hands"},
-                            {"bundle", recon::BundleDir(context).string()}};
+                            {"bundle", BundleDir(context).string()}};
     return skipped;
   }
   if (context.video.info) {
@@ -124,4 +126,4 @@ StageResult HandsStage::Run(const ClipContext& context) {
   return out;
 }
 
-}  // namespace doasido::hands
+}  // namespace doasido::stages

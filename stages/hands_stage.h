@@ -32,29 +32,30 @@
 #include "filters/hand_landmarker.h"
 #include "hands/hand_intrinsics.h"
 #include "hands/hands_config.h"
+#include "stages/shared_reasons.h"
 #include "stages/stage.h"
 
-namespace doasido::hands {
+namespace doasido::stages {
 
-inline constexpr const char* kReasonNoHands = "no_hands";
+// Reason code: reject kReasonNoHands (stages/shared_reasons.h).
 
 class HandsStage : public Stage {
  public:
-  explicit HandsStage(HandsConfig config = {});
+  explicit HandsStage(hands::HandsConfig config = {});
   ~HandsStage() override;
-  std::string Name() const override { return kHandsStageName; }
+  std::string Name() const override { return hands::kHandsStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 
  private:
-  HandsConfig config_;
+  hands::HandsConfig config_;
   // Started on the first clip and kept for the next ones (Node and the
   // models take about a second to load).
   std::unique_ptr<filters::HandLandmarker> landmarker_;
 };
 
 // The intrinsics for `context`'s clip at `width` x `height` (see above).
-Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
+hands::Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
                           double default_fov_deg);
 
-}  // namespace doasido::hands
+}  // namespace doasido::stages

@@ -19,7 +19,9 @@
 #include "stages/dynamic_stage.h"
 #include "robot/embodiment.h"
 
-namespace doasido::retarget {
+namespace doasido::stages {
+
+using namespace retarget;  // the algorithms this stage runs
 namespace {
 
 // What the stage retargets: hand keypoints and object poses in the world
@@ -120,11 +122,11 @@ StageInput FromBundle(const recon::ClipBundle& bundle, const std::filesystem::pa
 // The recon artifact when the recon stage ran, else the bundle.
 StageInput LoadInput(const ClipContext& context, const std::string& clip) {
   try {
-    const auto recon_dir = recon::SiblingArtifactDir(context, recon::kReconStageName);
+    const auto recon_dir = SiblingArtifactDir(context, recon::kReconStageName);
     if (std::filesystem::is_regular_file(recon_dir / recon::kReconstructionNpz)) {
       return FromReconstruction(recon_dir);
     }
-    const recon::ResolvedBundle resolved = recon::LoadClipBundle(context);
+    const ResolvedBundle resolved = LoadClipBundle(context);
     return FromBundle(resolved.bundle, resolved.dir);
   } catch (const Error& e) {
     ErrorSite site = e.site();
@@ -259,4 +261,4 @@ void CheckConfig(const KinematicStageConfig& c, const std::string& section) {
   CheckConfig(c.scene, section + ".scene");
 }
 
-}  // namespace doasido::retarget
+}  // namespace doasido::stages

@@ -36,7 +36,7 @@
 #include "retarget/scene/scene_builder.h"
 #include "stages/stage.h"
 
-namespace doasido::retarget {
+namespace doasido::stages {
 
 // The stage's name (kKinematicStageName, robot/trajectory/format.h with the
 // trajectory file names) is its queue name, config section and artifact folder.
@@ -53,8 +53,8 @@ struct KinematicStageConfig {
   std::string left_hand = "sharpa_left";  // the left hand's robot; "" = right hand only
   std::string robots_dir;             // folder of descriptions; "" = DefaultRobotsDir()
   double flag_fingertip_error = 0.02; // m, mean over frames
-  KinematicConfig kinematic;
-  SceneConfig scene;
+  retarget::KinematicConfig kinematic;
+  retarget::SceneConfig scene;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicStageConfig, hand, left_hand, robots_dir,
                                                 flag_fingertip_error, kinematic, scene)
@@ -64,7 +64,7 @@ void CheckConfig(const KinematicStageConfig& c, const std::string& section);
 class KinematicStage : public Stage {
  public:
   explicit KinematicStage(KinematicStageConfig config = {}) : config_(std::move(config)) {}
-  std::string Name() const override { return kKinematicStageName; }
+  std::string Name() const override { return retarget::kKinematicStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
   std::optional<StageResult> Redecide(const Json& measurements) const override;
@@ -75,10 +75,10 @@ class KinematicStage : public Stage {
     std::filesystem::path dir;          // its folder
     std::filesystem::path robot_scene;  // where to write hand + scene ("" = not written)
   };
-  HandTrajectory RetargetHand(const std::string& hand, const std::string& robots,
-                              const std::vector<Keypoints21>& human, const std::vector<bool>& valid,
+  retarget::HandTrajectory RetargetHand(const std::string& hand, const std::string& robots,
+                              const std::vector<retarget::Keypoints21>& human, const std::vector<bool>& valid,
                               double fps, const SceneFiles& scene, size_t* compat_changes) const;
   KinematicStageConfig config_;
 };
 
-}  // namespace doasido::retarget
+}  // namespace doasido::stages

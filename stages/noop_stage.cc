@@ -7,7 +7,7 @@
 
 #include "core/config_check.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 
 void CheckConfig(const NoopConfig& c, const std::string& section) {
   RequireInRange(section, "work_ms", c.work_ms, 0, 3600e3);
@@ -22,4 +22,4 @@ StageResult NoopStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

@@ -7,7 +7,7 @@
 
 #include "stages/stage.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 
 inline constexpr const char* kNoopStageName = "noop";
 
@@ -30,4 +30,4 @@ class NoopStage : public Stage {
   NoopConfig config_;
 };
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

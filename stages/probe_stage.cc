@@ -2,7 +2,9 @@
 
 #include "core/error.h"
 
-namespace doasido::video {
+namespace doasido::stages {
+
+using namespace video;  // the algorithms this stage runs
 
 StageResult ProbeStage::Run(const ClipContext& context) {
   VideoInfo info;
@@ -38,4 +40,4 @@ StageResult ProbeStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::video
+}  // namespace doasido::stages

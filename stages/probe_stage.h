@@ -10,7 +10,7 @@
 #include "stages/stage.h"
 #include "video/probe.h"
 
-namespace doasido::video {
+namespace doasido::stages {
 
 // The stage's name: its queue name, config section and artifact folder.
 inline constexpr const char* kProbeStageName = "probe";
@@ -21,13 +21,13 @@ inline constexpr const char* kReasonSpanOutsideVideo = "span_outside_video";
 // span lies inside it.
 class ProbeStage : public Stage {
  public:
-  explicit ProbeStage(ProbeConfig config = {}) : config_(config) {}
+  explicit ProbeStage(video::ProbeConfig config = {}) : config_(config) {}
   std::string Name() const override { return kProbeStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
 
  private:
-  ProbeConfig config_;
+  video::ProbeConfig config_;
 };
 
-}  // namespace doasido::video
+}  // namespace doasido::stages

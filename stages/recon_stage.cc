@@ -21,6 +21,12 @@ void CheckConfig(const ReconStageConfig& c, const std::string& section) {
   RequireInRange(section, "rest_speed", c.rest_speed, 0, 1);
 }
 
+}  // namespace doasido::recon
+
+namespace doasido::stages {
+
+using namespace recon;  // the algorithms this stage runs
+
 void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<Pose>& poses,
                     std::vector<bool>& valid) {
   const std::string name = file.string();
@@ -153,4 +159,4 @@ std::optional<StageResult> ReconStage::Redecide(const Json& m) const {
   return r;
 }
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

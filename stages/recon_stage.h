@@ -33,23 +33,31 @@
 #include "core/config.h"
 #include "recon/align/reconstruct.h"
 #include "stages/clip_inputs.h"
+#include "stages/shared_reasons.h"
 #include "stages/stage.h"
 #include "stages/track_stage.h"
 
 namespace doasido::recon {
 
+// Valid ranges of the recon stage's configuration; throws Error("bad_config").
+void CheckConfig(const ReconStageConfig& c, const std::string& section);
+
+}  // namespace doasido::recon
+
+namespace doasido::stages {
+
 // The stage's name kReconStageName is recon/reconstruction.h's (the
 // artifact folder its readers find).
 
-// Reason codes.
-inline constexpr const char* kReasonNoObject = "no_object";
-inline constexpr const char* kReasonNoHands = "no_hands";  // hand-only bundle, no valid frame
+// Reason codes (and kReasonNoObject, kReasonNoHands: a hand-only bundle
+// with no valid frame; stages/shared_reasons.h).
 inline constexpr const char* kReasonTooFewAlignedFrames = "too_few_aligned_frames";
 inline constexpr const char* kReasonScaleInconsistent = "scale_inconsistent";
 
-// The stage's configuration is ReconStageConfig (recon/align/reconstruct.h),
-// its measurement keys kMeasure* there too.
-void CheckConfig(const ReconStageConfig& c, const std::string& section);
+// The stage's configuration is recon::ReconStageConfig
+// (recon/align/reconstruct.h), its measurement keys kMeasure* there too; its
+// check is in namespace recon (above), beside the type, where
+// ReadCheckedSection finds it.
 
 // Reads a tracker's object_poses.npz (format in the file comment). Throws
 // Error("bad_track") naming the file and field.
@@ -58,15 +66,15 @@ void ReadTrackPoses(const std::filesystem::path& file, int frames, std::vector<P
 
 class ReconStage : public Stage {
  public:
-  explicit ReconStage(ReconStageConfig config = {});
-  std::string Name() const override { return kReconStageName; }
+  explicit ReconStage(recon::ReconStageConfig config = {});
+  std::string Name() const override { return recon::kReconStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 
  private:
   StageResult RunHandOnly(const ClipContext& context, const ResolvedBundle& resolved) const;
-  ReconStageConfig config_;
+  recon::ReconStageConfig config_;
 };
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

@@ -15,7 +15,7 @@
 #include "core/config.h"
 #include "db/stage_records.h"
 
-namespace doasido {
+namespace doasido::stages {
 
 class Stage {
  public:
@@ -34,4 +34,4 @@ class Stage {
   }
 };
 
-}  // namespace doasido
+}  // namespace doasido::stages

@@ -18,7 +18,7 @@
 #include "stages/track_stage.h"
 #include "stages/verdict_stages.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 namespace {
 
 // The table entry of a stage `StageT` configured by `ConfigT` from section
@@ -55,20 +55,19 @@ StageEntry Entry(const std::string& name, std::string summary, std::vector<Stage
 
 const std::vector<StageEntry>& StageTable() {
   using namespace filters;
-  using namespace stages;
   constexpr double kMinute = 60, kHour = 3600;
   static const std::vector<StageEntry> kTable = [&] {
     std::vector<StageEntry> table = {
-      Entry<ingest::DownloadStage, ingest::DownloadConfig>(
+      Entry<DownloadStage, ingest::DownloadConfig>(
           ingest::kDownloadStageName,
           "fetches clips listed by URL into the media folder (libcurl, or a yt-dlp command "
           "template for sites); local videos pass at once",
           {},
           true, 4 * kHour),
-      Entry<video::ProbeStage, video::ProbeConfig>(
-          video::kProbeStageName,
+      Entry<ProbeStage, video::ProbeConfig>(
+          kProbeStageName,
           "size, fps, frame count, rotation and codec; rejects spans outside the video",
-          {{video::kReasonSpanOutsideVideo, "clip span outside the video"}}, true,
+          {{kReasonSpanOutsideVideo, "clip span outside the video"}}, true,
           kMinute),
       Entry<ExternalDetectorStage, ExternalDetectorConfig>(
           kExternalDetectorStageName,
@@ -102,48 +101,48 @@ const std::vector<StageEntry>& StageTable() {
           {{kReasonCameraMotion, "camera motion"},
            {kReasonCameraMotionUnknown, "camera motion unknown"}},
           true, kMinute, true),
-      Entry<hands::HandsStage, hands::HandsConfig>(
+      Entry<HandsStage, hands::HandsConfig>(
           hands::kHandsStageName,
           "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
           "fit: the hand part of a clip bundle",
-          {{hands::kReasonNoHands, "no hands found"}},
+          {{kReasonNoHands, "no hands found"}},
           // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
           // and suites run the default list on hundreds of synthetic clips.
           false, kHour),
-      Entry<recon::BundleStage, recon::BundleStageConfig>(
+      Entry<BundleStage, BundleStageConfig>(
           recon::kBundleStageName,
           "runs the model command (per clip, or a server started once per worker) that writes "
           "the clip bundle (or checks the bundle the list names)",
           {},
           false, 2 * kHour),
-      Entry<recon::TrackStage, recon::TrackStageConfig>(
-          recon::kTrackStageName,
+      Entry<TrackStage, TrackStageConfig>(
+          kTrackStageName,
           "tracks the object frame by frame by guided flow sampling (seed 3.1): a velocity "
           "server, or the bundle's pose candidates as the model",
           {},
           false, kHour),
-      Entry<recon::ReconStage, recon::ReconStageConfig>(
+      Entry<ReconStage, recon::ReconStageConfig>(
           recon::kReconStageName,
           "aligns hand and object to one metric scale, gravity-aligns: the 4D reconstruction",
-          {{recon::kReasonNoObject, "no object"},
-           {recon::kReasonNoHands, "no hands found"},
-           {recon::kReasonTooFewAlignedFrames, "too few aligned frames"},
-           {recon::kReasonScaleInconsistent, "object scale inconsistent"}},
+          {{kReasonNoObject, "no object"},
+           {kReasonNoHands, "no hands found"},
+           {kReasonTooFewAlignedFrames, "too few aligned frames"},
+           {kReasonScaleInconsistent, "object scale inconsistent"}},
           false, 30 * kMinute),
-      Entry<retarget::KinematicStage, retarget::KinematicStageConfig>(
+      Entry<KinematicStage, KinematicStageConfig>(
           retarget::kKinematicStageName,
           "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)",
-          {{retarget::kReasonNoHand, "no hand to retarget"},
-           {retarget::kReasonNoRightHand, "no right hand (with an object)"},
-           {retarget::kReasonKinematicError, "large fingertip error"}},
+          {{kReasonNoHand, "no hand to retarget"},
+           {kReasonNoRightHand, "no right hand (with an object)"},
+           {kReasonKinematicError, "large fingertip error"}},
           false, 30 * kMinute),
-      Entry<retarget::DynamicRetargetStage, retarget::DynamicRetargetConfig>(
+      Entry<DynamicRetargetStage, retarget::DynamicRetargetConfig>(
           retarget::kRetargetStageName,
           "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed "
           "3.2)",
-          {{retarget::kReasonTrackingFailed, "the robot does not track the motion"},
-           {retarget::kReasonNoRightHand, "no right hand (with an object)"},
-           {retarget::kReasonNoObject, "no object"}},
+          {{kReasonTrackingFailed, "the robot does not track the motion"},
+           {kReasonNoRightHand, "no right hand (with an object)"},
+           {kReasonNoObject, "no object"}},
           false, 2 * kHour),
       Entry<NoopStage, NoopConfig>(kNoopStageName,
                                    "does nothing for work_ms milliseconds (queue diagnostics)", {},
@@ -228,4 +227,4 @@ void CheckStageConfig(const Json& config, const std::vector<std::string>& other_
   CheckStageTimeouts(config);
 }
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

@@ -13,7 +13,7 @@
 #include "core/config.h"
 #include "stages/stage.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 
 // A reason code a stage can give its verdict (the constants of its header),
 // with the words a reviewer reads for it.
@@ -68,4 +68,4 @@ std::set<std::string> FlagContinuingStages(const std::vector<std::string>& pipel
 // Error("bad_config") naming section.key, the value and the allowed range.
 void CheckStageConfig(const Json& config, const std::vector<std::string>& other_sections);
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

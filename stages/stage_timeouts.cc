@@ -6,7 +6,7 @@
 #include "core/config_check.h"
 #include "stages/stage_registry.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 namespace {
 
 constexpr double kMaxTimeoutSeconds = 30 * 24 * 3600.0;
@@ -64,4 +64,4 @@ double NoProgressLimit(const Json& config) {
   return Configured(config, kNoProgressKey).value_or(kDefaultNoProgressSeconds);
 }
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

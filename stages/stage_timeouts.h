@@ -20,7 +20,7 @@
 
 #include "core/config.h"
 
-namespace doasido::pipeline {
+namespace doasido::stages {
 
 inline constexpr const char* kTimeoutsSection = "timeouts";
 inline constexpr const char* kNoProgressKey = "no_progress";
@@ -37,4 +37,4 @@ double StageTimeout(const Json& config, const std::string& stage);
 // timeouts.no_progress, else kDefaultNoProgressSeconds.
 double NoProgressLimit(const Json& config);
 
-}  // namespace doasido::pipeline
+}  // namespace doasido::stages

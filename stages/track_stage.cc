@@ -17,7 +17,9 @@
 #include "recon/track/silhouette.h"
 #include "recon/track/velocity_server.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
+
+using namespace recon;  // the algorithms this stage runs
 namespace {
 
 // The bundle's pose samples as a model: one mode per sample. Quaternions
@@ -177,4 +179,4 @@ StageResult TrackStage::Run(const ClipContext& context) {
   return result;
 }
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

@@ -35,7 +35,7 @@
 #include "recon/track/pose_selection.h"
 #include "stages/stage.h"
 
-namespace doasido::recon {
+namespace doasido::stages {
 
 inline constexpr const char* kTrackStageName = "track";
 inline constexpr const char* kTrackPosesFile = "object_poses.npz";
@@ -55,9 +55,9 @@ struct TrackStageConfig {
   double kde_sigma = 0.01;         // mode width of the candidates model
   double pose_guidance = 0.5;      // alpha_p without point tracks
   double track_radius_px = 3.0;    // a drawn pixel follows the nearest track this close
-  GuidedFlowConfig flow;
-  AdaptiveGuidanceConfig guidance;
-  PoseSelectionConfig selection;
+  recon::GuidedFlowConfig flow;
+  recon::AdaptiveGuidanceConfig guidance;
+  recon::PoseSelectionConfig selection;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrackStageConfig, server, kde_sigma,
                                                 pose_guidance, track_radius_px, flow, guidance,
@@ -75,4 +75,4 @@ class TrackStage : public Stage {
   TrackStageConfig config_;
 };
 
-}  // namespace doasido::recon
+}  // namespace doasido::stages

@@ -63,9 +63,9 @@ constexpr ListedClip kClips[] = {
 constexpr int kFrames = 45;  // per clip: 1.5-1.8 s of each video
 
 bool HandsStageExists() {
-  const auto& table = pipeline::StageTable();
+  const auto& table = stages::StageTable();
   return std::any_of(table.begin(), table.end(),
-                     [](const pipeline::StageEntry& e) { return e.name == recon::kHandsStageFolder; });
+                     [](const stages::StageEntry& e) { return e.name == recon::kHandsStageFolder; });
 }
 
 std::string Pipeline(bool real_chain) {

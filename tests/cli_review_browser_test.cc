@@ -58,7 +58,7 @@ class BrowserTest : public ::testing::Test {
 // and passed by `out_of_frame` (a flag does not stop the filters; a clip
 // waits for a person once they have all judged it).
 std::vector<ClipId> FlagAll(Database& db) {
-  auto probe = pipeline::MakeStage("probe", Json::object());
+  auto probe = stages::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
     const StageResult result = probe->Run(db.LoadContext(claim->clip_id, "probe"));
     EXPECT_TRUE(db.Complete(*claim, "test", ParamHash(probe->Params()), result, 0.0));

@@ -116,7 +116,7 @@ std::filesystem::path ProbedClips(const TempDir& dir, int clips, int seed, const
   EXPECT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline", "probe," + stage}).exit_code, 0);
   EXPECT_EQ(RunDoasido({"ingest", "--db", db_path.string(), (dir / "synth" / "clips.csv").string()}).exit_code, 0);
   Database db(db_path);
-  auto probe = pipeline::MakeStage("probe", Json::object());
+  auto probe = stages::MakeStage("probe", Json::object());
   while (auto claim = db.ClaimNext("test", {"probe"}, 60, 3)) {
     EXPECT_TRUE(db.Complete(*claim, "test", "h", probe->Run(db.LoadContext(claim->clip_id, "probe")), 0.0));
   }
@@ -267,7 +267,7 @@ TEST(VerifyBrowser, ATwoHandTrajectoryShowsBothHands) {
   config.sampler.ctrl_dt = 0.1;
   config.sampler.threads = 2;
   const StageResult result =
-      retarget::DynamicRetargetStage(config).Run(db.LoadContext(claim->clip_id, retarget::kRetargetStageName));
+      stages::DynamicRetargetStage(config).Run(db.LoadContext(claim->clip_id, retarget::kRetargetStageName));
   ASSERT_TRUE(result.measurements.contains("left_wrist_error")) << result.measurements.dump();
   ASSERT_TRUE(db.Complete(*claim, "test", "h", result, 0.0));
 

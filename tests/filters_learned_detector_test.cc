@@ -101,7 +101,7 @@ const Json& Analysis(const std::string& name) {
   return it->second;
 }
 
-StageResult Judge(Stage& stage, const std::string& video) {
+StageResult Judge(stages::Stage& stage, const std::string& video) {
   ClipContext context;
   context.clip.external_id = video;
   context.video.path = Video(video).string();

@@ -33,7 +33,7 @@ Json Analyze(const std::string& video, bool thinned) {
       .measurements;
 }
 
-StageResult Judge(Stage& stage, const Json& analysis) {
+StageResult Judge(stages::Stage& stage, const Json& analysis) {
   ClipContext context;
   context.measurements[kAnalyzeStageName] = analysis;
   return stage.Run(context);
@@ -62,7 +62,7 @@ TEST_F(MotionSampling, ThinnedSamplingKeepsTheLabelledVerdicts) {
     InteractionStage interaction;
     OutOfFrameStage out_of_frame;
     ActivityStage activity;
-    for (Stage* stage : std::initializer_list<Stage*>{&interaction, &out_of_frame, &activity}) {
+    for (stages::Stage* stage : std::initializer_list<stages::Stage*>{&interaction, &out_of_frame, &activity}) {
       const StageResult a = Judge(*stage, thinned), b = Judge(*stage, full);
       EXPECT_EQ(a.verdict, b.verdict) << l.video << " " << stage->Name();
       EXPECT_EQ(a.reason, b.reason) << l.video << " " << stage->Name();

@@ -32,7 +32,7 @@ const Json& Analysis(const std::string& name) {
 
 // Runs `stage` the way the worker does: the analysis stage's measurements are
 // in the context.
-StageResult RunStage(Stage& stage, const std::string& video) {
+StageResult RunStage(stages::Stage& stage, const std::string& video) {
   ClipContext context;
   context.clip.external_id = video;
   context.video.path = (testing::SharedData() / "videos" / video).string();

@@ -28,7 +28,7 @@ const Json& Analysis(const std::string& path) {
   return it->second;
 }
 
-StageResult RunOn(Stage& stage, const Json& analysis) {
+StageResult RunOn(stages::Stage& stage, const Json& analysis) {
   ClipContext context;
   context.measurements[kAnalyzeStageName] = analysis;
   return stage.Run(context);
@@ -46,8 +46,8 @@ TEST(Redecide, SameConfigGivesTheSameVerdict) {
   CameraMotionStage camera;
   OutOfFrameStage out;
   InteractionStage interaction;
-  for (Stage* stage :
-       std::initializer_list<Stage*>{&shots, &activity, &camera, &out, &interaction}) {
+  for (stages::Stage* stage :
+       std::initializer_list<stages::Stage*>{&shots, &activity, &camera, &out, &interaction}) {
     const StageResult run = RunOn(*stage, analysis);
     const std::optional<StageResult> again = stage->Redecide(run.measurements);
     ASSERT_TRUE(again.has_value()) << stage->Name();

@@ -40,7 +40,7 @@ class HandsStageTest : public ::testing::Test {
 };
 
 TEST_F(HandsStageTest, WritesABundleThatReconReadsOnAShortRealClip) {
-  HandsStage stage;
+  stages::HandsStage stage;
   // eyeliner.avi: one hand holding a pencil, 320 x 240; the kept span is
   // the shot-boundary trim (frames 3..10) inside the clip's 0..11.
   ClipContext c = Context("videos/eyeliner.avi", 0, 11);
@@ -89,7 +89,7 @@ TEST_F(HandsStageTest, WritesABundleThatReconReadsOnAShortRealClip) {
 TEST_F(HandsStageTest, ARightHandIsRight) {
   // dex-retargeting's example video: one right hand, palm to the camera
   // (its pipeline and its keypoint file call it right; so does a look).
-  HandsStage stage;
+  stages::HandsStage stage;
   ClipContext c = Context("retarget/human_hand_video.mp4", 100, 107);
   const StageResult r = stage.Run(c);
   EXPECT_EQ(r.measurements.at("sides").at("right").at("frames"), 8) << r.measurements.dump();
@@ -103,7 +103,7 @@ TEST_F(HandsStageTest, BundledPositivesGetAdultHandsAndNoWristJumpOver5cm) {
   // breadth, so 5.2-7.5 cm), and the wrist never moves over 5 cm between
   // frames.
   constexpr double kSkin = 82.6 / 61.59;  // the template's breadth / joint-centre width
-  HandsStage stage;
+  stages::HandsStage stage;
   for (const char* video : {"videos/02_cups.mp4", "videos/03_blocks.mp4", "videos/bass_guitar.mp4",
                             "videos/eyeliner.avi", "videos/laptop_trackpad.mp4"}) {
     SCOPED_TRACE(video);
@@ -147,7 +147,7 @@ TEST_F(HandsStageTest, BundledPositivesGetAdultHandsAndNoWristJumpOver5cm) {
 }
 
 TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {
-  HandsStage stage;
+  stages::HandsStage stage;
   ClipContext c = Context("videos/eyeliner.avi", 0, 3);
   c.clip.metadata = {{"fov", "50"}};
   const StageResult r = stage.Run(c);
@@ -169,7 +169,7 @@ TEST_F(HandsStageTest, ListIntrinsicsAreUsedAndBadOnesNamed) {
 }
 
 TEST_F(HandsStageTest, MissingOrCorruptVideoIsANamedError) {
-  HandsStage stage;
+  stages::HandsStage stage;
   ClipContext c = Context("videos/eyeliner.avi", 0, 3);
   c.video.path = (tmp_ / "gone.mp4").string();
   try {

@@ -132,10 +132,10 @@ TEST(DownloadPieces, AHostSlotIsHeldByOneHolderAtATime) {
 TEST(DownloadPieces, ConfigOutOfRangeIsRefused) {
   DownloadConfig c;
   c.max_per_host = 0;
-  EXPECT_THROW(DownloadStage{c}, Error);
+  EXPECT_THROW(stages::DownloadStage{c}, Error);
   c = DownloadConfig();
   c.low_speed_time_s = 0;
-  EXPECT_THROW(DownloadStage{c}, Error);
+  EXPECT_THROW(stages::DownloadStage{c}, Error);
 }
 
 }  // namespace

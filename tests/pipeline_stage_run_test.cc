@@ -23,7 +23,7 @@ using testing::TempDir;
 
 // Passes clips whose external id is "good"; throws `Thrown` otherwise.
 template <typename Thrown>
-class PickyStage : public Stage {
+class PickyStage : public stages::Stage {
  public:
   std::string Name() const override { return "picky"; }
   Json Params() const override { return Json::object(); }
@@ -38,7 +38,7 @@ class PickyStage : public Stage {
 };
 
 // Throws Error(code) for every clip.
-class FailingStage : public Stage {
+class FailingStage : public stages::Stage {
  public:
   explicit FailingStage(std::string code) : code_(std::move(code)) {}
   std::string Name() const override { return "picky"; }
@@ -114,7 +114,7 @@ TEST(StageRun, APermanentErrorIsNotRetriedAndATransientOneIs) {
   FailingStage permanent(kVideoUnavailable), transient("rate_limited");
   std::map<ClipId, int> tries;
   while (auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
-    Stage& stage = claim->clip_id == gone ? static_cast<Stage&>(permanent) : transient;
+    stages::Stage& stage = claim->clip_id == gone ? static_cast<stages::Stage&>(permanent) : transient;
     const StageRunReport r = RunClaimedStage(db, stage, *claim, "w", "h", kDefaultMaxAttempts);
     EXPECT_EQ(r.outcome, RunOutcome::kFailed);
     ++tries[claim->clip_id];
@@ -150,13 +150,13 @@ TEST(StageRun, ALostLeaseDropsTheResultAndTheCommitHookStillRuns) {
 }
 
 TEST(StageRun, EveryRegisteredStageIsNamedByItsEntryAndChecksItsDefaults) {
-  for (const auto& entry : StageTable()) {
+  for (const auto& entry : stages::StageTable()) {
     EXPECT_NO_THROW(entry.check(Json::object())) << entry.name;
-    EXPECT_EQ(MakeStage(entry.name, Json::object())->Name(), entry.name);
+    EXPECT_EQ(stages::MakeStage(entry.name, Json::object())->Name(), entry.name);
   }
-  EXPECT_THROW(CheckStageConfig(Json{{"activityy", Json::object()}}, {}), Error);
-  EXPECT_THROW(CheckStageConfig(Json{{"activity", {{"min_active_fraction", -0.1}}}}, {}), Error);
-  EXPECT_NO_THROW(CheckStageConfig(Json{{"report", Json::object()}}, {"report"}));
+  EXPECT_THROW(stages::CheckStageConfig(Json{{"activityy", Json::object()}}, {}), Error);
+  EXPECT_THROW(stages::CheckStageConfig(Json{{"activity", {{"min_active_fraction", -0.1}}}}, {}), Error);
+  EXPECT_NO_THROW(stages::CheckStageConfig(Json{{"report", Json::object()}}, {"report"}));
 }
 
 }  // namespace

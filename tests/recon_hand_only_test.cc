@@ -70,9 +70,9 @@ std::string PermanentCode(const std::function<void()>& f) {
 TEST(HandOnlyBundle, TheHandsStageBundleIsTheClipsBundleWhenThereIsNoOther) {
   TempDir root;
   const ClipContext c = Context(root, kReconStageName);
-  EXPECT_EQ(PermanentCode([&] { LoadClipBundle(c); }), std::string(kErrorNoBundle) + " ");
+  EXPECT_EQ(PermanentCode([&] { stages::LoadClipBundle(c); }), std::string(kErrorNoBundle) + " ");
   WriteHandsStageBundle(Hands(), HandsDir(root), false);
-  const ResolvedBundle r = LoadClipBundle(c);
+  const stages::ResolvedBundle r = stages::LoadClipBundle(c);
   EXPECT_EQ(r.source, kBundleFromHands);
   EXPECT_EQ(r.hands_source, kBundleFromHands);
   EXPECT_EQ(r.dir, HandsDir(root));
@@ -88,7 +88,7 @@ TEST(HandOnlyBundle, AModelBundleWithoutHandsGetsTheHandsStagesHands) {
   ClipBundle hands = Hands();
   for (auto& j : hands.hand_right->joints) j.array() += 0.01;  // tell them apart
   WriteHandsStageBundle(hands, HandsDir(root), true);
-  const ResolvedBundle r = LoadClipBundle(Context(root, kReconStageName));
+  const stages::ResolvedBundle r = stages::LoadClipBundle(Context(root, kReconStageName));
   EXPECT_EQ(r.source, kBundleFromCommand);
   EXPECT_EQ(r.hands_source, kBundleFromHands);
   ASSERT_TRUE(r.bundle.hand_right);
@@ -101,7 +101,7 @@ TEST(HandOnlyBundle, AModelBundleWithoutHandsGetsTheHandsStagesHands) {
   TempDir root2;
   WriteBundle(Clip(), root2 / "artifacts/1" / kBundleStageName);
   WriteHandsStageBundle(hands, HandsDir(root2), true);
-  const ResolvedBundle own = LoadClipBundle(Context(root2, kReconStageName));
+  const stages::ResolvedBundle own = stages::LoadClipBundle(Context(root2, kReconStageName));
   EXPECT_EQ(own.hands_source, "bundle");
   const auto& truth = Clip().hand_right ? Clip().hand_right : Clip().hand_left;
   const auto& kept = Clip().hand_right ? own.bundle.hand_right : own.bundle.hand_left;
@@ -124,13 +124,13 @@ TEST(HandOnlyBundle, AListBundleOfAnotherLengthThanTheHandsIsRefusedNamingBoth) 
   WriteHandsStageBundle(shorter, HandsDir(root), false);
   ClipContext c = Context(root, kReconStageName);
   c.clip.metadata["bundle"] = (root / "listed").string();
-  EXPECT_EQ(PermanentCode([&] { LoadClipBundle(c); }), "bad_bundle frames");
+  EXPECT_EQ(PermanentCode([&] { stages::LoadClipBundle(c); }), "bad_bundle frames");
 }
 
 TEST(HandOnlyBundle, TheBundleStageRecordsWhereTheBundleAndHandsCameFrom) {
   TempDir root;
   WriteHandsStageBundle(Hands(), HandsDir(root), false);
-  const StageResult r = BundleStage().Run(Context(root, kBundleStageName));
+  const StageResult r = stages::BundleStage().Run(Context(root, kBundleStageName));
   EXPECT_EQ(r.measurements["source"], kBundleFromHands);
   EXPECT_EQ(r.measurements["hands_source"], kBundleFromHands);
   EXPECT_TRUE(r.measurements["producers"].contains("hands"));
@@ -139,24 +139,24 @@ TEST(HandOnlyBundle, TheBundleStageRecordsWhereTheBundleAndHandsCameFrom) {
   // A command that exits 0 writing nothing has no output for the clip:
   // the hands stage's bundle stands in. One that writes files but no
   // meta.json wrote a broken bundle.
-  BundleStageConfig silent;
+  stages::BundleStageConfig silent;
   silent.command = "true";
-  EXPECT_EQ(BundleStage(silent).Run(Context(root, kBundleStageName)).measurements["source"], kBundleFromHands);
-  BundleStageConfig broken;
+  EXPECT_EQ(stages::BundleStage(silent).Run(Context(root, kBundleStageName)).measurements["source"], kBundleFromHands);
+  stages::BundleStageConfig broken;
   broken.command = "touch {output}/hands.npz";
-  EXPECT_EQ(PermanentCode([&] { BundleStage(broken).Run(Context(root, kBundleStageName)); }),
+  EXPECT_EQ(PermanentCode([&] { stages::BundleStage(broken).Run(Context(root, kBundleStageName)); }),
             "bad_bundle ");
 }
 
 TEST(HandOnlyBundle, TrackPassesABundleWithoutObjectEvenWithAServer) {
   TempDir root;
   WriteHandsStageBundle(Hands(), HandsDir(root), false);
-  TrackStageConfig config;
+  stages::TrackStageConfig config;
   config.server = "false";  // would fail if it were started
-  const StageResult r = TrackStage(config).Run(Context(root, kTrackStageName));
+  const StageResult r = stages::TrackStage(config).Run(Context(root, stages::kTrackStageName));
   EXPECT_EQ(r.verdict, Verdict::kPass);
-  EXPECT_EQ(r.measurements[kMeasureTrackSource], kTrackSourceNoObject);
-  EXPECT_FALSE(std::filesystem::exists(root / "artifacts/1/track" / kTrackPosesFile));
+  EXPECT_EQ(r.measurements[stages::kMeasureTrackSource], stages::kTrackSourceNoObject);
+  EXPECT_FALSE(std::filesystem::exists(root / "artifacts/1/track" / stages::kTrackPosesFile));
 }
 
 // Height differences in the world frame are the camera-frame differences
@@ -186,7 +186,7 @@ double LowestJoint(const Reconstruction& rec) {
 // recon on `hands` written as the hands stage's bundle.
 StageResult ReconHands(const TempDir& root, const ClipBundle& hands, bool intrinsics_assumed) {
   WriteHandsStageBundle(hands, HandsDir(root), intrinsics_assumed);
-  return ReconStage().Run(Context(root, kReconStageName));
+  return stages::ReconStage().Run(Context(root, kReconStageName));
 }
 
 TEST(HandOnlyRecon, HandsAloneWithTheBundlesGravity) {
@@ -234,7 +234,7 @@ TEST(HandOnlyRecon, NoFrameWithAHandIsRejected) {
   }
   const StageResult r = ReconHands(root, hands, false);
   EXPECT_EQ(r.verdict, Verdict::kReject);
-  EXPECT_EQ(r.reason, kReasonNoHands);
+  EXPECT_EQ(r.reason, stages::kReasonNoHands);
 }
 
 }  // namespace

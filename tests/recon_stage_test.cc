@@ -33,7 +33,7 @@ ClipContext Context(const TempDir& root, const ClipBundle& b) {
 TEST(ReconStage, ExactBundleGivesScaleOneAndAReadableReconstruction) {
   TempDir root;
   const ClipContext c = Context(root, Clip());
-  const StageResult r = ReconStage().Run(c);
+  const StageResult r = stages::ReconStage().Run(c);
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
   EXPECT_GT(r.measurements[kMeasureEvidenceShare].get<double>(), 0.9);
   EXPECT_NEAR(r.measurements[kMeasureScaleMedian].get<double>(), 1.0, 0.003);
@@ -58,7 +58,7 @@ TEST(ReconStage, BothHandsGetTheSameFrame) {
   b.hand_left = hand;
   for (auto& j : b.hand_left->joints) j.rowwise() += Eigen::RowVector3d(0.3, 0, 0);
   const ClipContext c = Context(root, b);
-  EXPECT_EQ(ReconStage().Run(c).verdict, Verdict::kPass);
+  EXPECT_EQ(stages::ReconStage().Run(c).verdict, Verdict::kPass);
   const Reconstruction rec = ReadReconstruction(c.artifact_dir);
   ASSERT_EQ(rec.left_valid, rec.right_valid);
   std::optional<Eigen::RowVector3d> offset;
@@ -85,8 +85,8 @@ TEST(ReconStage, UsesTheTrackersPosesWhenPresent) {
   NpzArchive npz;
   npz["poses"] = MakeArray<double>({Clip().frames, 7}, poses);
   std::filesystem::create_directories(root / "artifacts/1/track");
-  WriteNpz(root / "artifacts/1/track" / kTrackPosesFile, npz);
-  const StageResult r = ReconStage().Run(c);
+  WriteNpz(root / "artifacts/1/track" / stages::kTrackPosesFile, npz);
+  const StageResult r = stages::ReconStage().Run(c);
   EXPECT_EQ(r.measurements[kMeasurePoseSource], "track");
   EXPECT_NEAR(r.measurements[kMeasureScaleMedian].get<double>(), 1 / 1.25, 0.003);
 }
@@ -95,32 +95,32 @@ TEST(ReconStage, VerdictsNameTheirReasons) {
   TempDir root;
   ClipBundle no_mesh = Clip();
   no_mesh.object_mesh.reset();
-  EXPECT_EQ(ReconStage().Run(Context(root, no_mesh)).reason, kReasonNoObject);
+  EXPECT_EQ(stages::ReconStage().Run(Context(root, no_mesh)).reason, stages::kReasonNoObject);
 
   TempDir root2;
   ClipBundle no_evidence = Clip();
   // New buffers: assigning Mat::zeros would write into the shared fixture.
   for (cv::Mat& m : no_evidence.mask_object) m = cv::Mat(m.size(), CV_8U, cv::Scalar(0));
-  const StageResult r = ReconStage().Run(Context(root2, no_evidence));
+  const StageResult r = stages::ReconStage().Run(Context(root2, no_evidence));
   EXPECT_EQ(r.verdict, Verdict::kReject);
-  EXPECT_EQ(r.reason, kReasonTooFewAlignedFrames);
+  EXPECT_EQ(r.reason, stages::kReasonTooFewAlignedFrames);
 
   TempDir root3;
-  const StageResult ok = ReconStage().Run(Context(root3, Clip()));
+  const StageResult ok = stages::ReconStage().Run(Context(root3, Clip()));
   ReconStageConfig strict;
   strict.max_scale_spread = 0;
   Json m = ok.measurements;
   m[kMeasureScaleSpread] = 0.01;
-  const auto flagged = ReconStage(strict).Redecide(m);
+  const auto flagged = stages::ReconStage(strict).Redecide(m);
   ASSERT_TRUE(flagged);
   EXPECT_EQ(flagged->verdict, Verdict::kFlag);
-  EXPECT_EQ(flagged->reason, kReasonScaleInconsistent);
+  EXPECT_EQ(flagged->reason, stages::kReasonScaleInconsistent);
 }
 
 TEST(ReconStage, BadConfigIsRefused) {
   ReconStageConfig c;
   c.min_aligned_fraction = 2;
-  EXPECT_THROW(ReconStage{c}, Error);
+  EXPECT_THROW(stages::ReconStage{c}, Error);
 }
 
 }  // namespace

@@ -41,14 +41,14 @@ TEST(TrackStage, CandidatesTracksAndSilhouettesGiveTheTruePoses) {
   TempDir root;
   ASSERT_FALSE(Clip().candidates.empty());
   ASSERT_TRUE(Clip().tracks.has_value());
-  const StageResult r = TrackStage().Run(Context(root, Clip(), kTrackStageName));
+  const StageResult r = stages::TrackStage().Run(Context(root, Clip(), stages::kTrackStageName));
   EXPECT_EQ(r.verdict, Verdict::kPass);
-  EXPECT_EQ(r.measurements[kMeasureTrackSource], "candidates");
-  EXPECT_EQ(r.measurements[kMeasureGuidanceSource], "tracks");
-  EXPECT_EQ(r.measurements[kMeasureTrackedFrames], 24);
+  EXPECT_EQ(r.measurements[stages::kMeasureTrackSource], "candidates");
+  EXPECT_EQ(r.measurements[stages::kMeasureGuidanceSource], "tracks");
+  EXPECT_EQ(r.measurements[stages::kMeasureTrackedFrames], 24);
   std::vector<Pose> poses;
   std::vector<bool> valid;
-  ReadTrackPoses(root / "artifacts/1/track" / kTrackPosesFile, 24, poses, valid);
+  stages::ReadTrackPoses(root / "artifacts/1/track" / stages::kTrackPosesFile, 24, poses, valid);
   // The clean bundle's poses are the truth; its candidates scatter around
   // it with flips and outliers.
   std::vector<double> t_err, r_err;
@@ -63,7 +63,7 @@ TEST(TrackStage, CandidatesTracksAndSilhouettesGiveTheTruePoses) {
   EXPECT_LT(r_err[12], 0.15) << "median rotation error";
   EXPECT_LT(r_err[21], 1.0) << "more than 2 frames flipped";
 
-  const StageResult recon = ReconStage().Run(Context(root, Clip(), kReconStageName));
+  const StageResult recon = stages::ReconStage().Run(Context(root, Clip(), kReconStageName));
   EXPECT_EQ(recon.measurements[kMeasurePoseSource], "track");
 }
 
@@ -81,22 +81,22 @@ TEST(TrackStage, LucasKanadeOnTheVideoWhenTheBundleHasNoTracks) {
   writer.release();
   ClipBundle no_tracks = rendered.bundle;
   no_tracks.tracks.reset();
-  ClipContext c = Context(root, no_tracks, kTrackStageName);
+  ClipContext c = Context(root, no_tracks, stages::kTrackStageName);
   c.video.path = video.string();
-  const StageResult r = TrackStage().Run(c);
-  EXPECT_EQ(r.measurements[kMeasureGuidanceSource], "lucas_kanade");
-  const double lk_alpha = r.measurements[kMeasureMeanPoseGuidance].get<double>();
+  const StageResult r = stages::TrackStage().Run(c);
+  EXPECT_EQ(r.measurements[stages::kMeasureGuidanceSource], "lucas_kanade");
+  const double lk_alpha = r.measurements[stages::kMeasureMeanPoseGuidance].get<double>();
   auto near_truth = [&] {
     std::vector<Pose> poses;
     std::vector<bool> valid;
-    ReadTrackPoses(c.artifact_dir / kTrackPosesFile, 24, poses, valid);
+    stages::ReadTrackPoses(c.artifact_dir / stages::kTrackPosesFile, 24, poses, valid);
     int near = 0;
     for (int k = 0; k < 24; ++k) near += (poses[k].t - rendered.bundle.object_poses[k].t).norm() < 0.01;
     return near;
   };
   const int lk_near = near_truth();
-  const StageResult with_tracks = TrackStage().Run(Context(root, rendered.bundle, kTrackStageName));
-  EXPECT_NEAR(lk_alpha, with_tracks.measurements[kMeasureMeanPoseGuidance].get<double>(), 0.1);
+  const StageResult with_tracks = stages::TrackStage().Run(Context(root, rendered.bundle, stages::kTrackStageName));
+  EXPECT_NEAR(lk_alpha, with_tracks.measurements[stages::kMeasureMeanPoseGuidance].get<double>(), 0.1);
   EXPECT_GE(lk_near, near_truth() - 3) << "Lucas-Kanade guidance far worse than the tracks'";
   EXPECT_GE(lk_near, 12);
 }
@@ -106,17 +106,17 @@ TEST(TrackStage, AVelocityServerIsTheModelWhenConfigured) {
   synth::TrackingSceneOptions o;
   o.frames = 24;
   const synth::TrackingScene scene = synth::MakeTrackingScene(4, o);
-  const ClipContext c = Context(root, Clip(), kTrackStageName);
+  const ClipContext c = Context(root, Clip(), stages::kTrackStageName);
   WriteMixtureNpz(root / "artifacts/1/bundle/flow_modes.npz", *scene.model);
-  TrackStageConfig config;
+  stages::TrackStageConfig config;
   config.server = std::string("/usr/bin/python3 ") + DOASIDO_SOURCE_DIR +
                   "/tools/velocity_server.py {bundle}/flow_modes.npz";
   config.selection.method = kSelectLikelihood;
-  const StageResult r = TrackStage(config).Run(c);
-  EXPECT_EQ(r.measurements[kMeasureTrackSource], "server");
+  const StageResult r = stages::TrackStage(config).Run(c);
+  EXPECT_EQ(r.measurements[stages::kMeasureTrackSource], "server");
   std::vector<Pose> poses;
   std::vector<bool> valid;
-  ReadTrackPoses(c.artifact_dir / kTrackPosesFile, 24, poses, valid);
+  stages::ReadTrackPoses(c.artifact_dir / stages::kTrackPosesFile, 24, poses, valid);
   // The scene's model puts its heaviest mode near its own truth.
   int near = 0;
   for (int k = 0; k < 24; ++k) near += (poses[k].t - scene.truth[k].t).norm() < 0.02;
@@ -124,7 +124,7 @@ TEST(TrackStage, AVelocityServerIsTheModelWhenConfigured) {
 
   config.server += " --misbehave die";
   try {
-    TrackStage(config).Run(c);
+    stages::TrackStage(config).Run(c);
     ADD_FAILURE() << "a dying server went unnoticed";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), kServerDied) << e.what();
@@ -136,12 +136,12 @@ TEST(TrackStage, ABundleWithoutAModelIsPassedOn) {
   TempDir root;
   ClipBundle plain = Clip();
   plain.candidates.clear();
-  const ClipContext c = Context(root, plain, kTrackStageName);
-  const StageResult r = TrackStage().Run(c);
+  const ClipContext c = Context(root, plain, stages::kTrackStageName);
+  const StageResult r = stages::TrackStage().Run(c);
   EXPECT_EQ(r.verdict, Verdict::kPass);
-  EXPECT_EQ(r.measurements[kMeasureTrackSource], "none");
-  EXPECT_FALSE(std::filesystem::exists(c.artifact_dir / kTrackPosesFile));
-  EXPECT_EQ(ReconStage().Run(Context(root, plain, kReconStageName)).measurements[kMeasurePoseSource],
+  EXPECT_EQ(r.measurements[stages::kMeasureTrackSource], "none");
+  EXPECT_FALSE(std::filesystem::exists(c.artifact_dir / stages::kTrackPosesFile));
+  EXPECT_EQ(stages::ReconStage().Run(Context(root, plain, kReconStageName)).measurements[kMeasurePoseSource],
             "bundle");
 }
 

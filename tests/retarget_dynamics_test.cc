@@ -117,10 +117,10 @@ TEST(AnnealedSampler, PresetsAndRangeChecks) {
   EXPECT_EQ(ErrorCode([&] { CheckConfig(bad, "retarget.sampler"); }), "bad_config");
   DynamicRetargetConfig c;
   c.sampler.reward.transition_epsilon = 0;
-  EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
+  EXPECT_EQ(ErrorCode([&] { stages::DynamicRetargetStage stage(c); }), "bad_config");
   c = {};
   c.sampler.reward.transition_rest_height = -0.01;
-  EXPECT_EQ(ErrorCode([&] { DynamicRetargetStage stage(c); }), "bad_config");
+  EXPECT_EQ(ErrorCode([&] { stages::DynamicRetargetStage stage(c); }), "bad_config");
 }
 
 // The transition reward per hand on a two-hand scene of boxes: the left
@@ -385,7 +385,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   context.clip.id = 9;
   context.clip.external_id = "synthetic9";
   context.artifact_dir = root / "artifacts/9" / kRetargetStageName;
-  DynamicRetargetStage stage(SmallConfig());
+  stages::DynamicRetargetStage stage(SmallConfig());
   const StageResult result = stage.Run(context);
   const HandTrajectory t = ReadTrajectoryJson(context.artifact_dir / "trajectory.json");
   ASSERT_EQ(t.qpos.size(), static_cast<size_t>(kFrames));
@@ -395,7 +395,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   const bool success = result.measurements["success"].get<bool>();
   EXPECT_EQ(t.metrics["success"].get<bool>(), success);
   EXPECT_EQ(result.verdict, success ? Verdict::kPass : Verdict::kReject);
-  EXPECT_EQ(result.reason, success ? "" : kReasonTrackingFailed);
+  EXPECT_EQ(result.reason, success ? "" : stages::kReasonTrackingFailed);
   EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "robot_scene.xml"));
   EXPECT_TRUE(std::filesystem::exists(context.artifact_dir / "scene/scene.xml"));
   ReadTrajectoryJson(context.artifact_dir / "kinematic_reference.json");
@@ -403,7 +403,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   // Redecide from measurements alone: a 0.2 m position error rejects.
   Json m = result.measurements;
   m["e_pos"] = 0.2;
-  EXPECT_EQ(stage.Redecide(m)->reason, kReasonTrackingFailed);
+  EXPECT_EQ(stage.Redecide(m)->reason, stages::kReasonTrackingFailed);
   m["e_pos"] = 0.05;
   m["e_rot"] = 0.1;
   EXPECT_EQ(stage.Redecide(m)->verdict, Verdict::kPass);
@@ -414,7 +414,7 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   context.artifact_dir = root / "artifacts/10" / kRetargetStageName;
   const StageResult none = stage.Run(context);
   EXPECT_EQ(none.verdict, Verdict::kReject);
-  EXPECT_EQ(none.reason, kReasonNoObject);
+  EXPECT_EQ(none.reason, stages::kReasonNoObject);
 }
 
 }  // namespace

@@ -29,19 +29,19 @@ ClipContext Context(const TempDir& root, const std::string& stage) {
   return c;
 }
 
-KinematicStageConfig FastConfig() {
-  KinematicStageConfig config;
+stages::KinematicStageConfig FastConfig() {
+  stages::KinematicStageConfig config;
   config.robots_dir = (SharedData() / "robots").string();
   config.kinematic.restarts = 1;
   return config;
 }
 
 // The hands stage's bundle -> recon -> retarget_kinematic.
-StageResult Chain(const TempDir& root, const recon::ClipBundle& hands, const KinematicStageConfig& config) {
+StageResult Chain(const TempDir& root, const recon::ClipBundle& hands, const stages::KinematicStageConfig& config) {
   testing::WriteHandsStageBundle(hands, root / "artifacts/3" / recon::kHandsStageFolder, true);
-  const StageResult recon = recon::ReconStage().Run(Context(root, recon::kReconStageName));
+  const StageResult recon = stages::ReconStage().Run(Context(root, recon::kReconStageName));
   EXPECT_EQ(recon.verdict, Verdict::kPass) << recon.reason;
-  return KinematicStage(config).Run(Context(root, kKinematicStageName));
+  return stages::KinematicStage(config).Run(Context(root, kKinematicStageName));
 }
 
 TEST(HandOnlyRetarget, BothHandsOntoTheDefaultHandsWithoutObject) {
@@ -50,7 +50,7 @@ TEST(HandOnlyRetarget, BothHandsOntoTheDefaultHandsWithoutObject) {
   const StageResult r = Chain(root, RealHandBundle({.frames = frames, .left = true, .gap_from = 10, .gap_to = 14}),
                               FastConfig());
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
-  EXPECT_EQ(r.measurements[kMeasureRetargetedHand], kHandRight);
+  EXPECT_EQ(r.measurements[stages::kMeasureRetargetedHand], stages::kHandRight);
   EXPECT_EQ(r.measurements["embodiment"], "sharpa_right");
   EXPECT_EQ(r.measurements["valid_frames"], frames - 4);
   EXPECT_EQ(r.measurements["left_embodiment"], "sharpa_left");
@@ -64,7 +64,7 @@ TEST(HandOnlyRetarget, BothHandsOntoTheDefaultHandsWithoutObject) {
   EXPECT_LT(left_mm, 10);
   const auto dir = root / "artifacts/3" / kKinematicStageName;
   const HandTrajectory right = ReadTrajectoryJson(dir / "trajectory.json");
-  const HandTrajectory left = ReadTrajectoryJson(dir / kLeftTrajectoryFile);
+  const HandTrajectory left = ReadTrajectoryJson(dir / stages::kLeftTrajectoryFile);
   EXPECT_EQ(right.qpos.size(), static_cast<size_t>(frames));
   EXPECT_EQ(left.qpos.size(), static_cast<size_t>(frames));
   EXPECT_TRUE(right.object_poses.empty());
@@ -79,9 +79,9 @@ TEST(HandOnlyRetarget, BothHandsOntoTheDefaultHandsWithoutObject) {
   // The dynamics-aware stage has nothing to manipulate.
   DynamicRetargetConfig dynamic;
   dynamic.robots_dir = FastConfig().robots_dir;
-  const StageResult d = DynamicRetargetStage(dynamic).Run(Context(root, kRetargetStageName));
+  const StageResult d = stages::DynamicRetargetStage(dynamic).Run(Context(root, kRetargetStageName));
   EXPECT_EQ(d.verdict, Verdict::kReject);
-  EXPECT_EQ(d.reason, recon::kReasonNoObject);
+  EXPECT_EQ(d.reason, stages::kReasonNoObject);
 }
 
 TEST(HandOnlyRetarget, ALoneLeftHandIsMirroredOntoTheRightRobotHand) {
@@ -90,7 +90,7 @@ TEST(HandOnlyRetarget, ALoneLeftHandIsMirroredOntoTheRightRobotHand) {
   b.hand_right.reset();
   const StageResult r = Chain(root, b, FastConfig());
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.reason;
-  EXPECT_EQ(r.measurements[kMeasureRetargetedHand], kHandLeftMirrored);
+  EXPECT_EQ(r.measurements[stages::kMeasureRetargetedHand], stages::kHandLeftMirrored);
   EXPECT_EQ(r.measurements["embodiment"], "sharpa_right");
   EXPECT_FALSE(r.measurements.contains("left_embodiment"));
   EXPECT_LT(1000 * r.measurements["fingertip_error_mean"].get<double>(), 10);
@@ -102,9 +102,9 @@ TEST(HandOnlyRetarget, NoHandIsRejectedNamingIt) {
   std::fill(b.hand_right->valid.begin(), b.hand_right->valid.end(), false);
   testing::WriteHandsStageBundle(b, root / "artifacts/3" / recon::kHandsStageFolder, false);
   // Straight from the bundle (no recon artifact).
-  const StageResult r = KinematicStage(FastConfig()).Run(Context(root, kKinematicStageName));
+  const StageResult r = stages::KinematicStage(FastConfig()).Run(Context(root, kKinematicStageName));
   EXPECT_EQ(r.verdict, Verdict::kReject);
-  EXPECT_EQ(r.reason, kReasonNoHand);
+  EXPECT_EQ(r.reason, stages::kReasonNoHand);
 }
 
 }  // namespace

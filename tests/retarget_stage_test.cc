@@ -80,9 +80,9 @@ TEST(KinematicStage, RetargetsASyntheticBundle) {
   context.clip.id = 7;
   context.clip.external_id = "synthetic";
   context.artifact_dir = root / "artifacts/7/retarget_kinematic";
-  KinematicStageConfig config;
+  stages::KinematicStageConfig config;
   config.robots_dir = (SharedData() / "robots").string();
-  KinematicStage stage(config);
+  stages::KinematicStage stage(config);
   const StageResult result = stage.Run(context);
   EXPECT_EQ(result.verdict, Verdict::kPass) << result.reason;
   EXPECT_EQ(result.measurements["frames"], frames);
@@ -120,9 +120,9 @@ TEST(KinematicStage, RetargetsASyntheticBundle) {
   std::filesystem::remove_all(root / "artifacts/7/recon");
 
   // Re-thresholding flags the clip without running it again.
-  KinematicStageConfig strict = config;
+  stages::KinematicStageConfig strict = config;
   strict.flag_fingertip_error = -1.0;  // every error is above it
-  const auto flagged = KinematicStage(strict).Redecide(result.measurements);
+  const auto flagged = stages::KinematicStage(strict).Redecide(result.measurements);
   ASSERT_TRUE(flagged);
   EXPECT_EQ(flagged->verdict, Verdict::kFlag);
 }
@@ -132,7 +132,7 @@ TEST(KinematicStage, MissingBundleNamesTheClip) {
   ClipContext context;
   context.clip.external_id = "clip42";
   context.artifact_dir = root / "artifacts/42/retarget_kinematic";
-  KinematicStage stage;
+  stages::KinematicStage stage;
   try {
     stage.Run(context);
     FAIL();

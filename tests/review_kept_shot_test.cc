@@ -38,7 +38,7 @@ TEST(ReviewKeptShot, ThePageSpanIsTheShotTheFiltersJudged) {
     strict.min_segment_s = 1000;
     stages::AnalyzeStage analyze;
     stages::ShotBoundaryStage shots(strict);
-    for (Stage* stage : std::initializer_list<Stage*>{&analyze, &shots}) {
+    for (stages::Stage* stage : std::initializer_list<stages::Stage*>{&analyze, &shots}) {
       const auto claim = db.ClaimNext("w", {stage->Name()}, 60, 3);
       ASSERT_TRUE(claim) << stage->Name();
       const ClipContext context = db.LoadContext(clip, stage->Name());

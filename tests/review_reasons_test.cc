@@ -58,7 +58,7 @@ std::set<std::string> DeclaredReasonCodes() {
 
 std::vector<std::string> PageReasonCodes() {
   std::vector<ReasonChoice> stage_reasons;
-  for (const auto& r : pipeline::StageReasons()) stage_reasons.push_back({r.code, r.label});
+  for (const auto& r : stages::StageReasons()) stage_reasons.push_back({r.code, r.label});
   const std::string page = ReviewPage("n0nce", {{"token", "t"}}, stage_reasons);
   const std::regex option(R"re(<option value="([^"]*)">)re");
   std::vector<std::string> codes;
@@ -94,7 +94,7 @@ TEST(ReviewReasons, ThePageListsEveryStageReasonAndNothingElse) {
     EXPECT_TRUE(expected.count(code)) << "the page lists '" << code << "', which no stage gives";
   }
   // The registry lists only declared codes, each with words for a person.
-  for (const auto& entry : pipeline::StageTable()) {
+  for (const auto& entry : stages::StageTable()) {
     for (const auto& r : entry.reasons) {
       EXPECT_TRUE(declared.count(r.code)) << entry.name << " lists undeclared '" << r.code << "'";
       EXPECT_FALSE(r.label.empty()) << entry.name << ": '" << r.code << "' has no label";
@@ -119,7 +119,7 @@ TEST(ReviewReasons, ARejectionOfAFlaggedClipTakesItsFilterRejectReason) {
                                                        {"shot_boundary", "shot_boundary"},
                                                        {"activity", "no_activity"},
                                                        {"camera_motion", "camera_motion"}};
-  EXPECT_EQ(pipeline::ReviewDefaultReasons(), expected);
+  EXPECT_EQ(stages::ReviewDefaultReasons(), expected);
 }
 
 }  // namespace

@@ -20,7 +20,9 @@
 // made so far without making more.
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
-//       [--no_replay] [--compare] [--only=NAME] [--real=DIR]
+//       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--trajectory_wrist]
+// The arm is planned on the floating hand's replayed wrist (plan.h step
+// 3b, deploy.follow_floating_wrist) unless --trajectory_wrist.
 // --compare replays each plan also on the floating hand (plan.h
 // ReplayMount::kFloating), under the plan's time map and at the video's
 // clock, and the arm at the video's clock (limits ignored): which of the
@@ -89,6 +91,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
+    else if (k == "--trajectory_wrist") f.plan.follow_floating_wrist = false;
+    else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
     else throw std::runtime_error("unknown flag " + a);
   }
   return f;
@@ -270,8 +274,11 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
   deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
   if (f.replay && !t.object_poses.empty()) {
-    deploy::ReplayPlan(plan, t, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
-    if (f.compare) Compare(f, plan, t, hand, files);
+    const std::string xml = retarget::ReadSceneXml(files.scene_dir);
+    deploy::FollowedPlan followed = deploy::PlanOnFloatingWrist(plan, t, hand, f.plan, xml, files.scene_dir);
+    plan = std::move(followed.plan);
+    deploy::ReplayPlan(plan, followed.trajectory, hand, xml, files.scene_dir, f.plan.servo_omega);
+    if (f.compare) Compare(f, plan, followed.trajectory, hand, files);
   }
   row.ok = plan.ok;
   row.slowdown = plan.slowdown;

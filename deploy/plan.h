@@ -104,17 +104,18 @@ struct PlanConfig {
   // stiffly as it did there. 0 drives the arm kinematically (infinitely stiff).
   double servo_omega = 40;
   // Step 3b: plan the arm on the wrist path the floating hand followed
-  // when replayed under the first plan's time map (needs the scene; see
-  // PlanOnFloatingWrist), instead of the trajectory's wrist recorded at
-  // the video's clock.
-  bool follow_floating_wrist = true;
+  // when replayed under the last plan's time map (needs the scene; see
+  // PlanOnFloatingWrist), this many rounds (0: on the trajectory's wrist,
+  // recorded at the video's clock). A second round replays under the time
+  // map of the path that will run (it kept ref0_noisy, which one lost).
+  int follow_rounds = 2;
   // s: the window of the moving average over the followed wrist's offset
   // from the trajectory's (FloatingWristTrajectory).
   double follow_smoothing = 0.2;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
                                                 home, lead_in, lead_out, approach_height, approach_speed,
-                                                servo_omega, follow_floating_wrist, follow_smoothing)
+                                                servo_omega, follow_rounds, follow_smoothing)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -240,9 +241,10 @@ retarget::HandTrajectory FloatingWristTrajectory(const Plan& plan, const retarge
                                                  double smoothing);
 
 // `plan` re-planned (steps 2-4 at its placement) on
-// FloatingWristTrajectory's wrist path; `trajectory` is that trajectory,
-// the one to replay the new plan against (step 5). Both unchanged when
-// config.follow_floating_wrist is off or the trajectory has no object or
+// FloatingWristTrajectory's wrist path, config.follow_rounds times (each
+// round replays the last round's plan); `trajectory` is the last round's
+// trajectory, the one to replay the new plan against (step 5). Both
+// unchanged when follow_rounds is 0 or the trajectory has no object or
 // scene.
 struct FollowedPlan {
   Plan plan;

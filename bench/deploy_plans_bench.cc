@@ -20,7 +20,9 @@
 // made so far without making more.
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
-//       [--no_replay] [--compare] [--only=NAME] [--real=DIR]
+//       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--follow_rounds=N] [--follow_smoothing=S]
+// The arm is planned on the floating hand's replayed wrist (plan.h step
+// 3b, deploy.follow_rounds; --follow_rounds=0: on the trajectory's wrist).
 // --compare replays each plan also on the floating hand (plan.h
 // ReplayMount::kFloating), under the plan's time map and at the video's
 // clock, and the arm at the video's clock (limits ignored): which of the
@@ -89,6 +91,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
+    else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
+    else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
     else throw std::runtime_error("unknown flag " + a);
   }
   return f;
@@ -270,8 +274,11 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   const retarget::Embodiment hand = retarget::FindEmbodiment(t.embodiment, kData / "robots");
   deploy::Plan plan = deploy::MakePlan(t, hand, f.plan);
   if (f.replay && !t.object_poses.empty()) {
-    deploy::ReplayPlan(plan, t, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir, f.plan.servo_omega);
-    if (f.compare) Compare(f, plan, t, hand, files);
+    const std::string xml = retarget::ReadSceneXml(files.scene_dir);
+    deploy::FollowedPlan followed = deploy::PlanOnFloatingWrist(plan, t, hand, f.plan, xml, files.scene_dir);
+    plan = std::move(followed.plan);
+    deploy::ReplayPlan(plan, followed.trajectory, hand, xml, files.scene_dir, f.plan.servo_omega);
+    if (f.compare) Compare(f, plan, followed.trajectory, hand, files);
   }
   row.ok = plan.ok;
   row.slowdown = plan.slowdown;
@@ -313,7 +320,7 @@ void Report(const std::vector<Row>& rows) {
   std::printf("%-14s | %-4s | %8s | %-13s | %-17s | %s\n", "reference", "ok", "slowdown", "success f/arm",
               "wrist mm mean/max", "checks");
   std::vector<double> slowdowns;
-  int ok = 0, ref_success = 0, arm_success = 0, replays = 0;
+  int ok = 0, ref_success = 0, arm_success = 0, replays = 0, kept = 0;
   double wrist_sum = 0, wrist_max = 0;
   for (const Row& r : rows) {
     std::printf("%-14s | %-4s | %7.2fx | %4d / %-6d | %6.1f / %-7.1f | %s\n", r.name.c_str(), r.ok ? "yes" : "NO",
@@ -325,6 +332,7 @@ void Report(const std::vector<Row>& rows) {
     ++replays;
     ref_success += r.reference_success > 0;
     arm_success += r.arm_success;
+    kept += r.reference_success > 0 && r.arm_success > 0;
     wrist_sum += r.wrist_mean;
     wrist_max = std::max(wrist_max, r.wrist_max);
   }
@@ -335,9 +343,10 @@ void Report(const std::vector<Row>& rows) {
   std::printf("passing every check: %d of %zu (%.0f%%); slowdown median %.2fx, max %.2fx\n", ok, n, 100.0 * ok / n,
               median, slowdowns.back());
   if (replays) {
-    std::printf("object success over %d replays: floating hand %d (%.0f%%), arm %d (%.0f%%); wrist tracking "
-                "mean %.2f mm, max %.2f mm\n", replays, ref_success, 100.0 * ref_success / replays, arm_success,
-                100.0 * arm_success / replays, 1000 * wrist_sum / replays, 1000 * wrist_max);
+    std::printf("object success over %d replays: floating hand %d (%.0f%%), arm %d (%.0f%%), the arm keeps %d of "
+                "the floating hand's %d; wrist tracking mean %.2f mm, max %.2f mm\n", replays, ref_success,
+                100.0 * ref_success / replays, arm_success, 100.0 * arm_success / replays, kept, ref_success,
+                1000 * wrist_sum / replays, 1000 * wrist_max);
   }
 }
 

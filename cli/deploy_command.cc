@@ -70,9 +70,10 @@ void PrintIssues(const deploy::Plan& plan) {
 
 void PrintTiming(const deploy::Plan& plan) {
   std::printf("re-timed: %.2f s of trajectory in %.2f s (slowdown %.2fx), lead-in %.2f s, lead-out %.2f s, "
-              "%zu commands at %.0f Hz\n", plan.trajectory_duration,
+              "%zu commands at %.0f Hz; wrist path: %s\n", plan.trajectory_duration,
               (plan.times.size() - plan.lead_in - plan.lead_out - 1) / plan.rate_hz, plan.slowdown,
-              plan.lead_in / plan.rate_hz, plan.lead_out / plan.rate_hz, plan.times.size(), plan.rate_hz);
+              plan.lead_in / plan.rate_hz, plan.lead_out / plan.rate_hz, plan.times.size(), plan.rate_hz,
+              plan.wrist_path.c_str());
 }
 
 void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
@@ -120,8 +121,10 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   deploy::Plan plan = deploy::MakePlan(trajectory, hand, config);
   plan.source = files.trajectory.string();
   if (config.replay && !a.no_replay) {
-    deploy::ReplayPlan(plan, trajectory, hand, retarget::ReadSceneXml(files.scene_dir), files.scene_dir,
-                       config.servo_omega);
+    const std::string xml = retarget::ReadSceneXml(files.scene_dir);
+    deploy::FollowedPlan followed = deploy::PlanOnFloatingWrist(plan, trajectory, hand, config, xml, files.scene_dir);
+    plan = std::move(followed.plan);
+    deploy::ReplayPlan(plan, followed.trajectory, hand, xml, files.scene_dir, config.servo_omega);
   }
   WriteWhole(a.out, OutputKind::kFile, [&plan](const std::filesystem::path& p) { deploy::WritePlanJson(plan, p); });
   const auto& p = plan.placement;

@@ -172,6 +172,8 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   RequireInRange(section, "servo_omega", c.servo_omega, 0, 1000);
   RequireInRange(section, "approach_height", c.approach_height, 0, 0.5);
   RequireInRange(section, "approach_speed", c.approach_speed, 0.005, 1);
+  RequireInRange(section, "follow_rounds", c.follow_rounds, 0, 5);
+  RequireInRange(section, "follow_smoothing", c.follow_smoothing, 0, 2);
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -289,6 +291,25 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
     plan.placement.candidates = 1;
   }
   return plan;
+}
+
+FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajectory& trajectory,
+                                 const retarget::Embodiment& embodiment, const PlanConfig& config,
+                                 const std::string& scene_xml, const std::filesystem::path& scene_dir) {
+  FollowedPlan out{plan, trajectory};
+  if (trajectory.object_poses.empty() || scene_xml.empty()) return out;
+  for (int round = 0; round < config.follow_rounds; ++round) {
+    out.trajectory = FloatingWristTrajectory(out.plan, trajectory, embodiment, scene_xml, scene_dir,
+                                             config.servo_omega, config.follow_smoothing);
+    out.plan = MakePlan(out.trajectory, embodiment, config, &plan.placement);
+    // The search's record stays; the reach is the new path's.
+    const double reached = out.plan.placement.reachable_fraction;
+    out.plan.placement = plan.placement;
+    out.plan.placement.reachable_fraction = reached;
+    out.plan.source = plan.source;
+    out.plan.wrist_path = kWristPathFloating;
+  }
+  return out;
 }
 
 }  // namespace doasido::deploy

@@ -103,10 +103,19 @@ struct PlanConfig {
   // retargeting (retarget/embodiment.h), so the hand meets the object as
   // stiffly as it did there. 0 drives the arm kinematically (infinitely stiff).
   double servo_omega = 40;
+  // Step 3b: plan the arm on the wrist path the floating hand followed
+  // when replayed under the last plan's time map (needs the scene; see
+  // PlanOnFloatingWrist), this many rounds (0: on the trajectory's wrist,
+  // recorded at the video's clock). A second round replays under the time
+  // map of the path that will run (it kept ref0_noisy, which one lost).
+  int follow_rounds = 2;
+  // s: the window of the moving average over the followed wrist's offset
+  // from the trajectory's (FloatingWristTrajectory).
+  double follow_smoothing = 0.2;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
                                                 home, lead_in, lead_out, approach_height, approach_speed,
-                                                servo_omega)
+                                                servo_omega, follow_rounds, follow_smoothing)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -151,8 +160,13 @@ struct ReplayReport {
   std::vector<int> hand_contacts;
 };
 
+// Plan::wrist_path: the wrist path the arm was planned on.
+inline constexpr const char* kWristPathTrajectory = "trajectory";  // the trajectory's own wrist
+inline constexpr const char* kWristPathFloating = "floating_replay";  // PlanOnFloatingWrist's
+
 struct Plan {
   std::string source;      // trajectory file
+  std::string wrist_path = kWristPathTrajectory;
   std::string embodiment;
   double rate_hz = 50;
   Placement placement;
@@ -209,11 +223,43 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory,
                 const std::filesystem::path& scene_dir, double servo_omega = PlanConfig{}.servo_omega,
                 ReplayMount mount = ReplayMount::kArm);
 
+// Step 3b. The trajectory with its floating wrist joints replaced, at
+// every frame, by the wrist the retargeting's floating hand reaches when
+// `plan`'s commands are replayed on it (ReplayMount::kFloating, the same
+// time map): the trajectory's wrist is what the floating hand did at the
+// video's clock, its wrist servo lagging its controls; slowed, the same
+// controls put the wrist elsewhere (10-16 mm, up to 0.18 rad in the
+// bench), and that is the motion that keeps the object at the slower
+// pace. The replayed wrist's offset from the trajectory's is averaged
+// over `smoothing` seconds (the floating servo's jitter at contact would
+// otherwise slow the re-timing down). The trajectory unchanged when it has
+// no object or scene.
+retarget::HandTrajectory FloatingWristTrajectory(const Plan& plan, const retarget::HandTrajectory& trajectory,
+                                                 const retarget::Embodiment& embodiment,
+                                                 const std::string& scene_xml,
+                                                 const std::filesystem::path& scene_dir, double servo_omega,
+                                                 double smoothing);
+
+// `plan` re-planned (steps 2-4 at its placement) on
+// FloatingWristTrajectory's wrist path, config.follow_rounds times (each
+// round replays the last round's plan); `trajectory` is the last round's
+// trajectory, the one to replay the new plan against (step 5). Both
+// unchanged when follow_rounds is 0 or the trajectory has no object or
+// scene.
+struct FollowedPlan {
+  Plan plan;
+  retarget::HandTrajectory trajectory;
+};
+FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajectory& trajectory,
+                                 const retarget::Embodiment& embodiment, const PlanConfig& config,
+                                 const std::string& scene_xml, const std::filesystem::path& scene_dir);
+
 // JSON: {"format": "doasido_deploy_plan", "version": 2, "source", "embodiment",
 // "rate_hz", "placement": {yaw, x, y, world_to_base: [tx,ty,tz,qw,qx,qy,qz],
 // reachable_fraction, candidates, search_slowdown, manipulability},
 // "arm_joints", "hand_joints", "times", "source_times", "lead_in",
-// "lead_out", "trajectory_duration", "slowdown", "arm": [[6]], "hand": [[n]],
+// "lead_out", "trajectory_duration", "slowdown", "wrist_path" (read as
+// "trajectory" when absent), "arm": [[6]], "hand": [[n]],
 // "position_error", "rotation_error", "unreachable": [{frame, time,
 // position_error, rotation_error}], "too_fast": [{frame, time, joint, speed,
 // limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],

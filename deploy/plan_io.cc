@@ -67,6 +67,7 @@ Json PlanToJson(const Plan& plan) {
   j["lead_out"] = plan.lead_out;
   j["trajectory_duration"] = plan.trajectory_duration;
   j["slowdown"] = plan.slowdown;
+  j["wrist_path"] = plan.wrist_path;
   Json arm = Json::array(), hand = Json::array();
   for (const ArmQ& q : plan.arm) arm.push_back(std::vector<double>(q.data(), q.data() + 6));
   for (const Eigen::VectorXd& q : plan.hand) hand.push_back(std::vector<double>(q.data(), q.data() + q.size()));
@@ -105,6 +106,101 @@ void WritePlanJson(const Plan& plan, const std::filesystem::path& path) {
   if (!out) throw Error("io", "cannot write plan", {.file = path.string()});
 }
 
+namespace {
+
+// PlanFromJson's steps; `field` names the member being read for the error.
+Placement PlacementFromJson(const Json& p) {
+  Placement placement;
+  placement.yaw = p.at("yaw");
+  placement.x = p.at("x");
+  placement.y = p.at("y");
+  const auto w = p.at("world_to_base").get<std::vector<double>>();
+  placement.world_to_base = {Quat(w.at(3), w.at(4), w.at(5), w.at(6)), Vec3(w.at(0), w.at(1), w.at(2))};
+  placement.reachable_fraction = p.at("reachable_fraction");
+  placement.candidates = p.at("candidates");
+  placement.search_slowdown = p.value("search_slowdown", 0.0);
+  placement.manipulability = p.value("manipulability", 0.0);
+  return placement;
+}
+
+// The time map and lead moves (version 1: commands at the video's timing).
+void ReadTiming(const Json& j, int version, Plan& plan, std::string& field) {
+  field = "times";
+  plan.times = j.at("times").get<std::vector<double>>();
+  if (version < 2) {
+    plan.source_times = plan.times;
+    return;
+  }
+  field = "source_times";
+  plan.source_times = j.at("source_times").get<std::vector<double>>();
+  field = "lead_in";
+  plan.lead_in = j.at("lead_in").get<int>();
+  plan.lead_out = j.at("lead_out").get<int>();
+  field = "slowdown";
+  plan.trajectory_duration = j.at("trajectory_duration").get<double>();
+  plan.slowdown = j.at("slowdown").get<double>();
+  field = "wrist_path";
+  plan.wrist_path = j.value("wrist_path", std::string(kWristPathTrajectory));
+}
+
+// The arm and hand commands, checked against the timing's length.
+void ReadCommands(const Json& j, const std::string& file, Plan& plan, std::string& field) {
+  field = "arm";
+  for (const auto& q : j.at("arm").get<std::vector<std::vector<double>>>()) {
+    if (q.size() != 6) throw Error("bad_plan", "arm command must have 6 joints", {.file = file, .field = field});
+    plan.arm.push_back(Eigen::Map<const ArmQ>(q.data()));
+  }
+  field = "hand";
+  for (const auto& q : j.at("hand").get<std::vector<std::vector<double>>>()) {
+    if (q.size() != plan.hand_joints.size()) {
+      throw Error("bad_plan", "hand command size differs from hand_joints", {.file = file, .field = field});
+    }
+    plan.hand.push_back(Eigen::Map<const Eigen::VectorXd>(q.data(), q.size()));
+  }
+  if (plan.arm.size() != plan.times.size() || plan.hand.size() != plan.times.size() ||
+      plan.source_times.size() != plan.times.size()) {
+    throw Error("bad_plan", "times, source_times, arm and hand differ in length", {.file = file, .field = "times"});
+  }
+  if (plan.lead_in < 0 || plan.lead_out < 0 || plan.lead_in + plan.lead_out > static_cast<int>(plan.times.size())) {
+    throw Error("bad_plan", "lead_in + lead_out exceed the commands", {.file = file, .field = "lead_in"});
+  }
+}
+
+void ReadChecks(const Json& j, int version, Plan& plan, std::string& field) {
+  field = "position_error";
+  plan.position_error = j.at("position_error").get<std::vector<double>>();
+  plan.rotation_error = j.at("rotation_error").get<std::vector<double>>();
+  field = "unreachable";
+  plan.unreachable = ReadIssues(j.at("unreachable"), "");
+  field = "too_fast";
+  plan.too_fast = ReadIssues(j.at("too_fast"), "speed");
+  field = "over_acceleration";
+  if (version >= 2) plan.over_acceleration = ReadIssues(j.at("over_acceleration"), "acceleration");
+}
+
+// Older files lack the per-command series: they read empty.
+ReplayReport ReplayFromJson(const Json& r) {
+  return {.ran = r.at("ran"),
+          .object_position_error_mean = r.at("object_position_error_mean"),
+          .object_position_error_max = r.at("object_position_error_max"),
+          .object_rotation_error_mean = r.at("object_rotation_error_mean"),
+          .object_rotation_error_max = r.at("object_rotation_error_max"),
+          .success = r.at("success"),
+          .reference_success = r.value("reference_success", -1),
+          .object_position_error = r.value("object_position_error", std::vector<double>{}),
+          .object_rotation_error = r.value("object_rotation_error", std::vector<double>{}),
+          .wrist_position_error = r.value("wrist_position_error", std::vector<double>{}),
+          .wrist_rotation_error = r.value("wrist_rotation_error", std::vector<double>{}),
+          .wrist_position_error_mean = r.value("wrist_position_error_mean", 0.0),
+          .wrist_position_error_max = r.value("wrist_position_error_max", 0.0),
+          .wrist_rotation_error_mean = r.value("wrist_rotation_error_mean", 0.0),
+          .wrist_rotation_error_max = r.value("wrist_rotation_error_max", 0.0),
+          .finger_error = r.value("finger_error", std::vector<double>{}),
+          .hand_contacts = r.value("hand_contacts", std::vector<int>{})};
+}
+
+}  // namespace
+
 Plan PlanFromJson(const Json& j, const std::string& file) {
   Plan plan;
   std::string field = "format";
@@ -119,81 +215,16 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
     field = "rate_hz";
     plan.rate_hz = j.at("rate_hz").get<double>();
     field = "placement";
-    const Json& p = j.at("placement");
-    plan.placement.yaw = p.at("yaw");
-    plan.placement.x = p.at("x");
-    plan.placement.y = p.at("y");
-    const auto w = p.at("world_to_base").get<std::vector<double>>();
-    plan.placement.world_to_base = {Quat(w.at(3), w.at(4), w.at(5), w.at(6)), Vec3(w.at(0), w.at(1), w.at(2))};
-    plan.placement.reachable_fraction = p.at("reachable_fraction");
-    plan.placement.candidates = p.at("candidates");
-    plan.placement.search_slowdown = p.value("search_slowdown", 0.0);
-    plan.placement.manipulability = p.value("manipulability", 0.0);
+    plan.placement = PlacementFromJson(j.at("placement"));
     field = "arm_joints";
     plan.arm_joints = j.at("arm_joints").get<std::vector<std::string>>();
     field = "hand_joints";
     plan.hand_joints = j.at("hand_joints").get<std::vector<std::string>>();
-    field = "times";
-    plan.times = j.at("times").get<std::vector<double>>();
-    if (version >= 2) {
-      field = "source_times";
-      plan.source_times = j.at("source_times").get<std::vector<double>>();
-      field = "lead_in";
-      plan.lead_in = j.at("lead_in").get<int>();
-      plan.lead_out = j.at("lead_out").get<int>();
-      field = "slowdown";
-      plan.trajectory_duration = j.at("trajectory_duration").get<double>();
-      plan.slowdown = j.at("slowdown").get<double>();
-    } else {
-      plan.source_times = plan.times;  // version 1: commands at the video's timing
-    }
-    field = "arm";
-    for (const auto& q : j.at("arm").get<std::vector<std::vector<double>>>()) {
-      if (q.size() != 6) throw Error("bad_plan", "arm command must have 6 joints", {.file = file, .field = field});
-      plan.arm.push_back(Eigen::Map<const ArmQ>(q.data()));
-    }
-    field = "hand";
-    for (const auto& q : j.at("hand").get<std::vector<std::vector<double>>>()) {
-      if (q.size() != plan.hand_joints.size()) {
-        throw Error("bad_plan", "hand command size differs from hand_joints", {.file = file, .field = field});
-      }
-      plan.hand.push_back(Eigen::Map<const Eigen::VectorXd>(q.data(), q.size()));
-    }
-    if (plan.arm.size() != plan.times.size() || plan.hand.size() != plan.times.size() ||
-        plan.source_times.size() != plan.times.size()) {
-      throw Error("bad_plan", "times, source_times, arm and hand differ in length", {.file = file, .field = "times"});
-    }
-    if (plan.lead_in < 0 || plan.lead_out < 0 || plan.lead_in + plan.lead_out > static_cast<int>(plan.times.size())) {
-      throw Error("bad_plan", "lead_in + lead_out exceed the commands", {.file = file, .field = "lead_in"});
-    }
-    field = "position_error";
-    plan.position_error = j.at("position_error").get<std::vector<double>>();
-    plan.rotation_error = j.at("rotation_error").get<std::vector<double>>();
-    field = "unreachable";
-    plan.unreachable = ReadIssues(j.at("unreachable"), "");
-    field = "too_fast";
-    plan.too_fast = ReadIssues(j.at("too_fast"), "speed");
-    field = "over_acceleration";
-    if (version >= 2) plan.over_acceleration = ReadIssues(j.at("over_acceleration"), "acceleration");
+    ReadTiming(j, version, plan, field);
+    ReadCommands(j, file, plan, field);
+    ReadChecks(j, version, plan, field);
     field = "replay";
-    const Json& r = j.at("replay");
-    plan.replay = {.ran = r.at("ran"),
-                   .object_position_error_mean = r.at("object_position_error_mean"),
-                   .object_position_error_max = r.at("object_position_error_max"),
-                   .object_rotation_error_mean = r.at("object_rotation_error_mean"),
-                   .object_rotation_error_max = r.at("object_rotation_error_max"),
-                   .success = r.at("success"),
-                   .reference_success = r.value("reference_success", -1),
-                   .object_position_error = r.value("object_position_error", std::vector<double>{}),
-                   .object_rotation_error = r.value("object_rotation_error", std::vector<double>{}),
-                   .wrist_position_error = r.value("wrist_position_error", std::vector<double>{}),
-                   .wrist_rotation_error = r.value("wrist_rotation_error", std::vector<double>{}),
-                   .wrist_position_error_mean = r.value("wrist_position_error_mean", 0.0),
-                   .wrist_position_error_max = r.value("wrist_position_error_max", 0.0),
-                   .wrist_rotation_error_mean = r.value("wrist_rotation_error_mean", 0.0),
-                   .wrist_rotation_error_max = r.value("wrist_rotation_error_max", 0.0),
-                   .finger_error = r.value("finger_error", std::vector<double>{}),
-                   .hand_contacts = r.value("hand_contacts", std::vector<int>{})};
+    plan.replay = ReplayFromJson(j.at("replay"));
     field = "ok";
     plan.ok = j.at("ok").get<bool>();
   } catch (const nlohmann::json::exception& e) {

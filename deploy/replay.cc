@@ -4,6 +4,7 @@
 // by what the slowed motion does to the object, not by the video's timing.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include "robot/embodiment.h"
@@ -160,108 +161,233 @@ void Summarise(ReplayReport& r) {
 }
 
 // Step 5 on `rig` (arm when rig.arm_qpos is used, floating when rig.wrist_qpos is set).
-ReplayReport Replay(const Plan& plan, const retarget::HandTrajectory& trajectory, const Rig& rig,
-                    double servo_omega) {
-  const mjModel* m = rig.model.get();
-  const bool floating = !rig.wrist_qpos.empty();
-  retarget::DataPtr data = retarget::MakeData(m);
-  mjData* d = data.get();
-  const HandDrive drive = MatchActuators(m, rig.joints, trajectory);
-  const std::vector<double>& source = plan.source_times.size() == plan.times.size() ? plan.source_times : plan.times;
-  std::vector<Pose> wrists;
-  for (int f = 0; f < static_cast<int>(trajectory.qpos.size()); ++f) wrists.push_back(WristPose(trajectory, f));
-  const size_t count = plan.arm.size();
-  std::vector<mjtNum> mass(m->nv * m->nv);
-  const auto arm_at = [&](double f) {
-    f = std::clamp(f, 0.0, static_cast<double>(count - 1));
-    const size_t i = std::min(static_cast<size_t>(f), count - 1), j = std::min(i + 1, count - 1);
-    const double a = f - i;
-    return ArmQ((1 - a) * plan.arm[i] + a * plan.arm[j]);
-  };
-  // Command f's drive (fractional command index): the arm's joints (set
-  // at the start, servoed after), the hand's actuators.
-  const auto drive_at = [&](double f, bool start) {
-    f = std::clamp(f, 0.0, static_cast<double>(count - 1));
-    const size_t i = std::min(static_cast<size_t>(f), count - 1), j = std::min(i + 1, count - 1);
-    const double a = f - i;
-    if (!floating) {
-      // Speed and acceleration of the commanded path by central differences
-      // over one command (the plan's own finite differences).
-      const ArmQ q = arm_at(f), v = (arm_at(f + 0.5) - arm_at(f - 0.5)) * plan.rate_hz;
-      const ArmQ acc = (arm_at(f + 1) - 2 * q + arm_at(f - 1)) * plan.rate_hz * plan.rate_hz;
-      if (start || servo_omega <= 0) {
-        for (int n = 0; n < 6; ++n) {
-          d->qpos[rig.arm_qpos[n]] = q[n];
-          d->qvel[rig.arm_dof[n]] = start ? 0 : v[n];
-        }
-      } else {
-        ServoArm(m, d, rig, q, v, acc, servo_omega, mass);
-      }
-    }
-    const double s = (1 - a) * source[i] + a * source[j];
-    if (!drive.from_joint.empty()) {
-      const VectorXd qpos = RowAt(trajectory.qpos, trajectory.fps, s);
-      for (const auto& [act, c] : drive.from_joint) d->ctrl[act] = qpos[c];
-    }
-    if (drive.from_ctrl.empty()) return;
-    const VectorXd ctrl = RowAt(trajectory.ctrl, trajectory.fps, s);
-    for (const auto& [act, c] : drive.from_ctrl) d->ctrl[act] = ctrl[c];
-  };
-  drive_at(0, true);
-  const VectorXd first = RowAt(trajectory.qpos, trajectory.fps, source[0]);
-  for (const auto& [adr, c] : rig.joints) d->qpos[adr] = first[c];
-  mj_forward(m, d);
+// One replay: the simulation of a plan's commands on a rig, driven and
+// measured command by command (the steps of Run below).
+class ReplayRun {
+ public:
+  // Sees the state reached at every command's time (lead moves too).
+  using Observer = std::function<void(size_t command, const mjData* d)>;
 
-  ReplayReport r;
-  if (trajectory.metrics.is_object() && trajectory.metrics.contains(retarget::kMetricSuccess)) {
-    r.reference_success = trajectory.metrics.at(retarget::kMetricSuccess).get<bool>();
+  ReplayRun(const Plan& plan, const retarget::HandTrajectory& trajectory, const Rig& rig, double servo_omega)
+      : plan_(plan), t_(trajectory), rig_(rig), omega_(servo_omega), m_(rig.model.get()),
+        data_(retarget::MakeData(m_)), d_(data_.get()), drive_(MatchActuators(m_, rig.joints, trajectory)),
+        source_(plan.source_times.size() == plan.times.size() ? plan.source_times : plan.times),
+        count_(plan.arm.size()), floating_(!rig.wrist_qpos.empty()), mass_(m_->nv * m_->nv) {
+    for (int f = 0; f < static_cast<int>(t_.qpos.size()); ++f) wrists_.push_back(WristPose(t_, f));
   }
-  const size_t path_begin = plan.lead_in, path_end = count - plan.lead_out;
-  const auto measure = [&](size_t k) {
-    if (k < path_begin || k >= path_end) return;
-    const Pose ref = PoseAt(trajectory.object_poses, trajectory.fps, source[k]);
-    const mjtNum* q = d->qpos + rig.object_qpos;
-    const Pose sim{Quat(q[3], q[4], q[5], q[6]).normalized(), Vec3(q[0], q[1], q[2])};
-    r.object_position_error.push_back((sim.t - ref.t).norm());
-    r.object_rotation_error.push_back(RotationAngle(sim.q, ref.q));
-    // The simulated body that carries the hand (the arm's flange, the
-    // floating wrist's mount), as MuJoCo placed it: a mismatch between the
-    // arm's model and its DH kinematics shows here.
-    mj_kinematics(m, d);  // the poses of the state reached, not of the step before
-    const mjtNum* p = d->xpos + 3 * rig.wrist_body;
-    const mjtNum* o = d->xquat + 4 * rig.wrist_body;
-    const Pose flange{Quat(o[0], o[1], o[2], o[3]).normalized(), Vec3(p[0], p[1], p[2])};
-    const Pose wrist = PoseAt(wrists, trajectory.fps, source[k]);
-    r.wrist_position_error.push_back((flange.t - wrist.t).norm());
-    r.wrist_rotation_error.push_back(RotationAngle(flange.q, wrist.q));
-    const VectorXd target = RowAt(trajectory.qpos, trajectory.fps, source[k]);
-    double finger = 0;
-    int fingers = 0;
-    for (const auto& [adr, c] : rig.joints) {
-      if (std::find(rig.wrist_qpos.begin(), rig.wrist_qpos.end(), adr) != rig.wrist_qpos.end()) continue;
-      finger += std::abs(d->qpos[adr] - target[c]);
-      ++fingers;
-    }
-    r.finger_error.push_back(fingers ? finger / fingers : 0);
+
+  // The contacts of the object with anything but the world (table, floor).
+  static int HandContacts(const mjModel* m, const mjData* d, int object_body) {
     int contacts = 0;
     for (int c = 0; c < d->ncon; ++c) {
       const int b1 = m->geom_bodyid[d->contact[c].geom1], b2 = m->geom_bodyid[d->contact[c].geom2];
-      const int other = b1 == rig.object_body ? b2 : b2 == rig.object_body ? b1 : -1;
-      contacts += other > 0;  // not the world (table, floor)
+      const int other = b1 == object_body ? b2 : b2 == object_body ? b1 : -1;
+      contacts += other > 0;
     }
-    r.hand_contacts.push_back(contacts);
-  };
-  const double dt = m->opt.timestep;
-  size_t k = 0;
-  for (long step = 0; k < count; ++step) {
-    const double t = step * dt;
-    while (k < count && plan.times[k] <= t + 1e-9) measure(k++);
-    if (k >= count) break;
-    drive_at(t * plan.rate_hz, false);
-    mj_step(m, d);
+    return contacts;
   }
-  Summarise(r);
-  return r;
+
+  ReplayReport Run(const Observer& observe = {}) {
+    Start();
+    const double dt = m_->opt.timestep;
+    size_t k = 0;
+    for (long step = 0; k < count_; ++step) {
+      const double t = step * dt;
+      for (; k < count_ && plan_.times[k] <= t + 1e-9; ++k) {
+        Measure(k);
+        if (observe) observe(k, d_);
+      }
+      if (k >= count_) break;
+      Drive(t * plan_.rate_hz, false);
+      mj_step(m_, d_);
+    }
+    Summarise(r_);
+    return r_;
+  }
+
+ private:
+  // Fractional command index f as the commands i, j around it and the weight of j.
+  struct Between {
+    size_t i, j;
+    double a;
+  };
+  Between At(double f) const {
+    f = std::clamp(f, 0.0, static_cast<double>(count_ - 1));
+    const size_t i = std::min(static_cast<size_t>(f), count_ - 1);
+    return {i, std::min(i + 1, count_ - 1), f - i};
+  }
+
+  ArmQ ArmAt(double f) const {
+    const Between b = At(f);
+    return ArmQ((1 - b.a) * plan_.arm[b.i] + b.a * plan_.arm[b.j]);
+  }
+
+  // The arm's joints at command f: set at the start (at rest) or when
+  // there is no servo, else servoed toward the command with its speed and
+  // acceleration by central differences over one command (the plan's own
+  // finite differences).
+  void DriveArm(double f, bool start) {
+    const ArmQ q = ArmAt(f), v = (ArmAt(f + 0.5) - ArmAt(f - 0.5)) * plan_.rate_hz;
+    if (start || omega_ <= 0) {
+      for (int n = 0; n < 6; ++n) {
+        d_->qpos[rig_.arm_qpos[n]] = q[n];
+        d_->qvel[rig_.arm_dof[n]] = start ? 0 : v[n];
+      }
+      return;
+    }
+    const ArmQ acc = (ArmAt(f + 1) - 2 * q + ArmAt(f - 1)) * plan_.rate_hz * plan_.rate_hz;
+    ServoArm(m_, d_, rig_, q, v, acc, omega_, mass_);
+  }
+
+  // The hand's actuators at command f's trajectory time (the time map).
+  void DriveHand(double f) {
+    const Between b = At(f);
+    const double s = (1 - b.a) * source_[b.i] + b.a * source_[b.j];
+    if (!drive_.from_joint.empty()) {
+      const VectorXd qpos = RowAt(t_.qpos, t_.fps, s);
+      for (const auto& [act, c] : drive_.from_joint) d_->ctrl[act] = qpos[c];
+    }
+    if (drive_.from_ctrl.empty()) return;
+    const VectorXd ctrl = RowAt(t_.ctrl, t_.fps, s);
+    for (const auto& [act, c] : drive_.from_ctrl) d_->ctrl[act] = ctrl[c];
+  }
+
+  void Drive(double f, bool start) {
+    if (!floating_) DriveArm(f, start);
+    DriveHand(f);
+  }
+
+  // The first command's arm at rest, the trajectory's joints at its first time.
+  void Start() {
+    Drive(0, true);
+    const VectorXd first = RowAt(t_.qpos, t_.fps, source_[0]);
+    for (const auto& [adr, c] : rig_.joints) d_->qpos[adr] = first[c];
+    mj_forward(m_, d_);
+    if (t_.metrics.is_object() && t_.metrics.contains(retarget::kMetricSuccess)) {
+      r_.reference_success = t_.metrics.at(retarget::kMetricSuccess).get<bool>();
+    }
+  }
+
+  // Command k of the path (lead moves are not measured).
+  void Measure(size_t k) {
+    if (k < static_cast<size_t>(plan_.lead_in) || k >= count_ - plan_.lead_out) return;
+    const double s = source_[k];
+    const Pose ref = PoseAt(t_.object_poses, t_.fps, s);
+    const mjtNum* q = d_->qpos + rig_.object_qpos;
+    const Pose sim{Quat(q[3], q[4], q[5], q[6]).normalized(), Vec3(q[0], q[1], q[2])};
+    r_.object_position_error.push_back((sim.t - ref.t).norm());
+    r_.object_rotation_error.push_back(RotationAngle(sim.q, ref.q));
+    MeasureWrist(s);
+    MeasureHand(s);
+  }
+
+  // The simulated body that carries the hand (the arm's flange, the
+  // floating wrist's mount), as MuJoCo placed it: a mismatch between the
+  // arm's model and its DH kinematics shows here.
+  void MeasureWrist(double s) {
+    mj_kinematics(m_, d_);  // the poses of the state reached, not of the step before
+    const mjtNum* p = d_->xpos + 3 * rig_.wrist_body;
+    const mjtNum* o = d_->xquat + 4 * rig_.wrist_body;
+    const Pose flange{Quat(o[0], o[1], o[2], o[3]).normalized(), Vec3(p[0], p[1], p[2])};
+    const Pose wrist = PoseAt(wrists_, t_.fps, s);
+    r_.wrist_position_error.push_back((flange.t - wrist.t).norm());
+    r_.wrist_rotation_error.push_back(RotationAngle(flange.q, wrist.q));
+  }
+
+  // The finger joints' mean error against the trajectory's, and the
+  // hand's contacts with the object.
+  void MeasureHand(double s) {
+    const VectorXd target = RowAt(t_.qpos, t_.fps, s);
+    double finger = 0;
+    int fingers = 0;
+    for (const auto& [adr, c] : rig_.joints) {
+      if (std::find(rig_.wrist_qpos.begin(), rig_.wrist_qpos.end(), adr) != rig_.wrist_qpos.end()) continue;
+      finger += std::abs(d_->qpos[adr] - target[c]);
+      ++fingers;
+    }
+    r_.finger_error.push_back(fingers ? finger / fingers : 0);
+    r_.hand_contacts.push_back(HandContacts(m_, d_, rig_.object_body));
+  }
+
+  const Plan& plan_;
+  const retarget::HandTrajectory& t_;
+  const Rig& rig_;
+  const double omega_;
+  const mjModel* m_;
+  retarget::DataPtr data_;
+  mjData* d_;
+  const HandDrive drive_;
+  const std::vector<double>& source_;
+  const size_t count_;
+  const bool floating_;
+  std::vector<mjtNum> mass_;
+  std::vector<Pose> wrists_;
+  ReplayReport r_;
+};
+
+// At trajectory time s, between the samples (times[c], times[c + 1]) of
+// non-decreasing `times`: c advanced from its last value (s non-decreasing
+// over the calls) and the weight of c + 1.
+double Bracket(const std::vector<double>& times, double s, size_t& c) {
+  while (c + 2 < times.size() && times[c + 1] < s) ++c;
+  const size_t n = std::min(c + 1, times.size() - 1);
+  const double span = times[n] - times[c];
+  return span > 0 ? std::clamp((s - times[c]) / span, 0.0, 1.0) : 0.0;
+}
+
+// Centred moving average over 2 half + 1 rows, shrunk at the ends.
+std::vector<VectorXd> MovingAverage(const std::vector<VectorXd>& rows, int half) {
+  std::vector<VectorXd> out;
+  const int n = static_cast<int>(rows.size());
+  for (int i = 0; i < n; ++i) {
+    const int h = std::min({half, i, n - 1 - i});
+    VectorXd sum = VectorXd::Zero(rows[i].size());
+    for (int j = i - h; j <= i + h; ++j) sum += rows[j];
+    out.push_back(sum / (2 * h + 1));
+  }
+  return out;
+}
+
+// FloatingWristTrajectory's replay: per trajectory frame, the floating
+// wrist's offset from the trajectory's (wrist joints, `columns` order) and
+// whether the hand touched the object.
+struct ReplayedWrist {
+  std::vector<int> columns;  // the wrist joints' trajectory qpos columns
+  std::vector<VectorXd> offsets;
+  std::vector<bool> touching;
+};
+
+ReplayedWrist ReplayWrist(const Plan& plan, const retarget::HandTrajectory& trajectory, const Rig& rig,
+                          double servo_omega) {
+  ReplayedWrist out;
+  std::vector<int> qpos;  // the wrist joints' addresses
+  for (const auto& [adr, c] : rig.joints) {
+    if (std::find(rig.wrist_qpos.begin(), rig.wrist_qpos.end(), adr) == rig.wrist_qpos.end()) continue;
+    qpos.push_back(adr);
+    out.columns.push_back(c);
+  }
+  std::vector<double> times;   // the path's commands' trajectory times
+  std::vector<VectorXd> rows;  // the simulated wrist joints there
+  std::vector<int> contacts;
+  const size_t begin = plan.lead_in, end = plan.arm.size() - plan.lead_out;
+  ReplayRun(plan, trajectory, rig, servo_omega).Run([&](size_t k, const mjData* d) {
+    if (k < begin || k >= end) return;
+    VectorXd w(qpos.size());
+    for (size_t n = 0; n < qpos.size(); ++n) w[n] = d->qpos[qpos[n]];
+    times.push_back(plan.source_times[k]);
+    rows.push_back(w);
+    contacts.push_back(ReplayRun::HandContacts(rig.model.get(), d, rig.object_body));
+  });
+  size_t c = 0;
+  for (size_t f = 0; f < trajectory.qpos.size(); ++f) {
+    const double a = Bracket(times, f / trajectory.fps, c);
+    const size_t n = std::min(c + 1, rows.size() - 1);
+    VectorXd w = (1 - a) * rows[c] + a * rows[n];
+    for (size_t j = 0; j < qpos.size(); ++j) w[j] -= trajectory.qpos[f][out.columns[j]];
+    out.offsets.push_back(w);
+    out.touching.push_back(contacts[c] > 0 || contacts[n] > 0);
+  }
+  return out;
 }
 
 }  // namespace
@@ -274,7 +400,40 @@ void ReplayPlan(Plan& plan, const retarget::HandTrajectory& trajectory, const re
   const Rig rig = mount == ReplayMount::kArm ? ArmRig(embodiment, trajectory, base, scene_xml, scene_dir)
                                              : FloatingRig(embodiment, trajectory, scene_xml, scene_dir);
   if (rig.object_qpos < 0) return;
-  plan.replay = Replay(plan, trajectory, rig, servo_omega);
+  plan.replay = ReplayRun(plan, trajectory, rig, servo_omega).Run();
+}
+
+retarget::HandTrajectory FloatingWristTrajectory(const Plan& plan, const retarget::HandTrajectory& trajectory,
+                                                 const retarget::Embodiment& embodiment,
+                                                 const std::string& scene_xml,
+                                                 const std::filesystem::path& scene_dir, double servo_omega,
+                                                 double smoothing) {
+  if (trajectory.object_poses.empty() || scene_xml.empty() || plan.arm.size() <= size_t(plan.lead_in + plan.lead_out)) {
+    return trajectory;
+  }
+  const Rig rig = FloatingRig(embodiment, trajectory, scene_xml, scene_dir);
+  if (rig.object_qpos < 0) return trajectory;
+  const ReplayedWrist replayed = ReplayWrist(plan, trajectory, rig, servo_omega);
+  // The offset applies in contact only (ramped over the smoothing window):
+  // in free motion the trajectory's own path, as smooth as the video's.
+  const int half = static_cast<int>(std::lround(0.5 * smoothing * trajectory.fps));
+  const std::vector<VectorXd> offsets = MovingAverage(replayed.offsets, half);
+  std::vector<VectorXd> touching;
+  for (size_t f = 0; f < replayed.touching.size(); ++f) {
+    bool near = false;
+    for (int g = std::max(0, int(f) - half); g <= std::min(int(f) + half, int(replayed.touching.size()) - 1); ++g) {
+      near = near || replayed.touching[g];
+    }
+    touching.push_back(VectorXd::Constant(1, near ? 1.0 : 0.0));
+  }
+  touching = MovingAverage(touching, half);
+  retarget::HandTrajectory followed = trajectory;
+  for (size_t f = 0; f < followed.qpos.size(); ++f) {
+    for (size_t n = 0; n < replayed.columns.size(); ++n) {
+      followed.qpos[f][replayed.columns[n]] += touching[f][0] * offsets[f][n];
+    }
+  }
+  return followed;
 }
 
 }  // namespace doasido::deploy

@@ -356,6 +356,66 @@ TEST(Plan, FloatingAndArmReplaysAgreeOnARetimedPath) {
   EXPECT_LT(floating.replay.wrist_position_error_max, 3 * lag) << "wrist speed " << speed << " m/s";
 }
 
+// Step 3b: the arm is planned on the floating hand's replayed wrist where
+// the hand touches the object, on the trajectory's own wrist elsewhere. A
+// mug the hand never touches leaves the path, and so the plan, as they
+// were; a mug in the hand's way at the start moves the wrist near the
+// frames where they touch (the floating replay's hand contacts) and
+// nowhere farther than the smoothing window from them.
+TEST(Plan, TheArmFollowsTheFloatingWristOnlyWhereTheHandTouches) {
+  Pose centre;
+  retarget::HandTrajectory t = PathWithGap(&centre);
+  for (int k = 20; k < 30; ++k) t.qpos[k][2] -= 1.0;
+  t.fps = 150;  // needs a slowdown
+  PlanConfig config = IdentityPlacement(centre);
+  config.rate_hz = 150;
+  const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", {});
+  const Plan plan = MakePlan(t, e, config);
+  ASSERT_TRUE(plan.ok);
+  const auto dir = std::filesystem::temp_directory_path() / ("follow_" + std::to_string(getpid()));
+  const auto scene_at = [&](const Vec3& where) {
+    const retarget::ObjectScene scene =
+        retarget::BuildObjectScene(retarget::MakeMug(), {Quat::Identity(), where}, retarget::SceneConfig{}, dir);
+    t.object_poses.assign(t.qpos.size(), scene.pose);
+    std::ifstream in(scene.xml_path);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  const std::string untouched = scene_at(-Vec3(centre.t.x(), centre.t.y(), 0).normalized() * 0.35);
+  const FollowedPlan same = PlanOnFloatingWrist(plan, t, e, config, untouched, dir);
+  EXPECT_EQ(same.plan.wrist_path, kWristPathFloating);
+  for (size_t f = 0; f < t.qpos.size(); ++f) EXPECT_EQ(same.trajectory.qpos[f], t.qpos[f]) << "frame " << f;
+  ASSERT_EQ(same.plan.arm.size(), plan.arm.size());
+  for (size_t k = 0; k < plan.arm.size(); ++k) EXPECT_LT((same.plan.arm[k] - plan.arm[k]).norm(), 1e-9);
+
+  const Vec3 start = WristPose(t, 0).t;
+  const std::string touched = scene_at(Vec3(start.x(), start.y(), start.z() - 0.08));
+  Plan floating = plan;
+  ReplayPlan(floating, t, e, touched, dir, config.servo_omega, ReplayMount::kFloating);
+  const retarget::HandTrajectory followed =
+      FloatingWristTrajectory(plan, t, e, touched, dir, config.servo_omega, config.follow_smoothing);
+  std::filesystem::remove_all(dir);
+  std::vector<double> touching;  // trajectory times of the commands with contacts
+  for (size_t k = 0; k < floating.replay.hand_contacts.size(); ++k) {
+    if (floating.replay.hand_contacts[k] > 0) touching.push_back(plan.source_times[k + plan.lead_in]);
+  }
+  ASSERT_FALSE(touching.empty()) << "the mug below the first wrist was not touched";
+  double moved = 0;
+  int far = 0;
+  for (size_t f = 0; f < t.qpos.size(); ++f) {
+    const double s = f / t.fps;
+    double nearest = 1e9;
+    for (double c : touching) nearest = std::min(nearest, std::abs(c - s));
+    const double d = (WristPose(followed, f).t - WristPose(t, f).t).norm();
+    moved = std::max(moved, d);
+    if (nearest > config.follow_smoothing + 2 / t.fps) {
+      EXPECT_EQ(d, 0) << "frame " << f << " far from contact";
+      ++far;
+    }
+  }
+  EXPECT_GT(far, 10) << "the hand touched the mug almost throughout";
+  EXPECT_GT(moved, 0.0005);
+}
+
 TEST(Plan, JsonRoundTrip) {
   Pose centre;
   const retarget::HandTrajectory t = PathWithGap(&centre);
@@ -376,6 +436,10 @@ TEST(Plan, JsonRoundTrip) {
   EXPECT_EQ(back.unreachable.size(), plan.unreachable.size());
   EXPECT_EQ(back.ok, plan.ok);
   EXPECT_EQ(back.placement.candidates, 2);
+  EXPECT_EQ(back.wrist_path, kWristPathTrajectory);
+  Plan followed = plan;
+  followed.wrist_path = kWristPathFloating;
+  EXPECT_EQ(PlanFromJson(PlanToJson(followed), "followed").wrist_path, kWristPathFloating);
 }
 
 }  // namespace

@@ -74,6 +74,24 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
 double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right, const Pose& right_base,
                       const BimanualConfig& config, bool hand_to_hand = true);
 
+// Both arms (and hands) of `plan` in one MuJoCo scene with the object, on
+// the plan's one clock (bimanual_replay.cc): each arm servoed along its
+// commands as the one-arm replay does (plan.h step 5), each hand's
+// actuators driven by the two-hand trajectory `both` (its variables
+// prefixed kLeftPrefix / kRightPrefix) at each command's trajectory time,
+// the object free. Fills plan.left.replay and plan.right.replay: each
+// arm's wrist tracking, fingers and hand-object contacts, and in both the
+// one object's error against the trajectory's object (the floating
+// two-hand simulation's) and the trajectory's own success.
+// ReplayMount::kFloating replays the retargeting's two floating hands
+// under the same time map instead: the yardstick for what the re-timing
+// alone does. Nothing is filled when the trajectory has no object poses
+// or the scene no free "object" body.
+void ReplayBimanualPlan(BimanualPlan& plan, const retarget::HandTrajectory& both,
+                        const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
+                        const std::string& scene_xml, const std::filesystem::path& scene_dir,
+                        double servo_omega = PlanConfig{}.servo_omega, ReplayMount mount = ReplayMount::kArm);
+
 // Streams doasido_lcm::bimanual_command (deploy/bimanual_command.lcm), one
 // message per tick carrying both arms and both hands, as StreamPlan does
 // for one arm (real-time pacing, or a dry-run log). Throws

@@ -63,6 +63,12 @@ struct BimanualPlan {
 
 // Makes both plans and checks them. Trajectories must have the same frame
 // rate and length (one clip). Throws Error("bad_trajectory") otherwise.
+// When the pair's default spot (the workspace's x, y) fails a check, the
+// pair's frame is moved over the workspace's offset grid (offset_range,
+// offset_steps, as one arm's placement search) and the spot with the
+// fewest failing commands, then the least slowdown, is kept (a carry whose
+// forearms cross within the clearance where the hands meet, for one);
+// both placements' `candidates` count the spots tried.
 BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
                               const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
                               const BimanualConfig& config);

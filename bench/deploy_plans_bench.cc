@@ -89,6 +89,9 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
+    else if (k == "--smooth_hz") f.plan.wrist_smoothing.cutoff_hz = std::stod(v);
+    else if (k == "--smooth_mm") f.plan.wrist_smoothing.tolerance = std::stod(v) / 1000;
+    else if (k == "--smooth_rad") f.plan.wrist_smoothing.rotation_tolerance = std::stod(v);
     else throw std::runtime_error("unknown flag " + a);
   }
   return f;
@@ -281,6 +284,13 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   row.wrist_max = plan.replay.wrist_position_error_max;
   row.why = std::to_string(plan.unreachable.size()) + " unreachable, " + std::to_string(plan.too_fast.size()) +
             " too fast, " + std::to_string(plan.over_acceleration.size()) + " too abrupt";
+  if (plan.wrist_smoothing.applied) {
+    char buf[128];
+    std::snprintf(buf, sizeof(buf), "; smoothed at %.1f Hz: wrist moved <= %.1f mm / %.3f rad, %d frames bounded",
+                  plan.wrist_smoothing.cutoff_hz, 1000 * plan.wrist_smoothing.position_deviation_max,
+                  plan.wrist_smoothing.rotation_deviation_max, plan.wrist_smoothing.bounded_frames);
+    row.why += buf;
+  }
   if (plan.replay.ran) {
     char buf[128];
     std::snprintf(buf, sizeof(buf), "; object %.0f mm / %.2f rad", 1000 * plan.replay.object_position_error_mean,

@@ -67,6 +67,7 @@ Json PlanToJson(const Plan& plan) {
   j["lead_out"] = plan.lead_out;
   j["trajectory_duration"] = plan.trajectory_duration;
   j["slowdown"] = plan.slowdown;
+  j["wrist_smoothing"] = plan.wrist_smoothing;
   Json arm = Json::array(), hand = Json::array();
   for (const ArmQ& q : plan.arm) arm.push_back(std::vector<double>(q.data(), q.data() + 6));
   for (const Eigen::VectorXd& q : plan.hand) hand.push_back(std::vector<double>(q.data(), q.data() + q.size()));
@@ -144,6 +145,8 @@ Plan PlanFromJson(const Json& j, const std::string& file) {
       field = "slowdown";
       plan.trajectory_duration = j.at("trajectory_duration").get<double>();
       plan.slowdown = j.at("slowdown").get<double>();
+      field = "wrist_smoothing";
+      plan.wrist_smoothing = j.value("wrist_smoothing", WristSmoothingReport{});  // absent before it existed
     } else {
       plan.source_times = plan.times;  // version 1: commands at the video's timing
     }

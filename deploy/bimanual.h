@@ -9,8 +9,9 @@
 // -base_distance / 2. The common frame is placed like one arm's base in
 // plan.h (offset from the workspace config, around the mean of both
 // wrists), turned so that the mean line from the right wrist to the left
-// one points along its +y (then by the workspace's yaw), without the search:
-// the two arms keep one placement. Both arms then go through plan.h's steps
+// one points along its +y (then by the workspace's yaw); the one-arm search
+// is not run, but a spot that fails a check is moved over the workspace's
+// offset grid (MakeBimanualPlan). Both arms then go through plan.h's steps
 // 2-4 on one clock (MakePlansOnOneClock): one time map re-times both paths
 // so that no joint of either arm exceeds its limits, and both lead moves
 // last as long as the longer one, so the two arms' commands stay in step.

@@ -323,8 +323,14 @@ void ReplayTwo(const Flags& f, deploy::BimanualPlan& plan, const retarget::HandT
   if (!f.compare) return;
   deploy::ReplayBimanualPlan(floating, both, left_hand, right_hand, xml, files.scene_dir, f.plan.servo_omega,
                              deploy::ReplayMount::kFloating);
-  std::printf("  compare %-12s %.2fx: %s | %s\n", dir.filename().c_str(), plan.right.slowdown,
-              TwoArmOutcome("arms", plan).c_str(), TwoArmOutcome("floating re-timed", floating).c_str());
+  deploy::BimanualPlan video = plan;
+  video.left = AtVideoClock(plan.left);
+  video.right = AtVideoClock(plan.right);
+  deploy::ReplayBimanualPlan(video, both, left_hand, right_hand, xml, files.scene_dir, f.plan.servo_omega,
+                             deploy::ReplayMount::kFloating);
+  std::printf("  compare %-12s %.2fx: %s | %s | %s\n", dir.filename().c_str(), plan.right.slowdown,
+              TwoArmOutcome("arms", plan).c_str(), TwoArmOutcome("floating re-timed", floating).c_str(),
+              TwoArmOutcome("floating video clock", video).c_str());
 }
 
 Row PlanTwo(const Flags& f, const fs::path& dir) {

@@ -93,6 +93,9 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
     else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
+    else if (k == "--smooth_hz") f.plan.wrist_smoothing.cutoff_hz = std::stod(v);
+    else if (k == "--smooth_mm") f.plan.wrist_smoothing.tolerance = std::stod(v) / 1000;
+    else if (k == "--smooth_rad") f.plan.wrist_smoothing.rotation_tolerance = std::stod(v);
     else throw std::runtime_error("unknown flag " + a);
   }
   return f;
@@ -288,6 +291,13 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   row.wrist_max = plan.replay.wrist_position_error_max;
   row.why = std::to_string(plan.unreachable.size()) + " unreachable, " + std::to_string(plan.too_fast.size()) +
             " too fast, " + std::to_string(plan.over_acceleration.size()) + " too abrupt";
+  if (plan.wrist_smoothing.applied) {
+    char buf[128];
+    std::snprintf(buf, sizeof(buf), "; smoothed at %.1f Hz: wrist moved <= %.1f mm / %.3f rad, %d frames bounded",
+                  plan.wrist_smoothing.cutoff_hz, 1000 * plan.wrist_smoothing.position_deviation_max,
+                  plan.wrist_smoothing.rotation_deviation_max, plan.wrist_smoothing.bounded_frames);
+    row.why += buf;
+  }
   if (plan.replay.ran) {
     char buf[128];
     std::snprintf(buf, sizeof(buf), "; object %.0f mm / %.2f rad", 1000 * plan.replay.object_position_error_mean,
@@ -297,12 +307,49 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   return row;
 }
 
-Row PlanTwo(const fs::path& dir) {
+// Both arms' wrist tracking and the object, for a row's `why`.
+std::string TwoArmOutcome(const char* what, const deploy::BimanualPlan& plan) {
+  const deploy::ReplayReport& l = plan.left.replay;
+  const deploy::ReplayReport& r = plan.right.replay;
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), "%s %s %.0f mm %.2f rad (wrist left %.1f / %.1f mm, right %.1f / %.1f mm)",
+                what, r.success ? "ok" : "LOST", 1000 * r.object_position_error_mean, r.object_rotation_error_mean,
+                1000 * l.wrist_position_error_mean, 1000 * l.wrist_position_error_max,
+                1000 * r.wrist_position_error_mean, 1000 * r.wrist_position_error_max);
+  return buf;
+}
+
+// The two-arm plan replayed with both arms (and, with --compare, on the two
+// floating hands under the same time map).
+void ReplayTwo(const Flags& f, deploy::BimanualPlan& plan, const retarget::HandTrajectory& both,
+               const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand, const fs::path& dir) {
+  const retarget::TrajectoryFiles files = retarget::FilesBeside(dir / "trajectory.json");
+  const std::string xml = retarget::ReadSceneXml(files.scene_dir);
+  deploy::BimanualPlan floating = plan;
+  deploy::ReplayBimanualPlan(plan, both, left_hand, right_hand, xml, files.scene_dir, f.plan.servo_omega);
+  if (!f.compare) return;
+  deploy::ReplayBimanualPlan(floating, both, left_hand, right_hand, xml, files.scene_dir, f.plan.servo_omega,
+                             deploy::ReplayMount::kFloating);
+  deploy::BimanualPlan video = plan;
+  video.left = AtVideoClock(plan.left);
+  video.right = AtVideoClock(plan.right);
+  deploy::ReplayBimanualPlan(video, both, left_hand, right_hand, xml, files.scene_dir, f.plan.servo_omega,
+                             deploy::ReplayMount::kFloating);
+  std::printf("  compare %-12s %.2fx: %s | %s | %s\n", dir.filename().c_str(), plan.right.slowdown,
+              TwoArmOutcome("arms", plan).c_str(), TwoArmOutcome("floating re-timed", floating).c_str(),
+              TwoArmOutcome("floating video clock", video).c_str());
+}
+
+Row PlanTwo(const Flags& f, const fs::path& dir) {
   Row row{.name = dir.filename().string()};
-  const auto [left, right] = retarget::SplitBimanualTrajectory(retarget::ReadTrajectoryJson(dir / "trajectory.json"));
-  const deploy::BimanualPlan plan = deploy::MakeBimanualPlan(
-      left, right, retarget::FindEmbodiment(left.embodiment, kData / "robots"),
-      retarget::FindEmbodiment(right.embodiment, kData / "robots"), deploy::BimanualConfig{});
+  const retarget::HandTrajectory both = retarget::ReadTrajectoryJson(dir / "trajectory.json");
+  const auto [left, right] = retarget::SplitBimanualTrajectory(both);
+  const retarget::Embodiment left_hand = retarget::FindEmbodiment(left.embodiment, kData / "robots");
+  const retarget::Embodiment right_hand = retarget::FindEmbodiment(right.embodiment, kData / "robots");
+  deploy::BimanualConfig config;
+  config.plan = f.plan;
+  deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, left_hand, right_hand, config);
+  if (f.replay) ReplayTwo(f, plan, both, left_hand, right_hand, dir);
   row.ok = plan.ok;
   row.slowdown = plan.right.slowdown;
   row.reference_success = left.metrics.value("success", false);
@@ -313,6 +360,14 @@ Row PlanTwo(const fs::path& dir) {
                                         plan.right.over_acceleration.size()) +
             " issues, " + std::to_string(plan.collisions.size()) + " collisions, closest " +
             std::to_string(closest).substr(0, 5) + " m";
+  if (plan.right.replay.ran) {
+    const deploy::ReplayReport& l = plan.left.replay;
+    const deploy::ReplayReport& r = plan.right.replay;
+    row.arm_success = r.success;
+    row.wrist_mean = 0.5 * (l.wrist_position_error_mean + r.wrist_position_error_mean);
+    row.wrist_max = std::max(l.wrist_position_error_max, r.wrist_position_error_max);
+    row.why += "; " + TwoArmOutcome("arms", plan);
+  }
   return row;
 }
 
@@ -377,7 +432,7 @@ int main(int argc, char** argv) {
   if (made(f.cache / "hot3d_left")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
   for (int i = 0; i < f.carries; ++i) {
     const fs::path dir = f.cache / ("carry" + std::to_string(i));
-    if (made(dir)) two.push_back(PlanTwo(dir));
+    if (made(dir)) two.push_back(PlanTwo(f, dir));
   }
   std::printf("== One arm: %zu trajectories (%d synthetic %.0f-s references clean + noisy, fast preset; HOT3D)\n",
               single.size(), f.refs, f.clip_seconds);

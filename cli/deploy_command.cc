@@ -76,6 +76,16 @@ void PrintTiming(const deploy::Plan& plan) {
               plan.wrist_path.c_str());
 }
 
+void PrintReplay(const char* what, const deploy::ReplayReport& r) {
+  std::printf("%s: object error mean %.1f mm (max %.1f), rotation mean %.3f rad (max %.3f), %s "
+              "(floating hand: %s); wrist tracking mean %.1f mm (max %.1f), %.3f rad (max %.3f)\n", what,
+              1000 * r.object_position_error_mean, 1000 * r.object_position_error_max,
+              r.object_rotation_error_mean, r.object_rotation_error_max, r.success ? "success" : "failure",
+              r.reference_success < 0 ? "unknown" : r.reference_success ? "success" : "failure",
+              1000 * r.wrist_position_error_mean, 1000 * r.wrist_position_error_max, r.wrist_rotation_error_mean,
+              r.wrist_rotation_error_max);
+}
+
 void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   std::vector<std::filesystem::path> databases;
   if (a.trajectory.empty()) databases.push_back(a.db.db);
@@ -132,16 +142,7 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
               hand.name.c_str(), p.yaw * 180 / 3.14159265358979, p.x, p.y, p.candidates, p.manipulability);
   PrintTiming(plan);
   PrintIssues(plan);
-  if (plan.replay.ran) {
-    const deploy::ReplayReport& r = plan.replay;
-    std::printf("replay: object error mean %.1f mm (max %.1f), rotation mean %.3f rad (max %.3f), %s "
-                "(floating hand: %s); wrist tracking mean %.1f mm (max %.1f), %.3f rad (max %.3f)\n",
-                1000 * r.object_position_error_mean, 1000 * r.object_position_error_max,
-                r.object_rotation_error_mean, r.object_rotation_error_max, r.success ? "success" : "failure",
-                r.reference_success < 0 ? "unknown" : r.reference_success ? "success" : "failure",
-                1000 * r.wrist_position_error_mean, 1000 * r.wrist_position_error_max, r.wrist_rotation_error_mean,
-                r.wrist_rotation_error_max);
-  }
+  if (plan.replay.ran) PrintReplay("replay", plan.replay);
   std::printf("%s: %zu unreachable, %zu too fast, %zu too abrupt -> %s\n", plan.ok ? "ok" : "FAILED checks",
               plan.unreachable.size(), plan.too_fast.size(), plan.over_acceleration.size(), a.out.c_str());
   if (!plan.ok) {
@@ -194,7 +195,7 @@ void AddPlan(CLI::App& deploy) {
 void AddPlanTwo(CLI::App& deploy) {
   struct Args {
     std::string trajectory, left, right, left_hand, right_hand, robots_dir, out;
-    bool force = false;
+    bool force = false, no_replay = false;
     deploy::BimanualConfig config;
   };
   auto a = std::make_shared<Args>();
@@ -215,6 +216,7 @@ void AddPlanTwo(CLI::App& deploy) {
   cmd->add_option("--clearance", a->config.clearance, "Metres the arms and hands must keep apart")->check(FiniteRange(0, 1))
       ->capture_default_str();
   cmd->add_option("--rate", a->config.plan.rate_hz, "Command rate, Hz")->check(FiniteRange(0, 1000))->capture_default_str();
+  cmd->add_flag("--no-replay", a->no_replay, "Skip the two-arm MuJoCo replay");
   AddForceFlag(*cmd, a->force);
   cmd->footer(
       "The bases stand side by side, the left arm at +base-distance/2 and the right at -base-distance/2\n"
@@ -222,7 +224,9 @@ void AddPlanTwo(CLI::App& deploy) {
       "and the hand a capsule along the flange. Both arms are re-timed on one clock (the slower arm sets\n"
       "the pace) within their speed and acceleration limits; commands where the arms come closer than the clearance are\n"
       "listed with their times and the command exits non-zero (the plan is written either way);\n"
-      "`deploy stream` refuses such a plan and sends one doasido_lcm.bimanual_command per tick otherwise.\n\n"
+      "`deploy stream` refuses such a plan and sends one doasido_lcm.bimanual_command per tick otherwise.\n"
+      "With --trajectory (one simulation of both hands, scene/scene.xml beside it), both arms and hands are\n"
+      "replayed in one MuJoCo scene with the object: each arm's wrist tracking and the object's outcome.\n\n"
       "Examples:\n"
       "  doasido deploy plan-two --trajectory work/doasido/artifacts/12/retarget/trajectory.json --out work/two.json\n"
       "  doasido deploy plan-two --left work/left/trajectory.json --right work/right/trajectory.json \\\n"
@@ -241,6 +245,12 @@ void AddPlanTwo(CLI::App& deploy) {
     const retarget::Embodiment lh = retarget::FindEmbodiment(a->left_hand.empty() ? left.embodiment : a->left_hand, robots);
     const retarget::Embodiment rh = retarget::FindEmbodiment(a->right_hand.empty() ? right.embodiment : a->right_hand, robots);
     deploy::BimanualPlan plan = deploy::MakeBimanualPlan(left, right, lh, rh, a->config);
+    if (!a->trajectory.empty() && a->config.plan.replay && !a->no_replay) {
+      const retarget::TrajectoryFiles files = retarget::FilesBeside(std::filesystem::absolute(a->trajectory));
+      deploy::ReplayBimanualPlan(plan, retarget::ReadTrajectoryJson(files.trajectory), lh, rh,
+                                 retarget::ReadSceneXml(files.scene_dir), files.scene_dir,
+                                 a->config.plan.servo_omega);
+    }
     plan.left.source = a->trajectory.empty() ? a->left : a->trajectory;
     plan.right.source = a->trajectory.empty() ? a->right : a->trajectory;
     WriteWhole(a->out, OutputKind::kFile, [&](const std::filesystem::path& p) {
@@ -251,6 +261,13 @@ void AddPlanTwo(CLI::App& deploy) {
                 a->config.base_distance, closest);
     PrintTiming(plan.right);
     for (const auto* side : {&plan.left, &plan.right}) PrintIssues(*side);
+    if (plan.right.replay.ran) {
+      PrintReplay("replay, both arms", plan.right.replay);
+      std::printf("  left arm: wrist tracking mean %.1f mm (max %.1f); right arm: mean %.1f mm (max %.1f)\n",
+                  1000 * plan.left.replay.wrist_position_error_mean, 1000 * plan.left.replay.wrist_position_error_max,
+                  1000 * plan.right.replay.wrist_position_error_mean,
+                  1000 * plan.right.replay.wrist_position_error_max);
+    }
     for (const auto& c : plan.collisions) {
       std::printf("collision    command %5d  t=%7.3f s  arms %.1f mm apart (clearance %.1f mm)\n", c.frame, c.time,
                   1000 * c.value, 1000 * c.limit);

@@ -102,16 +102,21 @@ double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right
   return best;
 }
 
-BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
-                              const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
-                              const BimanualConfig& config) {
-  CheckConfig(config, "deploy");
-  if (left.qpos.size() != right.qpos.size() || left.fps != right.fps || left.qpos.empty()) {
-    throw Error("bad_trajectory",
-                "left and right trajectories differ in frames (" + std::to_string(left.qpos.size()) + " and " +
-                    std::to_string(right.qpos.size()) + ") or frame rate",
-                {.field = "qpos"});
-  }
+namespace {
+
+// The commands of `plan` that fail a check: either arm's unreachable
+// frames and limit excesses, and the arm-arm collisions.
+size_t FailingCount(const BimanualPlan& plan) {
+  size_t n = plan.collisions.size();
+  for (const Plan* p : {&plan.left, &plan.right}) n += p->unreachable.size() + p->too_fast.size() + p->over_acceleration.size();
+  return n;
+}
+
+// Both arms planned with the pair's frame at (x, y) on the table (the
+// workspace's yaw), and their arm-arm distances checked.
+BimanualPlan PlanPairAt(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
+                        const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
+                        const BimanualConfig& config, double x, double y) {
   std::vector<Pose> wrists;
   Vec3 across = Vec3::Zero();  // from the right wrist to the left, summed over frames
   for (int f = 0; f < static_cast<int>(left.qpos.size()); ++f) {
@@ -123,13 +128,13 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
   // (+y of the pair's frame), then by the workspace's yaw.
   const WorkspaceConfig& w = config.plan.workspace;
   const double yaw = w.yaw + std::numbers::pi / 2 - std::atan2(across.y(), across.x());
-  const Pose world_to_pair = PlacementPose(yaw, w.x, w.y, wrists, w.base_height);
+  const Pose world_to_pair = PlacementPose(yaw, x, y, wrists, w.base_height);
   // p_base = p_pair - (base position in the pair's frame).
   const auto place = [&](double side) {
     Placement p;
     p.yaw = yaw;
-    p.x = w.x;
-    p.y = w.y;
+    p.x = x;
+    p.y = y;
     p.world_to_base = Pose{Quat::Identity(), Vec3(0, -side * config.base_distance / 2, 0)} * world_to_pair;
     return p;
   };
@@ -155,6 +160,41 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
   }
   out.ok = out.left.ok && out.right.ok && out.collisions.empty();
   return out;
+}
+
+}  // namespace
+
+BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
+                              const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
+                              const BimanualConfig& config) {
+  CheckConfig(config, "deploy");
+  if (left.qpos.size() != right.qpos.size() || left.fps != right.fps || left.qpos.empty()) {
+    throw Error("bad_trajectory",
+                "left and right trajectories differ in frames (" + std::to_string(left.qpos.size()) + " and " +
+                    std::to_string(right.qpos.size()) + ") or frame rate",
+                {.field = "qpos"});
+  }
+  const WorkspaceConfig& w = config.plan.workspace;
+  BimanualPlan best = PlanPairAt(left, right, left_hand, right_hand, config, w.x, w.y);
+  if (best.ok) return best;
+  // The default spot fails a check (two forearms crossing where the hands
+  // meet, say): the pair's frame moved over the workspace's offset grid,
+  // the fewest failing commands kept, then the least slowdown.
+  int candidates = 1;
+  for (int ix = 0; ix < w.offset_steps; ++ix) {
+    for (int iy = 0; iy < w.offset_steps; ++iy) {
+      const auto offset = [&](int i) {
+        return w.offset_steps == 1 ? 0.0 : w.offset_range * (2.0 * i / (w.offset_steps - 1) - 1);
+      };
+      if (offset(ix) == 0 && offset(iy) == 0) continue;
+      BimanualPlan p = PlanPairAt(left, right, left_hand, right_hand, config, w.x + offset(ix), w.y + offset(iy));
+      ++candidates;
+      const auto key = [](const BimanualPlan& q) { return std::pair(FailingCount(q), q.right.slowdown); };
+      if (key(p) < key(best)) best = std::move(p);
+    }
+  }
+  best.left.placement.candidates = best.right.placement.candidates = candidates;
+  return best;
 }
 
 StreamResult StreamBimanualPlan(const BimanualPlan& plan, const StreamOptions& options,

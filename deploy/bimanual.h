@@ -9,8 +9,9 @@
 // -base_distance / 2. The common frame is placed like one arm's base in
 // plan.h (offset from the workspace config, around the mean of both
 // wrists), turned so that the mean line from the right wrist to the left
-// one points along its +y (then by the workspace's yaw), without the search:
-// the two arms keep one placement. Both arms then go through plan.h's steps
+// one points along its +y (then by the workspace's yaw); the one-arm search
+// is not run, but a spot that fails a check is moved over the workspace's
+// offset grid (MakeBimanualPlan). Both arms then go through plan.h's steps
 // 2-4 on one clock (MakePlansOnOneClock): one time map re-times both paths
 // so that no joint of either arm exceeds its limits, and both lead moves
 // last as long as the longer one, so the two arms' commands stay in step.
@@ -63,6 +64,12 @@ struct BimanualPlan {
 
 // Makes both plans and checks them. Trajectories must have the same frame
 // rate and length (one clip). Throws Error("bad_trajectory") otherwise.
+// When the pair's default spot (the workspace's x, y) fails a check, the
+// pair's frame is moved over the workspace's offset grid (offset_range,
+// offset_steps, as one arm's placement search) and the spot with the
+// fewest failing commands, then the least slowdown, is kept (a carry whose
+// forearms cross within the clearance where the hands meet, for one);
+// both placements' `candidates` count the spots tried.
 BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
                               const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
                               const BimanualConfig& config);
@@ -73,6 +80,24 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
 // (each hand against the other arm's links still counts).
 double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right, const Pose& right_base,
                       const BimanualConfig& config, bool hand_to_hand = true);
+
+// Both arms (and hands) of `plan` in one MuJoCo scene with the object, on
+// the plan's one clock (bimanual_replay.cc): each arm servoed along its
+// commands as the one-arm replay does (plan.h step 5), each hand's
+// actuators driven by the two-hand trajectory `both` (its variables
+// prefixed kLeftPrefix / kRightPrefix) at each command's trajectory time,
+// the object free. Fills plan.left.replay and plan.right.replay: each
+// arm's wrist tracking, fingers and hand-object contacts, and in both the
+// one object's error against the trajectory's object (the floating
+// two-hand simulation's) and the trajectory's own success.
+// ReplayMount::kFloating replays the retargeting's two floating hands
+// under the same time map instead: the yardstick for what the re-timing
+// alone does. Nothing is filled when the trajectory has no object poses
+// or the scene no free "object" body.
+void ReplayBimanualPlan(BimanualPlan& plan, const retarget::HandTrajectory& both,
+                        const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
+                        const std::string& scene_xml, const std::filesystem::path& scene_dir,
+                        double servo_omega = PlanConfig{}.servo_omega, ReplayMount mount = ReplayMount::kArm);
 
 // Streams doasido_lcm::bimanual_command (deploy/bimanual_command.lcm), one
 // message per tick carrying both arms and both hands, as StreamPlan does

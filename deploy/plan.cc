@@ -174,6 +174,7 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   RequireInRange(section, "approach_speed", c.approach_speed, 0.005, 1);
   RequireInRange(section, "follow_rounds", c.follow_rounds, 0, 5);
   RequireInRange(section, "follow_smoothing", c.follow_smoothing, 0, 2);
+  CheckConfig(c.wrist_smoothing, section + ".wrist_smoothing");
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -201,11 +202,20 @@ Pose PlacementPose(double yaw, double x, double y, const std::vector<Pose>& wris
   return {r, Vec3(x, y, -base_height) - r * Vec3(centre.x(), centre.y(), 0)};
 }
 
-std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& trajectories,
+std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& given,
                                       const std::vector<const retarget::Embodiment*>& embodiments,
                                       const std::vector<Placement>& placements, const PlanConfig& config) {
   CheckConfig(config, "deploy");
-  const size_t arms = trajectories.size();
+  const size_t arms = given.size();
+  // Step 0: the arms follow the smoothed wrist paths.
+  std::vector<retarget::HandTrajectory> smoothed(arms);
+  std::vector<WristSmoothingReport> smoothing(arms);
+  std::vector<const retarget::HandTrajectory*> trajectories;
+  for (size_t a = 0; a < arms; ++a) {
+    RequireTrajectory(*given[a]);
+    smoothed[a] = SmoothWrist(*given[a], config.wrist_smoothing, &smoothing[a]);
+    trajectories.push_back(&smoothed[a]);
+  }
   for (const auto* t : trajectories) {
     RequireTrajectory(*t);
     if (t->qpos.size() != trajectories[0]->qpos.size() || t->fps != trajectories[0]->fps) {
@@ -223,6 +233,7 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
     for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
     plan.hand_joints = BuildArmHandModel(*embodiments[a], Pose::Identity()).hand_joints;
     plan.placement = placements[a];
+    plan.wrist_smoothing = smoothing[a];
     plan.trajectory_duration = (frames - 1) / first.fps;
     paths.push_back(SolveArmPath(*trajectories[a], placements[a].world_to_base, config));
     plan.position_error = paths[a].position_error;
@@ -282,8 +293,9 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
               const PlanConfig& config, const Placement* placement) {
   CheckConfig(config, "deploy");
   RequireTrajectory(trajectory);
-  std::vector<Pose> wrists;
-  for (int f = 0; f < static_cast<int>(trajectory.qpos.size()); ++f) wrists.push_back(WristPose(trajectory, f));
+  std::vector<Pose> wrists;  // the smoothed path's, which the arm will follow (MakePlansOnOneClock)
+  const retarget::HandTrajectory smoothed = SmoothWrist(trajectory, config.wrist_smoothing, nullptr);
+  for (int f = 0; f < static_cast<int>(smoothed.qpos.size()); ++f) wrists.push_back(WristPose(smoothed, f));
   Placement place = placement ? *placement : SearchPlacement(wrists, trajectory.fps, config);
   Plan plan = MakePlansOnOneClock({&trajectory}, {&embodiment}, {place}, config)[0];
   if (placement) {

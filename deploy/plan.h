@@ -3,6 +3,10 @@
 // commands for a UR3e carrying the hand (ur3e.h), at a fixed command rate,
 // re-timed so that the arm can run them.
 //
+// 0. Smoothing (wrist_smoothing.h): a hand-only trajectory's wrist path is
+//    low-passed within a tolerance (the jitter of a wrist tracked from
+//    video is noise the arm need not follow); the plan follows the
+//    smoothed path, the replay measures against the trajectory's own.
 // 1. Placement (placement.h). The trajectory's world has the table top (its
 //    floor) at z = 0. The arm's base stands on the table; the trajectory is
 //    turned by a yaw about the vertical and its mean wrist position is put
@@ -59,6 +63,7 @@
 #include "deploy/arm_ik.h"
 #include "deploy/time_scaling.h"
 #include "deploy/ur3e.h"
+#include "deploy/wrist_smoothing.h"
 #include "robot/trajectory/format.h"
 
 namespace doasido::deploy {
@@ -112,10 +117,12 @@ struct PlanConfig {
   // s: the window of the moving average over the followed wrist's offset
   // from the trajectory's (FloatingWristTrajectory).
   double follow_smoothing = 0.2;
+  // Step 0 (wrist_smoothing.h): the wrist path low-passed before planning.
+  WristSmoothingConfig wrist_smoothing;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
                                                 home, lead_in, lead_out, approach_height, approach_speed,
-                                                servo_omega, follow_rounds, follow_smoothing)
+                                                servo_omega, follow_rounds, follow_smoothing, wrist_smoothing)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -182,6 +189,7 @@ struct Plan {
   std::vector<double> position_error, rotation_error;  // IK residual per trajectory frame
   std::vector<FrameIssue> unreachable, too_fast, over_acceleration;
   ReplayReport replay;
+  WristSmoothingReport wrist_smoothing;  // step 0
   bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration
 };
 
@@ -259,7 +267,9 @@ FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajector
 // reachable_fraction, candidates, search_slowdown, manipulability},
 // "arm_joints", "hand_joints", "times", "source_times", "lead_in",
 // "lead_out", "trajectory_duration", "slowdown", "wrist_path" (read as
-// "trajectory" when absent), "arm": [[6]], "hand": [[n]],
+// "trajectory" when absent), "wrist_smoothing": {applied, cutoff_hz,
+// position_deviation_max, rotation_deviation_max, bounded_frames} (absent
+// in older files), "arm": [[6]], "hand": [[n]],
 // "position_error", "rotation_error", "unreachable": [{frame, time,
 // position_error, rotation_error}], "too_fast": [{frame, time, joint, speed,
 // limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],

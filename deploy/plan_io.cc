@@ -68,6 +68,7 @@ Json PlanToJson(const Plan& plan) {
   j["trajectory_duration"] = plan.trajectory_duration;
   j["slowdown"] = plan.slowdown;
   j["wrist_path"] = plan.wrist_path;
+  j["wrist_smoothing"] = plan.wrist_smoothing;
   Json arm = Json::array(), hand = Json::array();
   for (const ArmQ& q : plan.arm) arm.push_back(std::vector<double>(q.data(), q.data() + 6));
   for (const Eigen::VectorXd& q : plan.hand) hand.push_back(std::vector<double>(q.data(), q.data() + q.size()));
@@ -141,6 +142,8 @@ void ReadTiming(const Json& j, int version, Plan& plan, std::string& field) {
   plan.slowdown = j.at("slowdown").get<double>();
   field = "wrist_path";
   plan.wrist_path = j.value("wrist_path", std::string(kWristPathTrajectory));
+  field = "wrist_smoothing";
+  plan.wrist_smoothing = j.value("wrist_smoothing", WristSmoothingReport{});  // absent before it existed
 }
 
 // The arm and hand commands, checked against the timing's length.

@@ -10,9 +10,10 @@
 #include "robot/embodiment.h"
 
 #include "deploy/plan.h"
+#include "deploy/replay_rig.h"
 
 namespace doasido::deploy {
-namespace {
+namespace replay {
 
 using Eigen::VectorXd;
 
@@ -32,14 +33,6 @@ VectorXd RowAt(const std::vector<VectorXd>& rows, double fps, double s) {
   const double a = f - i;
   return (1 - a) * rows[i] + a * rows[j];
 }
-
-// How the rig's actuators are driven: by the trajectory's own controls
-// (matched by actuator name) when it has them, else, for actuators that
-// drive one joint the trajectory has, by that joint's trajectory position.
-struct HandDrive {
-  std::vector<std::pair<int, int>> from_ctrl;   // (actuator, trajectory ctrl column)
-  std::vector<std::pair<int, int>> from_joint;  // (actuator, trajectory qpos column)
-};
 
 // joints: (qpos address, trajectory qpos column) of the rig's joints the trajectory has.
 HandDrive MatchActuators(const mjModel* m, const std::vector<std::pair<int, int>>& joints,
@@ -68,23 +61,6 @@ double Mean(const std::vector<double>& v) {
 }
 
 double Max(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
-
-// The simulated rig of a replay: the arm with the hand on its flange, or
-// the floating hand of the retargeting (its wrist actuators driven by the
-// trajectory's own wrist controls), in the trajectory's scene.
-struct Rig {
-  retarget::ModelPtr model;
-  int object_qpos = -1;
-  std::array<int, 6> arm_qpos{}, arm_dof{};  // arm only
-  // (qpos address, trajectory qpos column) of the trajectory's joints the
-  // rig has (the fingers; the floating wrist too): set from the trajectory
-  // at the start, and the targets of their position actuators when the
-  // trajectory has no controls.
-  std::vector<std::pair<int, int>> joints;
-  std::vector<int> wrist_qpos;               // floating only: x y z rx ry rz
-  int wrist_body = -1;                       // the body carrying the hand: flange or floating mount
-  int object_body = -1;
-};
 
 // The trajectory's joints `m` has, by name.
 std::vector<std::pair<int, int>> TrajectoryJoints(const mjModel* m, const retarget::HandTrajectory& t) {
@@ -159,6 +135,11 @@ void Summarise(ReplayReport& r) {
   // REFERENCE.md section 5's success, as the retargeting's metrics judge it.
   r.success = r.ran && r.object_position_error_mean < 0.10 && r.object_rotation_error_mean < 0.5;
 }
+
+}  // namespace replay
+namespace {
+
+using namespace replay;
 
 // Step 5 on `rig` (arm when rig.arm_qpos is used, floating when rig.wrist_qpos is set).
 // One replay: the simulation of a plan's commands on a rig, driven and

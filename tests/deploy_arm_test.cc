@@ -172,6 +172,7 @@ PlanConfig IdentityPlacement(const Pose& centre) {
   config.workspace.yaw_steps = 1;
   config.workspace.offset_steps = 1;
   config.home = {0.3, -1.9, 1.7, -1.4, -1.5, 0.2};
+  config.wrist_smoothing.cutoff_hz = 0;  // the exact path (deploy_wrist_smoothing_test smooths)
   return config;
 }
 

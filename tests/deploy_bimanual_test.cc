@@ -3,7 +3,9 @@
 // each hand retargeted onto its side's robot hand: bases 60 cm apart plan
 // without an arm-arm collision; bases 5 cm apart overlap in every frame and
 // the stream refuses the plan naming the frames' times; Debian's
-// lcm-logger (an independent process) records both arms' commands at 50 Hz.
+// lcm-logger (an independent process) records both arms' commands at 50 Hz;
+// a two-hand carry replayed with both arms in one scene reports each arm's
+// wrist tracking and the object, as the two floating hands' replay does.
 #include <chrono>
 #include <csignal>
 #include <thread>
@@ -12,6 +14,8 @@
 
 #include "core/error.h"
 #include "deploy/bimanual.h"
+#include "retarget/scene/scene_builder.h"
+#include "robot/trajectory/format.h"
 #include "tests/test_util.h"
 #include "tests/two_hand_episode.h"
 
@@ -118,6 +122,111 @@ TEST(Bimanual, LcmLoggerRecordsBothArmsAtFiftyHertz) {
   for (const BimanualRecord& r : dry) ExpectEqualsPlan(r, plan);
   EXPECT_EQ(dry.back().log_time_us - dry.front().log_time_us,
             static_cast<int64_t>(dry.size() - 1) * 20000);
+}
+
+// A 2-s two-hand carry of a cylinder (synth), each hand retargeted
+// kinematically with the grasp terms onto its Sharpa hand in the object's
+// scene, combined into one two-hand trajectory whose object poses are the
+// episode's own.
+struct Carry {
+  retarget::Embodiment left_hand, right_hand;
+  retarget::HandTrajectory both;
+  std::string scene_xml;
+};
+
+Carry MakeCarry(const std::filesystem::path& dir) {
+  synth::EpisodeSpec spec;
+  spec.frames = 60;
+  spec.two_hand_task = synth::TwoHandTask::kCarry;
+  spec.grasp = synth::GraspTypeFromName("pinch");
+  const TriMesh mesh = synth::MakeCylinder(0.035, 0.10, 16);
+  const recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
+  retarget::SceneConfig scene_config;
+  scene_config.place_on_floor = false;
+  const retarget::ObjectScene scene = retarget::BuildObjectScene(mesh, r.object_poses[0], scene_config, dir);
+  Carry c{.left_hand = retarget::FindEmbodiment("sharpa_left", testing::SharedData() / "robots"),
+          .right_hand = retarget::FindEmbodiment("sharpa_right", testing::SharedData() / "robots"),
+          .scene_xml = testing::ReadFile(scene.xml_path)};
+  retarget::KinematicConfig config;
+  config.restarts = 1;
+  const auto solve = [&](const retarget::Embodiment& e, const std::vector<recon::Joints21>& joints,
+                         const std::vector<bool>& valid) {
+    const retarget::HandModel model = retarget::BuildHandModel(e, c.scene_xml, dir);  // outlives the solver
+    retarget::KinematicRetargeter k(model, config);
+    return k.Solve(joints, valid, r.fps, {}, &r.object_poses);
+  };
+  c.both = retarget::CombineBimanualTrajectories(solve(c.left_hand, r.left_joints, r.left_valid),
+                                                 solve(c.right_hand, r.right_joints, r.right_valid));
+  c.both.object_poses = r.object_poses;
+  return c;
+}
+
+void ExpectReportsEveryCommand(const BimanualPlan& plan, const char* what) {
+  const size_t path = plan.right.arm.size() - plan.right.lead_in - plan.right.lead_out;
+  for (const Plan* side : {&plan.left, &plan.right}) {
+    const ReplayReport& r = side->replay;
+    ASSERT_TRUE(r.ran) << what;
+    EXPECT_EQ(r.wrist_position_error.size(), path) << what;
+    EXPECT_EQ(r.finger_error.size(), path) << what;
+    EXPECT_EQ(r.hand_contacts.size(), path) << what;
+    EXPECT_EQ(r.object_position_error.size(), path) << what;
+  }
+  // One object for both arms.
+  EXPECT_EQ(plan.left.replay.object_position_error, plan.right.replay.object_position_error) << what;
+}
+
+TEST(Bimanual, BothArmsReplayACarryInOneSceneWithTheObject) {
+  TempDir dir;
+  const Carry c = MakeCarry(dir.path());
+  const auto [left, right] = retarget::SplitBimanualTrajectory(c.both);
+  BimanualPlan arms = MakeBimanualPlan(left, right, c.left_hand, c.right_hand, {});
+  ASSERT_TRUE(arms.ok);
+  BimanualPlan floating = arms;
+  ReplayBimanualPlan(arms, c.both, c.left_hand, c.right_hand, c.scene_xml, dir.path());
+  ReplayBimanualPlan(floating, c.both, c.left_hand, c.right_hand, c.scene_xml, dir.path(), PlanConfig{}.servo_omega,
+                     ReplayMount::kFloating);
+  ExpectReportsEveryCommand(arms, "arms");
+  ExpectReportsEveryCommand(floating, "floating");
+  for (const BimanualPlan* p : {&arms, &floating}) {
+    std::printf("%s: object %.1f mm / %.3f rad (max %.1f mm), wrist left %.2f / %.2f mm, right %.2f / %.2f mm, "
+                "contacts left %d right %d\n", p == &arms ? "arms" : "floating",
+                1000 * p->right.replay.object_position_error_mean, p->right.replay.object_rotation_error_mean,
+                1000 * p->right.replay.object_position_error_max, 1000 * p->left.replay.wrist_position_error_mean,
+                1000 * p->left.replay.wrist_position_error_max, 1000 * p->right.replay.wrist_position_error_mean,
+                1000 * p->right.replay.wrist_position_error_max,
+                *std::max_element(p->left.replay.hand_contacts.begin(), p->left.replay.hand_contacts.end()),
+                *std::max_element(p->right.replay.hand_contacts.begin(), p->right.replay.hand_contacts.end()));
+  }
+  // Each arm's flange follows its own hand's wrist path (IK within 1 mm at
+  // the frames, the servo between them) while its hand is free; in contact
+  // the kinematic grasp's overlap with the object pushes it, as it pushes
+  // the floating wrist, which yields more.
+  for (const Plan* side : {&arms.left, &arms.right}) {
+    const ReplayReport& r = side->replay;
+    double free_sum = 0, free_max = 0;
+    int free = 0;
+    for (size_t k = 0; k < r.hand_contacts.size(); ++k) {
+      if (r.hand_contacts[k] > 0) continue;
+      free_sum += r.wrist_position_error[k];
+      free_max = std::max(free_max, r.wrist_position_error[k]);
+      ++free;
+    }
+    ASSERT_GT(free, 10);
+    EXPECT_LT(free_sum / free, 0.003);
+    EXPECT_LT(free_max, 0.010);
+  }
+  EXPECT_LT(arms.left.replay.wrist_position_error_mean, floating.left.replay.wrist_position_error_mean);
+  EXPECT_LT(arms.right.replay.wrist_position_error_mean, floating.right.replay.wrist_position_error_mean);
+  // The arms do to the object what the floating hands do under the same time map.
+  EXPECT_NEAR(arms.right.replay.object_position_error_mean, floating.right.replay.object_position_error_mean, 0.01);
+  EXPECT_EQ(arms.right.replay.success, floating.right.replay.success);
+
+  // Written into the two-arm plan file and read back.
+  WriteBimanualPlanJson(arms, {}, dir / "two.json");
+  const BimanualPlan back = BimanualPlanFromJson(ReadPlanFile(dir / "two.json"), "two.json");
+  EXPECT_EQ(back.left.replay.wrist_position_error, arms.left.replay.wrist_position_error);
+  EXPECT_EQ(back.right.replay.hand_contacts, arms.right.replay.hand_contacts);
+  EXPECT_EQ(back.right.replay.success, arms.right.replay.success);
 }
 
 }  // namespace

@@ -38,6 +38,9 @@ inline retarget::HandTrajectory FromJointPath(const std::function<deploy::ArmQ(d
 inline deploy::Plan PlanInBaseFrame(const retarget::HandTrajectory& t, const deploy::ArmQ& home,
                                     deploy::PlanConfig config = {}) {
   for (int i = 0; i < 6; ++i) config.home[i] = home[i];
+  // The exact joint path: these plans measure the re-timing on it, not the
+  // wrist smoothing (deploy_wrist_smoothing_test does that).
+  config.wrist_smoothing.cutoff_hz = 0;
   deploy::Placement identity;
   identity.world_to_base = Pose::Identity();
   return deploy::MakePlan(t, retarget::FindEmbodiment("sharpa_right", {}), config, &identity);

@@ -30,9 +30,9 @@ Json IngestSummary::ToJson() const {
 }
 
 IngestSummary IngestList(Database& db, const std::filesystem::path& list,
-                         const ListOptions& options) {
+                         const ingest::ListOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  ListReadResult read = ReadClipList(list, options);
+  ingest::ListReadResult read = ingest::ReadClipList(list, options);
   IngestSummary summary;
   summary.list = list.string();
   summary.format = read.format;
@@ -48,7 +48,7 @@ IngestSummary IngestList(Database& db, const std::filesystem::path& list,
     try {
       Database::Transaction tx(db);
       for (size_t i = begin; i < end; ++i) {
-        ListRow& row = read.rows[i];
+        ingest::ListRow& row = read.rows[i];
         auto [it, fresh] = videos.emplace(row.video, 0);
         if (fresh) it->second = db.UpsertVideo(row.video);
         row.clip.video_id = it->second;

@@ -14,9 +14,6 @@
 
 namespace doasido::pipeline {
 
-using ingest::ListOptions;
-using ingest::RowError;
-
 struct IngestSummary {
   std::string list;
   std::string format;
@@ -24,7 +21,7 @@ struct IngestSummary {
   std::int64_t inserted = 0;         // new clips queued
   std::int64_t already_present = 0;  // same video and span already in the database
   std::int64_t detections = 0;
-  std::vector<RowError> errors;      // refused rows, each named
+  std::vector<ingest::RowError> errors;      // refused rows, each named
   double seconds = 0;
   // Refused rows counted by the field at fault ("row" for a whole row:
   // not JSON, wrong column count, empty line).
@@ -37,6 +34,6 @@ struct IngestSummary {
 // no-op (clips are deduplicated by video and span). Shows progress on long
 // lists.
 IngestSummary IngestList(Database& db, const std::filesystem::path& list,
-                         const ListOptions& options = {});
+                         const ingest::ListOptions& options = {});
 
 }  // namespace doasido::pipeline

@@ -12,7 +12,7 @@
 
 #include "synth/episode.h"
 #include "synth/objects.h"
-#include "synth/rasterizer.h"
+#include "video/mesh_rasterizer.h"
 #include "synth/render.h"
 
 namespace doasido::synth {
@@ -72,10 +72,10 @@ BENCHMARK(BM_RenderFrame640StaticCamera)->Unit(benchmark::kMillisecond);
 
 void BM_ZBuffer640(benchmark::State& st) {
   const Scene s = MakeScene(640, 480);
-  RasterTarget t;
+  video::RasterTarget t;
   for (auto _ : st) {
     t.Reset(640, 480);
-    for (const TriMesh& m : s.meshes_cam) Rasterize(m, s.state.camera, 1, t);
+    for (const TriMesh& m : s.meshes_cam) video::Rasterize(m, s.state.camera, 1, t);
     benchmark::DoNotOptimize(t.depth.data);
   }
   st.counters["frames/s"] = benchmark::Counter(st.iterations(), benchmark::Counter::kIsRate);
@@ -108,10 +108,10 @@ BENCHMARK(BM_FillPolySilhouette640)->Unit(benchmark::kMillisecond);
 // pixel count).
 void BM_BruteForce160Scaled(benchmark::State& st) {
   const Scene s = MakeScene(160, 120);
-  RasterTarget t;
+  video::RasterTarget t;
   for (auto _ : st) {
     t.Reset(160, 120);
-    for (const TriMesh& m : s.meshes_cam) RasterizeBruteForce(m, s.state.camera, 1, t);
+    for (const TriMesh& m : s.meshes_cam) video::RasterizeBruteForce(m, s.state.camera, 1, t);
     benchmark::DoNotOptimize(t.depth.data);
   }
   st.counters["frames/s@640"] =
@@ -129,19 +129,19 @@ double SecondsPer(const std::function<void()>& fn, int reps) {
 void PrintRatios() {
   const Scene s = MakeScene(640, 480);
   const Scene small = MakeScene(160, 120);
-  RasterTarget t;
+  video::RasterTarget t;
   cv::Mat mask(480, 640, CV_8U);
   const double zbuf = SecondsPer(
       [&] {
         t.Reset(640, 480);
-        for (const TriMesh& m : s.meshes_cam) Rasterize(m, s.state.camera, 1, t);
+        for (const TriMesh& m : s.meshes_cam) video::Rasterize(m, s.state.camera, 1, t);
       },
       20);
   const double brute = 16 * SecondsPer(
                                 [&] {
                                   t.Reset(160, 120);
                                   for (const TriMesh& m : small.meshes_cam)
-                                    RasterizeBruteForce(m, small.state.camera, 1, t);
+                                    video::RasterizeBruteForce(m, small.state.camera, 1, t);
                                 },
                                 1);
   const double fill = SecondsPer(

@@ -254,6 +254,54 @@ void Export(const Options& o) {
               static_cast<double>(s.bytes) / 1e6);
 }
 
+// `dataset create`: the next version, from the database.
+void AddCreateCommand(CLI::App& cmd, const std::shared_ptr<Options>& o) {
+  auto* create = cmd.add_subcommand("create", "Make the next version from the database");
+  AddDbOptions(*create, o->db);
+  AddRootOptions(*create, *o);
+  create->add_option("--select", o->select,
+                     "verified: accepted by a person in `review serve` /verify; success: passed "
+                     "by the trajectory stage; all: passed or flagged")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"verified", "success", "all"}));
+  create->add_option("--split", o->split,
+                     "Fractions of episodes per split; a video goes whole to one split")
+      ->capture_default_str();
+  create->add_option("--seed", o->seed, "Seed of the split assignment")->capture_default_str();
+  create->add_flag("--no-thumbnails", o->no_thumbnails,
+                   "Playbook report without example thumbnails (no decoding)");
+  create->add_flag("--allow-empty", o->allow_empty, "Make a version even with no episodes");
+  create->add_flag("--allow-stale", o->allow_stale,
+                   "Make a version although some clips' runs are pending, running or stale "
+                   "(computed from an earlier upstream run or other parameters); recorded in the "
+                   "manifest. Without it such a version is refused, naming the clips");
+  create->callback([o] { Create(*o); });
+}
+
+// `dataset export`: a version in a training format.
+void AddExportCommand(CLI::App& cmd, const std::shared_ptr<Options>& o) {
+  auto* exp = cmd.add_subcommand("export", "Write a version in a training format");
+  AddRootOptions(*exp, *o);
+  exp->add_option("version", o->version, "vK, name/vK or a version folder")->required();
+  exp->add_option("--format", o->format,
+                  "lerobot: a LeRobot v3.0 folder (Parquet and MP4); robomimic: one HDF5 file")
+      ->required()
+      ->check(CLI::IsMember({"lerobot", "robomimic"}));
+  exp->add_option("--out", o->out,
+                  "Output folder (lerobot) or file (robomimic); written beside it and renamed "
+                  "into place, replacing an earlier export only when complete")
+      ->required();
+  exp->add_flag("--no-verify", o->no_verify,
+                "Export without first checking every file against the manifest (says so)");
+  exp->add_flag("--no-videos", o->no_videos,
+                "lerobot: leave out the source video feature (no decoding or encoding)");
+  exp->add_option("--fps", o->fps,
+                  "lerobot: resample every episode (and its video) to this rate; needed when "
+                  "the clips' cameras ran at different rates (e.g. 25 and 30 fps)")
+      ->check(CLI::Range(1.0, 1000.0));
+  exp->callback([o] { Export(*o); });
+}
+
 }  // namespace
 
 void AddDatasetCommand(CLI::App& app) {
@@ -274,26 +322,7 @@ void AddDatasetCommand(CLI::App& app) {
       "  doasido dataset export --root work/datasets v2 --format lerobot --out work/lerobot\n"
       "  doasido dataset export --root work/datasets v2 --format robomimic --out demo.hdf5");
 
-  auto* create = cmd->add_subcommand("create", "Make the next version from the database");
-  AddDbOptions(*create, o->db);
-  AddRootOptions(*create, *o);
-  create->add_option("--select", o->select,
-                     "verified: accepted by a person in `review serve` /verify; success: passed "
-                     "by the trajectory stage; all: passed or flagged")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"verified", "success", "all"}));
-  create->add_option("--split", o->split,
-                     "Fractions of episodes per split; a video goes whole to one split")
-      ->capture_default_str();
-  create->add_option("--seed", o->seed, "Seed of the split assignment")->capture_default_str();
-  create->add_flag("--no-thumbnails", o->no_thumbnails,
-                   "Playbook report without example thumbnails (no decoding)");
-  create->add_flag("--allow-empty", o->allow_empty, "Make a version even with no episodes");
-  create->add_flag("--allow-stale", o->allow_stale,
-                   "Make a version although some clips' runs are pending, running or stale "
-                   "(computed from an earlier upstream run or other parameters); recorded in the "
-                   "manifest. Without it such a version is refused, naming the clips");
-  create->callback([o] { Create(*o); });
+  AddCreateCommand(*cmd, o);
 
   auto* list = cmd->add_subcommand("list", "List the versions under --root");
   list->add_option("--root", o->root, "Folder holding the datasets")->capture_default_str();
@@ -320,26 +349,7 @@ void AddDatasetCommand(CLI::App& app) {
   verify->add_option("version", o->version, "vK, name/vK or a version folder")->required();
   verify->callback([o] { Verify(*o); });
 
-  auto* exp = cmd->add_subcommand("export", "Write a version in a training format");
-  AddRootOptions(*exp, *o);
-  exp->add_option("version", o->version, "vK, name/vK or a version folder")->required();
-  exp->add_option("--format", o->format,
-                  "lerobot: a LeRobot v3.0 folder (Parquet and MP4); robomimic: one HDF5 file")
-      ->required()
-      ->check(CLI::IsMember({"lerobot", "robomimic"}));
-  exp->add_option("--out", o->out,
-                  "Output folder (lerobot) or file (robomimic); written beside it and renamed "
-                  "into place, replacing an earlier export only when complete")
-      ->required();
-  exp->add_flag("--no-verify", o->no_verify,
-                "Export without first checking every file against the manifest (says so)");
-  exp->add_flag("--no-videos", o->no_videos,
-                "lerobot: leave out the source video feature (no decoding or encoding)");
-  exp->add_option("--fps", o->fps,
-                  "lerobot: resample every episode (and its video) to this rate; needed when "
-                  "the clips' cameras ran at different rates (e.g. 25 and 30 fps)")
-      ->check(CLI::Range(1.0, 1000.0));
-  exp->callback([o] { Export(*o); });
+  AddExportCommand(*cmd, o);
 }
 
 }  // namespace doasido::cli

@@ -10,7 +10,7 @@
 #include "core/error.h"
 #include "core/whole_output.h"
 #include "robot/hand_mesh.h"
-#include "synth/rasterizer.h"
+#include "video/mesh_rasterizer.h"
 
 namespace doasido::cli {
 namespace {
@@ -145,7 +145,7 @@ void RenderHandPng(const HandCheck& check, const Eigen::VectorXd& qpos, const st
   const mjModel* m = check.model.get();
   const View view = MakeView(check, options);
   DataPtr d = Posed(m, qpos);
-  synth::RasterTarget target;
+  video::RasterTarget target;
   target.Reset(options.size, options.size);
   const auto groups = GeomGroups(check);
   std::vector<TriMesh> meshes;
@@ -154,7 +154,7 @@ void RenderHandPng(const HandCheck& check, const Eigen::VectorXd& qpos, const st
     for (int i = 0; i < mesh.num_vertices(); ++i) {
       mesh.vertices.row(i) = view.ToCamera(Vec3(mesh.vertices.row(i))).transpose();
     }
-    synth::Rasterize(mesh, view.camera, static_cast<std::uint8_t>(g + 1), target);
+    video::Rasterize(mesh, view.camera, static_cast<std::uint8_t>(g + 1), target);
     meshes.push_back(std::move(mesh));
   }
   cv::Mat image(options.size, options.size, CV_8UC3, cv::Scalar(255, 255, 255));

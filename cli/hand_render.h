@@ -1,5 +1,5 @@
 // Pictures of a robot hand for `doasido hand check`: the model's geometry at
-// a pose, drawn with the project's CPU rasteriser (synth/rasterizer.h),
+// a pose, drawn with the project's CPU rasteriser (video/mesh_rasterizer.h),
 // shaded by surface normal, one colour per finger chain (thumb orange, the
 // other fingers blue to green, palm grey) and the description's points as
 // dots (fingertips red, others yellow).

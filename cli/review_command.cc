@@ -43,22 +43,16 @@ void AddStageReasons(review::ServeOptions& options) {
   options.default_reasons = stages::ReviewDefaultReasons();
 }
 
-void AddReviewCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "review", "Review flagged clips in a local web app, and run preference studies");
-  cmd->require_subcommand(1);
-  cmd->footer(
-      "Example:\n"
-      "  doasido review serve --db work/doasido.db --reviewer alice\n"
-      "  doasido review study create --db work/doasido.db --name tracking --items items.csv\n"
-      "  doasido review study summary --db work/doasido.db --name tracking --json");
+namespace {
 
+// `review serve`: the page of flagged clips and the studies.
+void AddServeCommand(CLI::App& review) {
   struct ServeArgs {
     DbOptions db;
     review::ServeOptions serve;
   };
   auto serve = std::make_shared<ServeArgs>();
-  auto* srv = cmd->add_subcommand("serve", "Serve the review page (flagged clips) and studies");
+  auto* srv = review.add_subcommand("serve", "Serve the review page (flagged clips) and studies");
   AddDbOptions(*srv, serve->db);
   srv->add_option("--host", serve->serve.host, "Address to listen on (loopback unless "
                                              "--allow-remote)")
@@ -84,13 +78,10 @@ void AddReviewCommand(CLI::App& app) {
       std::fflush(stdout);
     });
   });
+}
 
-  auto* study = cmd->add_subcommand("study", "Preference studies: two renderings side by side");
-  study->require_subcommand(1);
-  study->footer(
-      "Example:\n"
-      "  doasido review study create --db work/doasido.db --name tracking --items items.csv");
-
+// `review study create`: a study from an items CSV.
+void AddStudyCreateCommand(CLI::App& study) {
   struct CreateArgs {
     DbOptions db;
     std::string name, items;
@@ -98,7 +89,7 @@ void AddReviewCommand(CLI::App& app) {
     std::int64_t seed = 1;
   };
   auto create = std::make_shared<CreateArgs>();
-  auto* c = study->add_subcommand("create", "Create a study from an items CSV");
+  auto* c = study.add_subcommand("create", "Create a study from an items CSV");
   AddDbOptions(*c, create->db);
   c->add_option("--name", create->name, "Study name (letters, digits, _ - .)")->required();
   c->add_option("--items", create->items,
@@ -118,14 +109,17 @@ void AddReviewCommand(CLI::App& app) {
     std::printf("study %s: %zu items, %d raters per item\n", create->name.c_str(),
                 db.GetStudyItems(s->id).size(), s->raters_per_item);
   });
+}
 
+// `review study summary`: shares, win rate, unanimity and kappa of a study.
+void AddStudySummaryCommand(CLI::App& study) {
   struct SummaryArgs {
     DbOptions db;
     std::string name;
     bool json = false;
   };
   auto summary = std::make_shared<SummaryArgs>();
-  auto* m = study->add_subcommand("summary", "Preference shares, win rate, unanimity, Fleiss' "
+  auto* m = study.add_subcommand("summary", "Preference shares, win rate, unanimity, Fleiss' "
                                              "kappa");
   AddDbOptions(*m, summary->db);
   m->add_option("--name", summary->name, "Study name")->required();
@@ -140,6 +134,28 @@ void AddReviewCommand(CLI::App& app) {
       PrintSummary(s);
     }
   });
+}
+
+}  // namespace
+
+void AddReviewCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "review", "Review flagged clips in a local web app, and run preference studies");
+  cmd->require_subcommand(1);
+  cmd->footer(
+      "Example:\n"
+      "  doasido review serve --db work/doasido.db --reviewer alice\n"
+      "  doasido review study create --db work/doasido.db --name tracking --items items.csv\n"
+      "  doasido review study summary --db work/doasido.db --name tracking --json");
+  AddServeCommand(*cmd);
+
+  auto* study = cmd->add_subcommand("study", "Preference studies: two renderings side by side");
+  study->require_subcommand(1);
+  study->footer(
+      "Example:\n"
+      "  doasido review study create --db work/doasido.db --name tracking --items items.csv");
+  AddStudyCreateCommand(*study);
+  AddStudySummaryCommand(*study);
 }
 
 }  // namespace doasido::cli

@@ -315,6 +315,59 @@ ResumePlan PlanResume(const pipeline::ShardProgress& p,
   return plan;
 }
 
+// `slurm submit`: shards the unfinished clips, writes the scripts and submits
+// them (or prints them with --dry-run).
+void RunSlurmSubmit(SlurmCliOptions& o) {
+  Database db(o.shard.db.db, Database::OpenMode::kExisting);
+  const auto groups = SubmitGroups(db, o);  // checked before anything is sharded
+  MakeShards(db, o.shard);
+  std::vector<Database::ShardRow> fresh;
+  for (const auto& row : db.ListShards()) {
+    if (row.slurm_job.empty()) fresh.push_back(row);
+  }
+  const auto scripts = Scripts(db, fresh, groups, o);
+  if (o.dry_run) {
+    for (const auto& g : scripts.groups) PrintFile(g);
+    PrintFile(scripts.merge);
+    return;
+  }
+  const pipeline::SlurmSubmission submission{
+      groups, o.slurm.config.empty() ? "" : std::filesystem::absolute(o.slurm.config).string(),
+      o.slurm.scratch};
+  db.SetMeta(pipeline::kSlurmSubmitMetaKey, Json(submission).dump());
+  Submit(db, fresh, scripts, groups, {{0, {}}});
+}
+
+// `slurm resume`: resubmits the shards with open runs from their first open
+// stage group, cancelling the tasks that wait for a failed one.
+void RunSlurmResume(SlurmCliOptions& r) {
+  Database db(r.shard.db.db, Database::OpenMode::kExisting);
+  const auto shards = db.ListShards();
+  if (shards.empty()) throw Error("no_shards", "this database has no shards", {.file = db.path().string()});
+  const auto groups = ResumeGroups(db, r);
+  const auto states = pipeline::SlurmTaskStates(AllShardJobs(shards));
+  const auto progress = pipeline::ReadShardProgress(db, states);
+  std::map<int, std::vector<size_t>> first_group_tasks;
+  std::vector<std::string> cancel;
+  for (size_t i = 0; i < progress.size(); ++i) {
+    const ResumePlan plan = PlanResume(progress[i], groups, states);
+    if (!plan.resubmit) continue;
+    first_group_tasks[plan.first_group].push_back(i);
+    cancel.insert(cancel.end(), plan.cancel.begin(), plan.cancel.end());
+    std::printf("%s task %zu (%s) from group %s%s\n", r.dry_run ? "would resubmit" : "resubmitting",
+                i, shards[i].name.c_str(), groups[static_cast<size_t>(plan.first_group)].name.c_str(),
+                plan.cancel.empty() ? "" : (", cancelling " + Join(plan.cancel, " ")).c_str());
+  }
+  if (first_group_tasks.empty()) {
+    std::printf("every shard is finished or still queued: nothing to resume\n");
+    return;
+  }
+  if (r.dry_run) return;
+  const auto scripts = Scripts(db, shards, groups, r);
+  pipeline::Scancel(cancel);
+  Submit(db, shards, scripts, groups, first_group_tasks);
+}
+
 void AddSlurm(CLI::App& app) {
   auto* slurm = app.add_subcommand("slurm", "Run the queue as Slurm job arrays and merge it back");
   slurm->require_subcommand(1);
@@ -347,26 +400,7 @@ void AddSlurm(CLI::App& app) {
       "      --group 'bundle name=gpu partition=gpu gpus=1 mem=32G' \\\n"
       "      --group 'recon..retarget_kinematic name=recon cpus=8'\n"
       "  doasido slurm submit --db work/doasido.db --shards 4 --dry-run   # scripts only");
-  submit->callback([o] {
-    Database db(o->shard.db.db, Database::OpenMode::kExisting);
-    const auto groups = SubmitGroups(db, *o);  // checked before anything is sharded
-    MakeShards(db, o->shard);
-    std::vector<Database::ShardRow> fresh;
-    for (const auto& row : db.ListShards()) {
-      if (row.slurm_job.empty()) fresh.push_back(row);
-    }
-    const auto scripts = Scripts(db, fresh, groups, *o);
-    if (o->dry_run) {
-      for (const auto& g : scripts.groups) PrintFile(g);
-      PrintFile(scripts.merge);
-      return;
-    }
-    const pipeline::SlurmSubmission submission{
-        groups, o->slurm.config.empty() ? "" : std::filesystem::absolute(o->slurm.config).string(),
-        o->slurm.scratch};
-    db.SetMeta(pipeline::kSlurmSubmitMetaKey, Json(submission).dump());
-    Submit(db, fresh, scripts, groups, {{0, {}}});
-  });
+  submit->callback([o] { RunSlurmSubmit(*o); });
 
   auto r = std::make_shared<SlurmCliOptions>();
   auto* resume = slurm->add_subcommand(
@@ -382,33 +416,7 @@ void AddSlurm(CLI::App& app) {
       "groups keep their resources unless given here (--partition, --cpus-per-task,\n"
       "--mem, --time then apply to every group).\n\n"
       "Example:\n  doasido slurm resume --db work/doasido.db --time 04:00:00");
-  resume->callback([r] {
-    Database db(r->shard.db.db, Database::OpenMode::kExisting);
-    const auto shards = db.ListShards();
-    if (shards.empty()) throw Error("no_shards", "this database has no shards", {.file = db.path().string()});
-    const auto groups = ResumeGroups(db, *r);
-    const auto states = pipeline::SlurmTaskStates(AllShardJobs(shards));
-    const auto progress = pipeline::ReadShardProgress(db, states);
-    std::map<int, std::vector<size_t>> first_group_tasks;
-    std::vector<std::string> cancel;
-    for (size_t i = 0; i < progress.size(); ++i) {
-      const ResumePlan plan = PlanResume(progress[i], groups, states);
-      if (!plan.resubmit) continue;
-      first_group_tasks[plan.first_group].push_back(i);
-      cancel.insert(cancel.end(), plan.cancel.begin(), plan.cancel.end());
-      std::printf("%s task %zu (%s) from group %s%s\n", r->dry_run ? "would resubmit" : "resubmitting",
-                  i, shards[i].name.c_str(), groups[static_cast<size_t>(plan.first_group)].name.c_str(),
-                  plan.cancel.empty() ? "" : (", cancelling " + Join(plan.cancel, " ")).c_str());
-    }
-    if (first_group_tasks.empty()) {
-      std::printf("every shard is finished or still queued: nothing to resume\n");
-      return;
-    }
-    if (r->dry_run) return;
-    const auto scripts = Scripts(db, shards, groups, *r);
-    pipeline::Scancel(cancel);
-    Submit(db, shards, scripts, groups, first_group_tasks);
-  });
+  resume->callback([r] { RunSlurmResume(*r); });
 }
 
 }  // namespace

@@ -119,6 +119,22 @@ void CsvReader::Fail(long line, const std::string& field, const std::string& mes
   throw Error(code_, message, {.file = file_, .line = line, .field = field});
 }
 
+std::string CsvField(const std::string& field) {
+  if (field.find_first_of(",\"\r\n") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string CsvLine(const std::vector<std::string>& fields) {
+  std::string out;
+  for (std::size_t i = 0; i < fields.size(); ++i) out += (i ? "," : "") + CsvField(fields[i]);
+  return out + "\n";
+}
+
 std::string TrimCsvField(const std::string& text) {
   const auto b = std::find_if_not(text.begin(), text.end(), IsSpace);
   const auto e = std::find_if_not(text.rbegin(), text.rend(), IsSpace).base();

@@ -1,7 +1,9 @@
 // The one reader of delimited text (CSV, TSV) in the project: clip lists,
 // EPIC-KITCHENS tables, study items, keypoint CSVs and HOT3D pose tables all
 // go through it, so a quoted comma, a CRLF file or a byte-order mark means
-// the same everywhere.
+// the same everywhere. And the one writer (CsvField, CsvLine): the report's
+// tables, the synthetic clip list and trajectory CSVs, which the reader reads
+// back field for field.
 //
 // RFC 4180 quoting: a field that begins (after white space) with a double
 // quote runs to the closing quote and may hold the delimiter, line ends and
@@ -69,6 +71,14 @@ class CsvReader {
   long line_ = 1;
   long header_line_ = 0;
 };
+
+// `field` as one field of a CSV record (RFC 4180): quoted when it holds a
+// comma, a double quote or a line break (CR or LF), each inner quote
+// doubled; unchanged otherwise, so plain fields are written as they are.
+std::string CsvField(const std::string& field);
+
+// One record: `fields` through CsvField, joined by commas, ending in LF.
+std::string CsvLine(const std::vector<std::string>& fields);
 
 // `text` without leading and trailing spaces, tabs, CRs and LFs.
 std::string TrimCsvField(const std::string& text);

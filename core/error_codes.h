@@ -21,8 +21,13 @@ inline constexpr const char* kNotARegularFile = "not_a_regular_file";
 // A video no stage can judge: too small to show a hand, an absurd size or
 // rate, no frames, audio only, a still image under a video's name.
 inline constexpr const char* kUnsupportedVideo = "unsupported_video";
-// A stage run went past its wall-clock limit (stages/stage_timeouts.h).
+// A stage run went past its wall-clock limit (stages/stage_timeouts.h). A
+// stage whose same input gives the same outcome would run as long again, so
+// its timeout is permanent; a stage that waits on the outside world (the
+// network) may be quicker next time: kStageTimeoutTransient, retried. The
+// stage's registry entry says which it is (StageEntry::deterministic).
 inline constexpr const char* kStageTimeout = "stage_timeout";
+inline constexpr const char* kStageTimeoutTransient = "stage_timeout_transient";
 
 // Failures that are the input's, not the moment's (each a retry would
 // meet again): a site that answered 404/410 or refused the request (another
@@ -57,7 +62,8 @@ inline bool IsPermanentError(std::string_view code) {
         std::string_view(kNoDownloadCommand), std::string_view(kVideoUnavailable),
         std::string_view(kGeoBlocked), std::string_view(kBadIntrinsics),
         std::string_view(kNoBundle), std::string_view(kBadBundle), std::string_view(kBadTrack),
-        std::string_view(kBundleServerRefused), std::string_view(kMeasurementsTooLarge)}) {
+        std::string_view(kBundleServerRefused), std::string_view(kMeasurementsTooLarge),
+        std::string_view(kStageTimeout)}) {
     if (code == permanent) return true;
   }
   return false;

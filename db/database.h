@@ -605,6 +605,11 @@ class Database {
  private:
   db::Statement& Prepare(const std::string& sql);
   void WriteShard(const ShardSpec& spec, const std::filesystem::path& file);  // WriteShardDatabase's writes
+  // The parts of Complete(), inside its transaction at its time `now`.
+  void RecordStageResult(const Claim& claim, const std::string& param_hash,
+                         const StageResult& result, double now);
+  void ReplaceArtifactRows(const Claim& claim, const StageResult& result, double now);
+  void RecordVideoInfo(ClipId clip, const VideoInfo& video, double now);
   // The writes both review and verification make once their check passed:
   // the `reviews` row, the human verdict with `verdict_reason` and a
   // "review" event with `event_detail`.

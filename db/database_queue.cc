@@ -100,6 +100,66 @@ bool Database::Heartbeat(std::int64_t run_id, const std::string& worker, double 
   return held;
 }
 
+// The run's measurements and its verdict (the stage's, as opposed to a person's).
+void Database::RecordStageResult(const Claim& claim, const std::string& param_hash,
+                                 const StageResult& result, double now) {
+  Prepare("INSERT OR REPLACE INTO measurements (clip_id, stage, param_hash, data, created_at)"
+          " VALUES (?,?,?,?,?)")
+      .Bind(1, claim.clip_id)
+      .Bind(2, claim.stage)
+      .Bind(3, param_hash)
+      .Bind(4, result.measurements.dump())
+      .Bind(5, now)
+      .Run();
+  Prepare("INSERT INTO verdicts (clip_id, stage, verdict, reason, source, param_hash, created_at)"
+          " VALUES (?,?,?,?,'stage',?,?)")
+      .Bind(1, claim.clip_id)
+      .Bind(2, claim.stage)
+      .Bind(3, ToString(result.verdict))
+      .Bind(4, result.reason)
+      .Bind(5, param_hash)
+      .Bind(6, now)
+      .Run();
+}
+
+// Only this run's files are the stage's output now; paths relative to the
+// artifact root (db/database_artifacts.cc).
+void Database::ReplaceArtifactRows(const Claim& claim, const StageResult& result, double now) {
+  Prepare("DELETE FROM artifacts WHERE clip_id = ? AND stage = ?")
+      .Bind(1, claim.clip_id)
+      .Bind(2, claim.stage)
+      .Run();
+  const auto dir = std::filesystem::path(std::to_string(claim.clip_id)) / claim.stage;
+  for (const auto& [kind, rel] : result.artifacts) {
+    Prepare("INSERT OR IGNORE INTO artifacts (clip_id, stage, kind, path, created_at)"
+            " VALUES (?,?,?,?,?)")
+        .Bind(1, claim.clip_id)
+        .Bind(2, claim.stage)
+        .Bind(3, kind)
+        .Bind(4, (dir / rel).lexically_normal().generic_string())
+        .Bind(5, now)
+        .Run();
+  }
+}
+
+// What probing found, on the clip's videos row.
+void Database::RecordVideoInfo(ClipId clip, const VideoInfo& v, double now) {
+  Prepare("UPDATE videos SET width = ?, height = ?, fps = ?, frame_count = ?, duration_s = ?,"
+          " variable_frame_rate = ?, rotation_deg = ?, codec = ?, probed_at = ?"
+          " WHERE id = (SELECT video_id FROM clips WHERE id = ?)")
+      .Bind(1, v.width)
+      .Bind(2, v.height)
+      .Bind(3, v.fps)
+      .Bind(4, v.frame_count)
+      .Bind(5, v.duration_s)
+      .Bind(6, v.variable_frame_rate ? 1 : 0)
+      .Bind(7, v.rotation_deg)
+      .Bind(8, v.codec)
+      .Bind(9, now)
+      .Bind(10, clip)
+      .Run();
+}
+
 bool Database::Complete(const Claim& claim, const std::string& worker,
                         const std::string& param_hash, const StageResult& result,
                         double duration_s) {
@@ -119,61 +179,13 @@ bool Database::Complete(const Claim& claim, const std::string& worker,
       .Bind(8, worker)
       .Run();
   if (sqlite3_changes(db_) == 0) return false;  // lease lost: roll back
-  Prepare("INSERT OR REPLACE INTO measurements (clip_id, stage, param_hash, data, created_at)"
-          " VALUES (?,?,?,?,?)")
-      .Bind(1, claim.clip_id)
-      .Bind(2, claim.stage)
-      .Bind(3, param_hash)
-      .Bind(4, result.measurements.dump())
-      .Bind(5, now)
-      .Run();
-  Prepare("INSERT INTO verdicts (clip_id, stage, verdict, reason, source, param_hash, created_at)"
-          " VALUES (?,?,?,?,'stage',?,?)")
-      .Bind(1, claim.clip_id)
-      .Bind(2, claim.stage)
-      .Bind(3, ToString(result.verdict))
-      .Bind(4, result.reason)
-      .Bind(5, param_hash)
-      .Bind(6, now)
-      .Run();
-  // Only this run's files are the stage's output now; paths relative to the
-  // artifact root (db/database_artifacts.cc).
-  Prepare("DELETE FROM artifacts WHERE clip_id = ? AND stage = ?")
-      .Bind(1, claim.clip_id)
-      .Bind(2, claim.stage)
-      .Run();
-  const auto dir = std::filesystem::path(std::to_string(claim.clip_id)) / claim.stage;
-  for (const auto& [kind, rel] : result.artifacts) {
-    Prepare("INSERT OR IGNORE INTO artifacts (clip_id, stage, kind, path, created_at)"
-            " VALUES (?,?,?,?,?)")
-        .Bind(1, claim.clip_id)
-        .Bind(2, claim.stage)
-        .Bind(3, kind)
-        .Bind(4, (dir / rel).lexically_normal().generic_string())
-        .Bind(5, now)
-        .Run();
-  }
+  RecordStageResult(claim, param_hash, result, now);
+  ReplaceArtifactRows(claim, result, now);
   if (!result.detections.empty()) AddDetections(claim.clip_id, result.detections);
   if (result.measurements.contains(kVideoFileKey)) {
     RecordVideoFile(claim.clip_id, result.measurements.at(kVideoFileKey));
   }
-  if (result.video_info) {
-    const auto& v = *result.video_info;
-    Prepare("UPDATE videos SET width = ?, height = ?, fps = ?, frame_count = ?, duration_s = ?,"
-            " variable_frame_rate = ?, rotation_deg = ?, codec = ?, probed_at = ?"
-            " WHERE id = (SELECT video_id FROM clips WHERE id = ?)")
-        .Bind(1, v.width)
-        .Bind(2, v.height)
-        .Bind(3, v.fps)
-        .Bind(4, v.frame_count)
-        .Bind(5, v.duration_s)
-        .Bind(6, v.variable_frame_rate ? 1 : 0)
-        .Bind(7, v.rotation_deg)
-        .Bind(8, v.codec)
-        .Bind(9, now)
-        .Bind(10, claim.clip_id)
-        .Run();
-  }
+  if (result.video_info) RecordVideoInfo(claim.clip_id, *result.video_info, now);
   // Later runs consumed the previous result of this stage (there are none
   // on a clip's first pass): they run again after it.
   const std::int64_t requeued = RequeueDownstream(claim.clip_id, claim.stage);

@@ -195,6 +195,61 @@ Hot3dRecording ReadHot3dRecording(const std::filesystem::path& dir) {
   return rec;
 }
 
+namespace {
+
+// The OpenPose-21 joints of hand `name` ("left" or "right") by timestamp;
+// none when the recording has no poses of it.
+std::map<long long, Joints21> HandJointsByStamp(const Hot3dRecording& rec,
+                                                const std::string& name) {
+  std::map<long long, Joints21> out;
+  const auto poses = rec.hands.find(name);
+  if (poses == rec.hands.end()) return out;
+  const HandSide s = name == "right" ? HandSide::kRight : HandSide::kLeft;
+  for (const auto& [stamp, pose] : poses->second) {
+    out[stamp] = UmeTrackOpenPose21(rec.hand_model, pose.angles, pose.wrist, s);
+  }
+  return out;
+}
+
+// The object the chosen hand's fingertips stay closest to (options.object_uid
+// alone when set), with its model from `object_library` or the stand-in.
+Candidate ClosestObject(const Hot3dRecording& rec, const std::filesystem::path& object_library,
+                        const Hot3dReferenceOptions& options) {
+  const std::map<long long, Joints21> joints = HandJointsByStamp(rec, options.hand);
+  Candidate best;
+  for (const auto& [uid, poses] : rec.objects) {
+    if (!options.object_uid.empty() && uid != options.object_uid) continue;
+    const auto glb = object_library / (uid + ".glb");
+    const bool has_model = std::filesystem::exists(glb);
+    if (!has_model && options.stand_in.num_faces() == 0) continue;
+    Candidate c = Pair(rec, joints, uid, has_model ? LoadMesh(glb) : options.stand_in);
+    c.stand_in = !has_model;
+    if (c.distance < best.distance) best = std::move(c);
+  }
+  return best;
+}
+
+// The hand other than `hand` at `stamps`, moved by -origin, into the left
+// hand's place of `r`, whose right hand's place holds the chosen one; then,
+// when the chosen hand is the left one, the two swap to their own sides.
+void AddOtherHand(const Hot3dRecording& rec, const std::string& hand,
+                  const std::vector<long long>& stamps, const Vec3& origin, Reconstruction& r) {
+  const std::map<long long, Joints21> other =
+      HandJointsByStamp(rec, hand == "right" ? "left" : "right");
+  for (const long long stamp : stamps) {
+    const auto it = other.find(stamp);
+    r.left_valid.push_back(it != other.end());
+    r.left_joints.push_back(it != other.end() ? Joints21(it->second.rowwise() - origin.transpose())
+                                              : Joints21::Zero());
+  }
+  if (hand == "left") {
+    std::swap(r.right_valid, r.left_valid);
+    std::swap(r.right_joints, r.left_joints);
+  }
+}
+
+}  // namespace
+
 Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
                                      const std::filesystem::path& object_library,
                                      const Hot3dReferenceOptions& options) {
@@ -206,27 +261,7 @@ Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
   if (hand == rec.hands.end() || hand->second.empty()) {
     throw Error("bad_hot3d", "the recording has no " + options.hand + " hand poses", site);
   }
-  const auto openpose = [&](const std::string& name) {
-    std::map<long long, Joints21> out;
-    const auto poses = rec.hands.find(name);
-    if (poses == rec.hands.end()) return out;
-    const HandSide s = name == "right" ? HandSide::kRight : HandSide::kLeft;
-    for (const auto& [stamp, pose] : poses->second) {
-      out[stamp] = UmeTrackOpenPose21(rec.hand_model, pose.angles, pose.wrist, s);
-    }
-    return out;
-  };
-  const std::map<long long, Joints21> joints = openpose(options.hand);
-  Candidate best;
-  for (const auto& [uid, poses] : rec.objects) {
-    if (!options.object_uid.empty() && uid != options.object_uid) continue;
-    const auto glb = object_library / (uid + ".glb");
-    const bool has_model = std::filesystem::exists(glb);
-    if (!has_model && options.stand_in.num_faces() == 0) continue;
-    Candidate c = Pair(rec, joints, uid, has_model ? LoadMesh(glb) : options.stand_in);
-    c.stand_in = !has_model;
-    if (c.distance < best.distance) best = std::move(c);
-  }
+  const Candidate best = ClosestObject(rec, object_library, options);
   if (best.stamps.size() < 2) {
     throw Error("bad_hot3d",
                 "no object " + (options.object_uid.empty() ? std::string("with a model in ") + object_library.string()
@@ -254,20 +289,7 @@ Hot3dReference Hot3dToReconstruction(const Hot3dRecording& rec,
     r.object_poses.push_back({best.object[t].q, best.object[t].t - origin});
   }
   r.floor_z = 0;
-  if (options.both_hands) {
-    const std::string other_name = options.hand == "right" ? "left" : "right";
-    const std::map<long long, Joints21> other = openpose(other_name);
-    for (int t = 0; t < n; ++t) {
-      const auto it = other.find(best.stamps[t]);
-      r.left_valid.push_back(it != other.end());
-      r.left_joints.push_back(it != other.end() ? Joints21(it->second.rowwise() - origin.transpose())
-                                                : Joints21::Zero());
-    }
-    if (options.hand == "left") {  // the chosen hand went into right_joints
-      std::swap(r.right_valid, r.left_valid);
-      std::swap(r.right_joints, r.left_joints);
-    }
-  }
+  if (options.both_hands) AddOtherHand(rec, options.hand, best.stamps, origin, r);
   if (options.mirror) Mirror(r, out.mesh);
   out.mirrored = options.mirror;
   r.info = {{"source", "hot3d"},

@@ -14,13 +14,10 @@ struct Builder : MeshBuilder {
   Builder() { drop_degenerate = true; }
 };
 
-}  // namespace
-
-TriMesh MakeMug(const MugShape& s) {
-  Builder b;
-  // Lathe of the closed profile (r, z): axis bottom -> outer wall -> rim ->
-  // inner wall -> inside bottom -> axis. Traversed this way, the triangles
-  // below face out of the solid.
+// The closed profile (r, z) the cup is turned from: axis bottom -> outer
+// wall -> rim -> inner wall -> inside bottom -> axis. Traversed this way,
+// MakeCup's triangles face out of the solid.
+std::vector<std::pair<double, double>> MugProfile(const MugShape& s) {
   const double ri = s.radius - s.wall;
   const std::vector<std::pair<double, double>> corners = {
       {0, 0}, {s.radius, 0}, {s.radius, s.height}, {ri, s.height}, {ri, s.bottom}, {0, s.bottom}};
@@ -35,6 +32,13 @@ TriMesh MakeMug(const MugShape& s) {
       profile.emplace_back(r0 + (r1 - r0) * k / pieces, z0 + (z1 - z0) * k / pieces);
     }
   }
+  return profile;
+}
+
+// The cup: the profile turned about the z axis in s.segments steps.
+TriMesh MakeCup(const MugShape& s) {
+  Builder b;
+  const std::vector<std::pair<double, double>> profile = MugProfile(s);
   const int n = s.segments;
   std::vector<std::vector<int>> id(profile.size(), std::vector<int>(n));
   for (size_t i = 0; i < profile.size(); ++i) {
@@ -56,8 +60,14 @@ TriMesh MakeMug(const MugShape& s) {
       b.Tri(id[i][j], id[i + 1][k], id[i + 1][j]);
     }
   }
-  // Handle: the outer half of a torus in the xz-plane, its ends sunk into
-  // the wall, closed by flat caps.
+  TriMesh cup = b.Mesh();
+  if (cup.Volume() < 0) cup.faces.col(1).swap(cup.faces.col(2));
+  return cup;
+}
+
+// The handle: the outer half of a torus in the xz-plane, its ends sunk into
+// the wall, closed by flat caps.
+TriMesh MakeHandle(const MugShape& s) {
   const Vec3 c(s.radius - 0.0005, 0, 0.5 * s.height);
   const int nu = s.segments / 2, nv = 16;
   Builder h;
@@ -92,8 +102,14 @@ TriMesh MakeMug(const MugShape& s) {
   }
   TriMesh handle = h.Mesh();
   if (handle.Volume() < 0) handle.faces.col(1).swap(handle.faces.col(2));
-  TriMesh cup = b.Mesh();
-  if (cup.Volume() < 0) cup.faces.col(1).swap(cup.faces.col(2));
+  return handle;
+}
+
+}  // namespace
+
+TriMesh MakeMug(const MugShape& s) {
+  const TriMesh cup = MakeCup(s);
+  const TriMesh handle = MakeHandle(s);
   TriMesh out;
   out.vertices.resize(cup.num_vertices() + handle.num_vertices(), 3);
   out.vertices << cup.vertices, handle.vertices;

@@ -111,11 +111,15 @@ void KeepFailedRunLogs(Database& db, const Claim& claim, const std::filesystem::
 
 }  // namespace
 
+int AttemptsAllowed(const Claim& claim, std::string_view code, int max_attempts) {
+  return IsPermanentError(code) ? claim.attempts : max_attempts;
+}
+
 StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& claim,
                                const std::string& worker, const std::string& param_hash,
                                int max_attempts, const std::function<void()>& in_same_commit) {
   StageRunReport report;
-  bool permanent = false;  // a retry cannot fix it: fail now
+  std::string code;  // the failure's error code, "" for an exception that is not an Error
   report.clip = std::to_string(claim.clip_id);
   const auto start = std::chrono::steady_clock::now();
   // The run writes into a fresh folder, published only when it succeeded
@@ -135,7 +139,7 @@ StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& 
                        db.ArtifactDir(claim.clip_id, claim.stage), db.ArtifactRoot());
   } catch (const Error& e) {
     report.error = e.what();
-    permanent = IsPermanentError(e.code());
+    code = e.code();
   } catch (const std::exception& e) {
     report.error = std::string("unexpected: ") + e.what();
   }
@@ -150,7 +154,7 @@ StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& 
                                std::to_string(kMaxMeasurementBytes) + " the database keeps",
                            {.clip = report.clip, .file = path})
                          .what();
-      permanent = IsPermanentError(kMeasurementsTooLarge);
+      code = kMeasurementsTooLarge;
     }
   }
   if (!report.error.empty()) KeepFailedRunLogs(db, claim, work, report.error);
@@ -167,7 +171,7 @@ StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& 
     std::filesystem::remove(work.parent_path(), ec);  // only when empty
     spdlog::warn("{} on clip {} (attempt {}): {}", claim.stage, report.clip, claim.attempts,
                  report.error);
-    db.Fail(claim, worker, report.error, permanent ? claim.attempts : max_attempts);
+    db.Fail(claim, worker, report.error, AttemptsAllowed(claim, code, max_attempts));
     report.outcome = RunOutcome::kFailed;
   } else if (db.Complete(claim, worker, param_hash, report.result, report.seconds)) {
     spdlog::debug("{} {} -> {} {}", claim.stage, report.clip, ToString(report.result.verdict),

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "db/database.h"
 #include "stages/stage.h"
@@ -38,5 +39,11 @@ StageRunReport RunClaimedStage(Database& db, stages::Stage& stage, const Claim& 
                                const std::string& worker, const std::string& param_hash,
                                int max_attempts,
                                const std::function<void()>& in_same_commit = {});
+
+// The one rule of what is retried, for a run and for the watchdog's timeout:
+// the attempts `claim` may have after failing with error `code` ("" for an
+// exception that is not an Error): its current attempt when a retry cannot
+// fix the error (IsPermanentError), else `max_attempts`.
+int AttemptsAllowed(const Claim& claim, std::string_view code, int max_attempts);
 
 }  // namespace doasido::pipeline

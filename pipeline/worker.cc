@@ -16,7 +16,6 @@
 #include <thread>
 
 #include "core/child_groups.h"
-#include "core/error_codes.h"
 #include "core/log.h"
 #include "core/stage_progress.h"
 #include "db/database.h"
@@ -69,18 +68,10 @@ class RunWatch {
     started_ = moved_ = std::chrono::steady_clock::now();
     count_at_start_ = count_ = StageProgressCount();
     limit_s_ = stages::StageTimeout(options_.config, claim->stage);
-    permanent_ = IsDeterministic(claim->stage);
   }
 
  private:
   using Clock = std::chrono::steady_clock;
-
-  static bool IsDeterministic(const std::string& stage) {
-    for (const auto& entry : stages::StageTable()) {
-      if (entry.name == stage) return entry.deterministic;
-    }
-    return true;
-  }
 
   static double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -136,11 +127,11 @@ class RunWatch {
       if (!external.empty()) clip = external;
     } catch (const std::exception&) {
     }
-    const Error error(kStageTimeout, claim_->stage + " " + why, {.clip = clip});
+    const Error error(stages::StageTimeoutCode(claim_->stage), claim_->stage + " " + why, {.clip = clip});
     bool recorded = false;
     try {
       recorded = db.Fail(*claim_, worker_, error.what(),
-                         permanent_ ? claim_->attempts : options_.max_attempts);
+                         AttemptsAllowed(*claim_, error.code(), options_.max_attempts));
     } catch (const std::exception& e) {
       spdlog::error("cannot record the timeout: {}", e.what());
     }
@@ -164,7 +155,6 @@ class RunWatch {
   std::uint64_t count_at_start_ = 0;
   std::uint64_t count_ = 0;
   double limit_s_ = 0;
-  bool permanent_ = true;
   std::thread thread_;
 };
 
@@ -211,82 +201,94 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   return stats;
 }
 
-int RunWorkers(const WorkerOptions& options) {
-  {
-    Database db(options.db);
-    db.RefuseMergedShard();
-    const auto pipeline = db.Pipeline();
-    if (pipeline.empty()) {
-      throw Error("pipeline", "the database has no pipeline: run `doasido init` first",
-                  {.file = options.db});
-    }
-    for (const auto& name : options.stages.empty() ? pipeline : options.stages) {
-      const auto stage = stages::MakeStage(name, options.config);
-      std::int64_t downstream = 0;
-      const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()), &downstream);
-      if (changed > 0) {
-        std::printf("%s: parameters changed, %lld clips queued again, and %lld later runs of "
-                    "them\n", name.c_str(), static_cast<long long>(changed),
-                    static_cast<long long>(downstream));
-      }
+namespace {
+
+// Refuses a merged shard or a database without a pipeline, and queues again
+// the runs of stages whose parameters changed (saying how many).
+void PrepareQueue(const WorkerOptions& options) {
+  Database db(options.db);
+  db.RefuseMergedShard();
+  const auto pipeline = db.Pipeline();
+  if (pipeline.empty()) {
+    throw Error("pipeline", "the database has no pipeline: run `doasido init` first",
+                {.file = options.db});
+  }
+  for (const auto& name : options.stages.empty() ? pipeline : options.stages) {
+    const auto stage = stages::MakeStage(name, options.config);
+    std::int64_t downstream = 0;
+    const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()), &downstream);
+    if (changed > 0) {
+      std::printf("%s: parameters changed, %lld clips queued again, and %lld later runs of "
+                  "them\n", name.c_str(), static_cast<long long>(changed),
+                  static_cast<long long>(downstream));
     }
   }
+}
+
+// Runs options.jobs worker processes until they have all ended, starting
+// another in place of one killed by a signal or by its stage timeout while
+// work is left, and reports progress meanwhile.
+void SuperviseWorkers(const WorkerOptions& options) {
+  std::map<pid_t, int> children;
+  const pid_t parent = getpid();
+  auto spawn = [&options, &children, parent](int slot) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      // A worker does not outlive its command, even one killed with SIGKILL.
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(0);  // the command died before the line above
+      int code = 0;
+      try {
+        RunWorkerLoop(options);
+      } catch (const std::exception& e) {
+        spdlog::error("worker: {}", e.what());
+        code = 1;
+      }
+      _exit(code);
+    }
+    if (pid < 0) throw Error("worker", "fork failed");
+    children[pid] = slot;
+  };
+  for (int i = 0; i < options.jobs; ++i) spawn(i);
+  Database db(options.db);
+  while (!children.empty()) {
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, WNOHANG);
+    if (pid > 0) {
+      const int slot = children[pid];
+      children.erase(pid);
+      const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == kTimedOutExitCode;
+      if ((WIFSIGNALED(status) || timed_out) && !g_stop) {
+        const auto s = db.Summary(options.stages);
+        const std::string why = timed_out ? std::string("ended after a stage timeout")
+                                          : "died from signal " + std::to_string(WTERMSIG(status));
+        spdlog::warn("worker {} {}; {}", pid, why,
+                     s.pending + s.running > 0 ? "starting another" : "no work left");
+        if (s.pending + s.running > 0) spawn(slot);
+      }
+      continue;
+    }
+    if (g_stop) {
+      for (const auto& [child, slot] : children) kill(child, SIGTERM);
+    }
+    if (options.progress) {
+      const auto s = db.Summary();
+      options.progress(s.done + s.failed, s.pending + s.running + s.done + s.failed);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  if (options.progress_done) options.progress_done();
+}
+
+}  // namespace
+
+int RunWorkers(const WorkerOptions& options) {
+  PrepareQueue(options);
   struct sigaction action = {};
   action.sa_handler = OnStopSignal;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
-
-  {
-    std::map<pid_t, int> children;
-    const pid_t parent = getpid();
-    auto spawn = [&options, &children, parent](int slot) {
-      const pid_t pid = fork();
-      if (pid == 0) {
-        // A worker does not outlive its command, even one killed with SIGKILL.
-        prctl(PR_SET_PDEATHSIG, SIGKILL);
-        if (getppid() != parent) _exit(0);  // the command died before the line above
-        int code = 0;
-        try {
-          RunWorkerLoop(options);
-        } catch (const std::exception& e) {
-          spdlog::error("worker: {}", e.what());
-          code = 1;
-        }
-        _exit(code);
-      }
-      if (pid < 0) throw Error("worker", "fork failed");
-      children[pid] = slot;
-    };
-    for (int i = 0; i < options.jobs; ++i) spawn(i);
-    Database db(options.db);
-    while (!children.empty()) {
-      int status = 0;
-      const pid_t pid = waitpid(-1, &status, WNOHANG);
-      if (pid > 0) {
-        const int slot = children[pid];
-        children.erase(pid);
-        const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == kTimedOutExitCode;
-        if ((WIFSIGNALED(status) || timed_out) && !g_stop) {
-          const auto s = db.Summary(options.stages);
-          const std::string why = timed_out ? std::string("ended after a stage timeout")
-                                            : "died from signal " + std::to_string(WTERMSIG(status));
-          spdlog::warn("worker {} {}; {}", pid, why,
-                       s.pending + s.running > 0 ? "starting another" : "no work left");
-          if (s.pending + s.running > 0) spawn(slot);
-        }
-        continue;
-      }
-      if (g_stop) {
-        for (const auto& [child, slot] : children) kill(child, SIGTERM);
-      }
-      if (options.progress) {
-        const auto s = db.Summary();
-        options.progress(s.done + s.failed, s.pending + s.running + s.done + s.failed);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    }
-    if (options.progress_done) options.progress_done();
-  }
+  SuperviseWorkers(options);
   Database db(options.db);
   const auto s = db.Summary();
   spdlog::info("queue: {} done, {} failed, {} pending, {} running", s.done, s.failed, s.pending,

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "reports/source_breakdown.h"
 #include "reports/svg_chart.h"
@@ -42,15 +43,13 @@ std::string Cell(double v) {
 }
 
 std::string Cell(std::int64_t v) { return std::to_string(v); }
-std::string Cell(const std::string& v) { return CsvField(v); }
-std::string Cell(const char* v) { return CsvField(v); }
+std::string Cell(const std::string& v) { return v; }
+std::string Cell(const char* v) { return v; }
 
+// One CSV record of numbers and text (core/csv.h quotes what needs it).
 template <typename... T>
 std::string Row(const T&... cells) {
-  std::string out;
-  bool first = true;
-  ((out += (first ? "" : ",") + Cell(cells), first = false), ...);
-  return out + "\n";
+  return CsvLine({Cell(cells)...});
 }
 
 void Write(const std::filesystem::path& path, const std::string& text,
@@ -187,35 +186,10 @@ Json ThumbnailsToJson(const std::vector<ThumbnailStrip>& all) {
   return thumbs;
 }
 
-}  // namespace
-
-std::string CsvField(const std::string& field) {
-  if (field.find_first_of(",\"\r\n") == std::string::npos) return field;
-  std::string out = "\"";
-  for (char c : field) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
-
-Json ReportToJson(const ReportData& d) {
-  return {{"database", d.database},
-          {"generated_at", d.generated_at},
-          {"pipeline", d.pipeline},
-          {"funnel", FunnelToJson(d.funnel)},
-          {"scores", ScoresToJson(d.scores)},
-          {"sources", SourcesToJson(d.sources)},
-          {"runs", RunsToJson(d.runs)},
-          {"downloads", d.downloads.ToJson()},
-          {"thumbnails", ThumbnailsToJson(d.thumbnails)},
-          {"notes", d.notes}};
-}
-
-std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
-                                                 const std::filesystem::path& dir) {
-  std::vector<std::filesystem::path> written;
-  const auto& f = d.funnel;
+// funnel.csv (the pool, each stage, the survivors) and reasons.csv (each
+// stage's rejects and flags by reason).
+void WriteFunnelCsv(const Funnel& f, const std::filesystem::path& dir,
+                    std::vector<std::filesystem::path>& written) {
   std::string funnel = "kind,stage,entering,passed,rejected,flagged,failed,pending,entering_pct,"
                        "passed_pct\n";
   const double all = f.pool > 0 ? 100.0 : 0.0;
@@ -237,7 +211,11 @@ std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
                 Percent(f.survivors, f.pool), Percent(f.survivors, f.pool));
   Write(dir / "funnel.csv", funnel, written);
   Write(dir / "reasons.csv", reasons, written);
+}
 
+// scores.csv (each score's thresholds and statistics) and histograms.csv.
+void WriteScoresCsv(const ReportData& d, const std::filesystem::path& dir,
+                    std::vector<std::filesystem::path>& written) {
   std::string scores = "stage,score,rejects,reject,flag,clips,reject_side,flag_zone,pass_side,"
                        "non_finite,min,max,mean,median\n";
   std::string hist = "stage,score,bin,lo,hi,count\n";
@@ -259,7 +237,11 @@ std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
   }
   Write(dir / "scores.csv", scores, written);
   Write(dir / "histograms.csv", hist, written);
+}
 
+// sources.csv: outcomes by each source key's values.
+void WriteSourcesCsv(const ReportData& d, const std::filesystem::path& dir,
+                     std::vector<std::filesystem::path>& written) {
   std::string sources = "key,value,clips,survived,rejected,flagged,failed,in_progress\n";
   for (const auto& b : d.sources) {
     for (const auto& r : b.rows) {
@@ -268,7 +250,12 @@ std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
     }
   }
   Write(dir / "sources.csv", sources, written);
+}
 
+// stages.csv (run times, attempts, workers) and failures.csv (each failed
+// run's error).
+void WriteRunsCsv(const ReportData& d, const std::filesystem::path& dir,
+                  std::vector<std::filesystem::path>& written) {
   std::string stages = "stage,runs,done,failed,pending,running,total_s,mean_s,median_s,p95_s,"
                        "max_s,attempts,retried_runs,failed_attempts,workers\n";
   std::string failures = "stage,clip,error\n";
@@ -285,7 +272,11 @@ std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
   }
   Write(dir / "stages.csv", stages, written);
   Write(dir / "failures.csv", failures, written);
+}
 
+// clips.csv: where each clip ended and why.
+void WriteClipsCsv(const ReportData& d, const std::filesystem::path& dir,
+                   std::vector<std::filesystem::path>& written) {
   std::string clips = "clip,external_id,source,outcome,stage,reason\n";
   for (const auto& c : d.clips) {
     auto it = d.outcomes.find(c.id);
@@ -296,6 +287,31 @@ std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
                  known ? it->second.reason : std::string());
   }
   Write(dir / "clips.csv", clips, written);
+}
+
+}  // namespace
+
+Json ReportToJson(const ReportData& d) {
+  return {{"database", d.database},
+          {"generated_at", d.generated_at},
+          {"pipeline", d.pipeline},
+          {"funnel", FunnelToJson(d.funnel)},
+          {"scores", ScoresToJson(d.scores)},
+          {"sources", SourcesToJson(d.sources)},
+          {"runs", RunsToJson(d.runs)},
+          {"downloads", d.downloads.ToJson()},
+          {"thumbnails", ThumbnailsToJson(d.thumbnails)},
+          {"notes", d.notes}};
+}
+
+std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& d,
+                                                 const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> written;
+  WriteFunnelCsv(d.funnel, dir, written);
+  WriteScoresCsv(d, dir, written);
+  WriteSourcesCsv(d, dir, written);
+  WriteRunsCsv(d, dir, written);
+  WriteClipsCsv(d, dir, written);
   return written;
 }
 

@@ -25,9 +25,6 @@ namespace doasido::reports {
 
 Json ReportToJson(const ReportData& data);
 
-// One CSV field, quoted when it holds a comma, quote or line break.
-std::string CsvField(const std::string& field);
-
 // Writes the CSV files above into `dir` (which must exist); returns their
 // paths. Throws Error("io") naming a file it cannot write.
 std::vector<std::filesystem::path> WriteCsvFiles(const ReportData& data,

@@ -106,6 +106,68 @@ Json Replay(const mjModel* m, const retarget::HandTrajectory& t) {
   return frames;
 }
 
+// The three.js the page draws the robot with, from the npm packages.
+void ServeThree(httplib::Response& res) {
+  const std::filesystem::path p = NpmDir() / "node_modules/three/build/three.min.js";
+  if (!std::filesystem::is_regular_file(p)) {
+    res.status = 404;
+    res.set_content(Json({{"error", "three.js is not installed at " + p.string() +
+                                        " (run scripts/setup.sh)"}}).dump(),
+                    "application/json");
+    return;
+  }
+  res.set_header("Cache-Control", "max-age=3600");
+  res.set_content(TryReadFile(p).value_or(""), "text/javascript; charset=utf-8");
+}
+
+// A person's accept or reject of a clip's trajectory (POST /api/verify/decision).
+void RecordDecision(Database& d, const httplib::Request& req, httplib::Response& res) {
+  const Json body = ParseRequestBody(req.body);
+  const ClipId clip = RequireId(body, "clip_id");
+  const std::string stage = body.at("stage").get<std::string>();
+  const std::string decision = body.at("decision").get<std::string>();
+  const std::string reviewer = body.value("reviewer", std::string());
+  const std::string code = body.value("reason_code", std::string());
+  const std::string text = body.value("reason_text", std::string());
+  const auto bad = [&](const std::string& message) {
+    res.status = 400;
+    res.set_content(Json({{"error", message}}).dump(), "application/json");
+  };
+  if (!retarget::IsTrajectoryStage(stage)) {
+    return bad("stage must be a trajectory stage");
+  }
+  if (decision != "accept" && decision != "reject") return bad("decision must be accept or reject");
+  if (reviewer.empty() || reviewer.size() > 64) {
+    return bad("a reviewer name (1-64 characters) is required");
+  }
+  if (decision == "reject" && code.empty()) return bad("a rejection needs a reason");
+  std::string reason = code;
+  if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
+  // The decision is for the trajectory file as it is now; a page that
+  // says which one it showed (trajectory_sha256) is refused when the
+  // trajectory changed since.
+  std::string why;
+  const auto files = FindTrajectoryFiles(d, clip, &why, true);
+  if (!files || files->stage != stage) {
+    res.status = 409;
+    res.set_content(Json({{"error", "no trajectory to verify: " + why}}).dump(),
+                    "application/json");
+    return;
+  }
+  const std::string sha = ingest::FileSha256(files->trajectory);
+  const std::string shown = body.value("trajectory_sha256", std::string());
+  if (!shown.empty() && shown != sha) {
+    res.status = 409;
+    res.set_content(Json({{"error", "the trajectory changed since it was shown; reload"}}).dump(),
+                    "application/json");
+    return;
+  }
+  d.RecordVerification(clip, stage, reviewer, decision == "accept", reason, sha);
+  res.set_content(Json({{"ok", true},
+                        {"remaining", d.ListTrajectoriesToVerify(TrajectoryStages()).size()}}).dump(),
+                  "application/json");
+}
+
 }  // namespace
 
 Json TrajectoryScene(Database& db, ClipId clip, const std::string& stage) {
@@ -165,18 +227,8 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
                     "text/html; charset=utf-8");
   });
 
-  http.Get("/vendor/three.min.js", [](const httplib::Request&, httplib::Response& res) {
-    const std::filesystem::path p = NpmDir() / "node_modules/three/build/three.min.js";
-    if (!std::filesystem::is_regular_file(p)) {
-      res.status = 404;
-      res.set_content(Json({{"error", "three.js is not installed at " + p.string() +
-                                          " (run scripts/setup.sh)"}}).dump(),
-                      "application/json");
-      return;
-    }
-    res.set_header("Cache-Control", "max-age=3600");
-    res.set_content(TryReadFile(p).value_or(""), "text/javascript; charset=utf-8");
-  });
+  http.Get("/vendor/three.min.js",
+           [](const httplib::Request&, httplib::Response& res) { ServeThree(res); });
 
   http.Get("/api/verify/queue", [hooks](const httplib::Request&, httplib::Response& res) {
     hooks.with_db(res, [&](Database& d) {
@@ -203,52 +255,7 @@ void AddVerifyRoutes(httplib::Server& http, const VerifyHooks& hooks) {
   });
 
   http.Post("/api/verify/decision", [hooks](const httplib::Request& req, httplib::Response& res) {
-    hooks.with_db(res, [&](Database& d) {
-      const Json body = ParseRequestBody(req.body);
-      const ClipId clip = RequireId(body, "clip_id");
-      const std::string stage = body.at("stage").get<std::string>();
-      const std::string decision = body.at("decision").get<std::string>();
-      const std::string reviewer = body.value("reviewer", std::string());
-      const std::string code = body.value("reason_code", std::string());
-      const std::string text = body.value("reason_text", std::string());
-      const auto bad = [&](const std::string& message) {
-        res.status = 400;
-        res.set_content(Json({{"error", message}}).dump(), "application/json");
-      };
-      if (!retarget::IsTrajectoryStage(stage)) {
-        return bad("stage must be a trajectory stage");
-      }
-      if (decision != "accept" && decision != "reject") return bad("decision must be accept or reject");
-      if (reviewer.empty() || reviewer.size() > 64) {
-        return bad("a reviewer name (1-64 characters) is required");
-      }
-      if (decision == "reject" && code.empty()) return bad("a rejection needs a reason");
-      std::string reason = code;
-      if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
-      // The decision is for the trajectory file as it is now; a page that
-      // says which one it showed (trajectory_sha256) is refused when the
-      // trajectory changed since.
-      std::string why;
-      const auto files = FindTrajectoryFiles(d, clip, &why, true);
-      if (!files || files->stage != stage) {
-        res.status = 409;
-        res.set_content(Json({{"error", "no trajectory to verify: " + why}}).dump(),
-                        "application/json");
-        return;
-      }
-      const std::string sha = ingest::FileSha256(files->trajectory);
-      const std::string shown = body.value("trajectory_sha256", std::string());
-      if (!shown.empty() && shown != sha) {
-        res.status = 409;
-        res.set_content(Json({{"error", "the trajectory changed since it was shown; reload"}}).dump(),
-                        "application/json");
-        return;
-      }
-      d.RecordVerification(clip, stage, reviewer, decision == "accept", reason, sha);
-      res.set_content(Json({{"ok", true},
-                            {"remaining", d.ListTrajectoriesToVerify(TrajectoryStages()).size()}}).dump(),
-                      "application/json");
-    });
+    hooks.with_db(res, [&](Database& d) { RecordDecision(d, req, res); });
   });
 }
 

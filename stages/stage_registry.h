@@ -40,8 +40,9 @@ struct StageEntry {
   // Wall-clock limit of one run unless the config's [timeouts] says
   // otherwise (stages/stage_timeouts.h).
   double timeout_s = 600;
-  // The same input gives the same outcome: a timeout is not retried. The
-  // network stage is the one that is not.
+  // The same input gives the same outcome, so a timeout is not retried: it
+  // fails as kStageTimeout, a permanent code, else as kStageTimeoutTransient
+  // (StageTimeoutCode). The network stage is the one that is not.
   bool deterministic = true;
 };
 

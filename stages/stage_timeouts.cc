@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "core/config_check.h"
+#include "core/error_codes.h"
 #include "stages/stage_registry.h"
 
 namespace doasido::stages {
@@ -58,6 +59,11 @@ double StageTimeout(const Json& config, const std::string& stage) {
   if (const auto configured = Configured(config, stage)) return *configured;
   const StageEntry* entry = Find(stage);
   return entry ? entry->timeout_s : kMaxTimeoutSeconds;
+}
+
+const char* StageTimeoutCode(const std::string& stage) {
+  const StageEntry* entry = Find(stage);
+  return entry && !entry->deterministic ? kStageTimeoutTransient : kStageTimeout;
 }
 
 double NoProgressLimit(const Json& config) {

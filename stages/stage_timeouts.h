@@ -10,7 +10,8 @@
 // A run past its limit is failed as kStageTimeout (core/error_codes.h) by
 // the worker's watchdog, which then ends the worker process (a hung read or
 // a stuck library call cannot be cancelled in place); the supervisor starts
-// another worker. The timeout of a deterministic stage is permanent.
+// another worker. The timeout of a deterministic stage is permanent (its
+// code, StageTimeoutCode, decides through core/error_codes.h).
 // `no_progress` applies to every stage run that reports progress
 // (core/stage_progress.h): once its count stands still that long, the watch
 // stops renewing its lease and fails it the same way.
@@ -32,6 +33,12 @@ void CheckStageTimeouts(const Json& config);
 
 // The limit of `stage` in seconds: the config's, else the stage's default.
 double StageTimeout(const Json& config, const std::string& stage);
+
+// The error code of a timed-out run of `stage`: kStageTimeout (permanent)
+// for a deterministic stage and for a name the registry does not know,
+// kStageTimeoutTransient (retried) for one that is not
+// (StageEntry::deterministic).
+const char* StageTimeoutCode(const std::string& stage);
 
 // How long a run that reports progress may stand still: the config's
 // timeouts.no_progress, else kDefaultNoProgressSeconds.

@@ -75,6 +75,72 @@ cv::Mat Occluders(const ClipBundle& b, int k) {
   return out;
 }
 
+// The model the tracker samples from: the configured velocity server, else
+// the bundle's pose candidates; nullptr when there is neither. Says which in
+// `m` (kMeasureTrackSource).
+std::unique_ptr<VelocityField> ObjectModel(const TrackStageConfig& config, const ClipBundle& b,
+                                           const std::filesystem::path& dir,
+                                           const std::string& clip,
+                                           const std::filesystem::path& artifact_dir, Json& m) {
+  if (!config.server.empty()) {
+    // Quoted as the bundle stage quotes its command's values: a clip id or
+    // a path with spaces or shell characters stays one word.
+    std::string command = config.server;
+    ReplaceAll(command, "{bundle}", ShellQuote(dir.string()));
+    ReplaceAll(command, "{clip}", ShellQuote(clip));
+    m[kMeasureTrackSource] = "server";
+    return std::make_unique<VelocityServer>(command, artifact_dir / "track.log");
+  }
+  if (!b.candidates.empty() && !b.candidates[0].empty()) {
+    m[kMeasureTrackSource] = "candidates";
+    return CandidatesModel(b, config.kde_sigma);
+  }
+  m[kMeasureTrackSource] = "none";
+  return nullptr;
+}
+
+// alpha_p per frame: from the bundle's point tracks, else from Lucas-Kanade
+// flow of the clip's video, where the object has masks; else the configured
+// constant. Says which in `m` (kMeasureGuidanceSource).
+std::vector<double> PoseGuidance(const TrackStageConfig& config, const ClipBundle& b,
+                                 const ClipContext& context, Json& m) {
+  const bool masks = static_cast<int>(b.mask_object.size()) == b.frames;
+  if (b.tracks && masks) {
+    m[kMeasureGuidanceSource] = "tracks";
+    return EstimatePoseGuidance(b.mask_object, FollowPointTracks(*b.tracks, config.track_radius_px),
+                                config.guidance).alpha_p;
+  }
+  if (masks && !context.video.path.empty() &&
+      std::filesystem::is_regular_file(context.video.path)) {
+    const auto gray = ReadGrayFrames(context.video.path, context.clip.start_frame.value_or(0),
+                                     b.frames, b.width, b.height);
+    m[kMeasureGuidanceSource] = "lucas_kanade";
+    return EstimatePoseGuidance(b.mask_object, FollowWithLucasKanade(gray), config.guidance)
+        .alpha_p;
+  }
+  m[kMeasureGuidanceSource] = "fixed";
+  return std::vector<double>(b.frames, config.pose_guidance);
+}
+
+// Frames tracked, mean alpha_p (returned too), frames chosen among outliers
+// only, and the time spent sampling and selecting.
+double AddTrackMeasurements(const std::vector<TrackedFrame>& track, Json& m) {
+  double alpha = 0, sampling = 0, selection = 0;
+  int outliers = 0;
+  for (const TrackedFrame& f : track) {
+    alpha += f.pose_guidance / track.size();
+    sampling += f.sampling_seconds;
+    selection += f.selection_seconds;
+    outliers += f.choice.outliers_only;
+  }
+  m[kMeasureTrackedFrames] = track.size();
+  m[kMeasureMeanPoseGuidance] = alpha;
+  m[kMeasureOutlierFrames] = outliers;
+  m[kMeasureSamplingSeconds] = sampling;
+  m[kMeasureSelectionSeconds] = selection;
+  return alpha;
+}
+
 }  // namespace
 
 void CheckConfig(const TrackStageConfig& c, const std::string& section) {
@@ -104,20 +170,9 @@ StageResult TrackStage::Run(const ClipContext& context) {
     return result;
   }
   std::filesystem::create_directories(context.artifact_dir);
-  std::unique_ptr<VelocityField> model;
-  if (!config_.server.empty()) {
-    // Quoted as the bundle stage quotes its command's values: a clip id or
-    // a path with spaces or shell characters stays one word.
-    std::string command = config_.server;
-    ReplaceAll(command, "{bundle}", ShellQuote(dir.string()));
-    ReplaceAll(command, "{clip}", ShellQuote(clip));
-    model = std::make_unique<VelocityServer>(command, context.artifact_dir / "track.log");
-    result.measurements[kMeasureTrackSource] = "server";
-  } else if (!b.candidates.empty() && !b.candidates[0].empty()) {
-    model = CandidatesModel(b, config_.kde_sigma);
-    result.measurements[kMeasureTrackSource] = "candidates";
-  } else {
-    result.measurements[kMeasureTrackSource] = "none";
+  std::unique_ptr<VelocityField> model =
+      ObjectModel(config_, b, dir, clip, context.artifact_dir, result.measurements);
+  if (!model) {
     spdlog::info("{} {}: no object model (set track.server, or give the bundle "
                  "object/candidates.npz); recon uses the bundle's poses", kTrackStageName, clip);
     return result;
@@ -125,22 +180,7 @@ StageResult TrackStage::Run(const ClipContext& context) {
 
   TrackInputs inputs;
   const bool masks = static_cast<int>(b.mask_object.size()) == b.frames;
-  if (b.tracks && masks) {
-    inputs.pose_guidance =
-        EstimatePoseGuidance(b.mask_object, FollowPointTracks(*b.tracks, config_.track_radius_px),
-                             config_.guidance).alpha_p;
-    result.measurements[kMeasureGuidanceSource] = "tracks";
-  } else if (masks && !context.video.path.empty() &&
-             std::filesystem::is_regular_file(context.video.path)) {
-    const auto gray = ReadGrayFrames(context.video.path, context.clip.start_frame.value_or(0),
-                                     b.frames, b.width, b.height);
-    inputs.pose_guidance =
-        EstimatePoseGuidance(b.mask_object, FollowWithLucasKanade(gray), config_.guidance).alpha_p;
-    result.measurements[kMeasureGuidanceSource] = "lucas_kanade";
-  } else {
-    inputs.pose_guidance.assign(b.frames, config_.pose_guidance);
-    result.measurements[kMeasureGuidanceSource] = "fixed";
-  }
+  inputs.pose_guidance = PoseGuidance(config_, b, context, result.measurements);
   std::unique_ptr<SilhouetteRenderer> renderer;
   if (config_.selection.method == kSelectClustering) {
     if (!b.object_mesh || !masks || b.K.empty()) {
@@ -158,19 +198,7 @@ StageResult TrackStage::Run(const ClipContext& context) {
   WriteTrack(context.artifact_dir / kTrackPosesFile, track);
   result.artifacts.emplace_back("object_poses", kTrackPosesFile);
 
-  double alpha = 0, sampling = 0, selection = 0;
-  int outliers = 0;
-  for (const TrackedFrame& f : track) {
-    alpha += f.pose_guidance / track.size();
-    sampling += f.sampling_seconds;
-    selection += f.selection_seconds;
-    outliers += f.choice.outliers_only;
-  }
-  result.measurements[kMeasureTrackedFrames] = track.size();
-  result.measurements[kMeasureMeanPoseGuidance] = alpha;
-  result.measurements[kMeasureOutlierFrames] = outliers;
-  result.measurements[kMeasureSamplingSeconds] = sampling;
-  result.measurements[kMeasureSelectionSeconds] = selection;
+  const double alpha = AddTrackMeasurements(track, result.measurements);
   spdlog::info("{} {}: {} frames from {} ({} guidance, mean alpha_p {:.2f}), {} selection",
                kTrackStageName, clip, track.size(),
                result.measurements[kMeasureTrackSource].get<std::string>(),

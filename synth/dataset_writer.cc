@@ -7,6 +7,7 @@
 #include <opencv2/videoio.hpp>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "synth/generator.h"
 #include "synth/texture.h"
@@ -44,6 +45,27 @@ void WriteVideo(const std::vector<cv::Mat>& frames, double fps, const fs::path& 
               {.file = path.string()});
 }
 
+namespace {
+
+// The clip's row of clips.csv: its video, span, defects (each kind once) and
+// scene, read back by `doasido ingest` through core/csv.h.
+std::string ClipListRow(const SynthConfig& cfg, const RenderedClip& clip) {
+  std::string defects;
+  for (const auto& d : clip.defects) {
+    if (defects.find(d.kind) != std::string::npos) continue;
+    defects += (defects.empty() ? "" : ";") + d.kind;
+  }
+  const Json& scene = clip.gt["scenes"][0];
+  std::ostringstream fps;
+  fps << cfg.fps;
+  return CsvLine({"videos/" + clip.id + ".mp4", clip.id, "0", std::to_string(cfg.frames - 1),
+                  "synth", defects, scene["verb"].get<std::string>(),
+                  scene["object"].get<std::string>(), scene["two_hands"].get<bool>() ? "2" : "1",
+                  std::to_string(cfg.width), std::to_string(cfg.height), fps.str()});
+}
+
+}  // namespace
+
 Json DatasetSummary::ToJson() const {
   return Json{{"clips", clips}, {"defect_counts", defect_counts}};
 }
@@ -62,8 +84,8 @@ DatasetSummary GenerateDataset(const SynthConfig& cfg, const fs::path& out,
   DatasetSummary summary;
   summary.clips = cfg.clips;
   for (const auto& [k, w] : mix) summary.defect_counts[DefectName(k)] = 0;
-  std::ostringstream csv;
-  csv << "video,id,start_frame,end_frame,source,defects,verb,object,hands,width,height,fps\n";
+  std::string csv = CsvLine({"video", "id", "start_frame", "end_frame", "source", "defects", "verb",
+                             "object", "hands", "width", "height", "fps"});
   for (int i = 0; i < cfg.clips; ++i) {
     RenderedClip clip = RenderClip(cfg, i, kinds[i]);
     WriteVideo(clip.bgr, cfg.fps, out / "videos" / (clip.id + ".mp4"));
@@ -92,16 +114,7 @@ DatasetSummary GenerateDataset(const SynthConfig& cfg, const fs::path& out,
       if (!f) throw Error("io", "cannot write ground truth", {.file = p.string()});
     }
     summary.defect_counts[DefectName(kinds[i])]++;
-    std::string defects;
-    for (const auto& d : clip.defects) {
-      if (defects.find(d.kind) != std::string::npos) continue;
-      defects += (defects.empty() ? "" : ";") + d.kind;
-    }
-    const Json& scene = clip.gt["scenes"][0];
-    csv << "videos/" << clip.id << ".mp4," << clip.id << ",0," << cfg.frames - 1 << ",synth,"
-        << defects << "," << scene["verb"].get<std::string>() << ","
-        << scene["object"].get<std::string>() << "," << (scene["two_hands"].get<bool>() ? 2 : 1)
-        << "," << cfg.width << "," << cfg.height << "," << cfg.fps << "\n";
+    csv += ClipListRow(cfg, clip);
     if (progress) progress(i + 1);
   }
   auto write_text = [](const fs::path& p, const std::string& text) {
@@ -109,7 +122,7 @@ DatasetSummary GenerateDataset(const SynthConfig& cfg, const fs::path& out,
     f << text;
     if (!f) throw Error("io", "cannot write file", {.file = p.string()});
   };
-  write_text(out / "clips.csv", csv.str());
+  write_text(out / "clips.csv", csv);
   Json mix_json = Json::object();
   for (const auto& [k, w] : mix) mix_json[DefectName(k)] = w;
   Json s = summary.ToJson();

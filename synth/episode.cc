@@ -410,6 +410,101 @@ TwoHandTask TwoHandTaskFromName(const std::string& name) {
               {.field = "two_hand_task"});
 }
 
+namespace {
+
+// Where each hand's wrist is, how far its fingers are closed (0-1) and
+// whether it touches the object, at one frame of a two-hand script.
+struct TwoHandFrame {
+  Pose right, left;
+  double right_curl = 0, left_curl = 0;
+  bool right_touch = false, left_touch = false;
+};
+
+// The right hand lifts the object and offers it; the left takes it over and
+// puts it down (u in [0, 1] through the clip; sets the object's pose and the
+// phase in `fr`).
+TwoHandFrame HandoverFrame(double u, const Pose& rest, const HandPlan& right, const HandPlan& left,
+                           EpisodeFrame& fr) {
+  TwoHandFrame w;
+  const Pose offer = Translated(rest, Vec3(-0.08, 0, 0.12));
+  const Pose placed = Translated(rest, Vec3(-0.22, 0.02, 0));
+  fr.object_pose = u <= 0.24   ? rest
+                   : u <= 0.44 ? Interpolate(rest, offer, MinJerk(Seg(u, 0.24, 0.44)))
+                   : u <= 0.66 ? offer
+                               : Interpolate(offer, placed, MinJerk(Seg(u, 0.66, 0.86)));
+  w.right = u <= 0.18   ? right.Reach(rest, u, 0, 0.18)
+            : u <= 0.66 ? right.At(fr.object_pose)
+                        : Interpolate(right.At(offer), right.Back(offer, 0.16),
+                                      MinJerk(Seg(u, 0.66, 0.80)));
+  w.right_curl = u <= 0.66 ? Closing(u, 0.18, 0.24, 0.60, 0.66) : 0;
+  w.left = u <= 0.30   ? left.Back(offer, 0.16)
+           : u <= 0.50 ? left.Reach(offer, u, 0.30, 0.50)
+           : u <= 0.92
+               ? left.At(fr.object_pose)
+               : Interpolate(left.At(placed), left.Back(placed, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
+  w.left_curl = u > 0.50 && u <= 0.92 ? Closing(u, 0.50, 0.56, 0.86, 0.92) : 0;
+  w.right_touch = u >= 0.24 && u < 0.60;
+  w.left_touch = u >= 0.56 && u < 0.86;
+  fr.phase = u < 0.24   ? "reach"
+             : u < 0.44 ? "carry"
+             : u < 0.56 ? "offer"
+             : u < 0.66 ? "handover"
+             : u < 0.86 ? "carry"
+                        : "release";
+  return w;
+}
+
+// Both hands lift the object together, carry it and put it down.
+TwoHandFrame CarryFrame(double u, const Pose& rest, const HandPlan& right, const HandPlan& left,
+                        EpisodeFrame& fr) {
+  TwoHandFrame w;
+  const Pose up = Translated(rest, Vec3(0.05, 0.05, 0.15));
+  const Pose down = Translated(rest, Vec3(0.10, 0.05, 0));
+  fr.object_pose = u <= 0.24   ? rest
+                   : u <= 0.50 ? Interpolate(rest, up, MinJerk(Seg(u, 0.24, 0.50)))
+                   : u <= 0.76 ? Interpolate(up, down, MinJerk(Seg(u, 0.50, 0.76)))
+                               : down;
+  for (const auto& [hand, wrist, curl] :
+       {std::tie(right, w.right, w.right_curl), std::tie(left, w.left, w.left_curl)}) {
+    wrist = u <= 0.18 ? hand.Reach(rest, u, 0, 0.18)
+            : u <= 0.82
+                ? hand.At(fr.object_pose)
+                : Interpolate(hand.At(down), hand.Back(down, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
+    curl = u <= 0.82 ? Closing(u, 0.18, 0.24, 0.76, 0.82) : 0;
+  }
+  w.right_touch = w.left_touch = u >= 0.24 && u < 0.76;
+  fr.phase = u < 0.24 ? "reach" : u < 0.76 ? "carry" : "release";
+  return w;
+}
+
+// The left hand holds the object still while the right twists it.
+TwoHandFrame HoldAndActFrame(double u, const Pose& rest, const HandPlan& right,
+                             const HandPlan& left, EpisodeFrame& fr) {
+  TwoHandFrame w;
+  fr.object_pose = rest;
+  w.left = u <= 0.18 ? left.Reach(rest, u, 0, 0.18)
+           : u <= 0.92
+               ? left.At(rest)
+               : Interpolate(left.At(rest), left.Back(rest, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
+  w.left_curl = u <= 0.92 ? Closing(u, 0.18, 0.24, 0.86, 0.92) : 0;
+  // Twisting about the object's own vertical axis keeps a round object's surface under the fingers.
+  const double twist =
+      u > 0.48 && u < 0.76 ? 0.4 * std::sin(2 * kPi * 2 * Seg(u, 0.48, 0.76)) : 0.0;
+  const Pose turned = rest * Pose{Quat(Eigen::AngleAxisd(twist, Vec3::UnitZ())), Vec3::Zero()};
+  w.right = u <= 0.24   ? right.Back(rest, 0.16)
+            : u <= 0.42 ? right.Reach(rest, u, 0.24, 0.42)
+            : u <= 0.82
+                ? right.At(turned)
+                : Interpolate(right.At(rest), right.Back(rest, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
+  w.right_curl = u > 0.42 && u <= 0.82 ? Closing(u, 0.42, 0.48, 0.76, 0.82) : 0;
+  w.left_touch = u >= 0.24 && u < 0.86;
+  w.right_touch = u >= 0.48 && u < 0.76;
+  fr.phase = u < 0.24 ? "reach" : u < 0.48 ? "steady" : u < 0.76 ? "act" : "release";
+  return w;
+}
+
+}  // namespace
+
 Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const HandShape& shape) {
   Episode ep;
   ep.spec = spec;
@@ -424,75 +519,18 @@ Episode ScriptTwoHands(const EpisodeSpec& spec, const TriMesh& object, const Han
   for (int i = 0; i < spec.frames; ++i) {
     const double u = i / T;
     EpisodeFrame fr;
-    Pose wr, wl;
-    double cr = 0, cl = 0;
-    bool touch_r = false, touch_l = false;
+    TwoHandFrame w;
     switch (spec.two_hand_task) {
-      case TwoHandTask::kHandover: {
-        const Pose offer = Translated(rest, Vec3(-0.08, 0, 0.12));
-        const Pose placed = Translated(rest, Vec3(-0.22, 0.02, 0));
-        fr.object_pose = u <= 0.24   ? rest
-                         : u <= 0.44 ? Interpolate(rest, offer, MinJerk(Seg(u, 0.24, 0.44)))
-                         : u <= 0.66 ? offer
-                                     : Interpolate(offer, placed, MinJerk(Seg(u, 0.66, 0.86)));
-        wr = u <= 0.18 ? right.Reach(rest, u, 0, 0.18)
-             : u <= 0.66 ? right.At(fr.object_pose)
-                         : Interpolate(right.At(offer), right.Back(offer, 0.16), MinJerk(Seg(u, 0.66, 0.80)));
-        cr = u <= 0.66 ? Closing(u, 0.18, 0.24, 0.60, 0.66) : 0;
-        wl = u <= 0.30 ? left.Back(offer, 0.16)
-             : u <= 0.50 ? left.Reach(offer, u, 0.30, 0.50)
-             : u <= 0.92 ? left.At(fr.object_pose)
-                         : Interpolate(left.At(placed), left.Back(placed, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
-        cl = u > 0.50 && u <= 0.92 ? Closing(u, 0.50, 0.56, 0.86, 0.92) : 0;
-        touch_r = u >= 0.24 && u < 0.60;
-        touch_l = u >= 0.56 && u < 0.86;
-        fr.phase = u < 0.24 ? "reach" : u < 0.44 ? "carry" : u < 0.56 ? "offer" : u < 0.66 ? "handover"
-                 : u < 0.86 ? "carry" : "release";
-        break;
-      }
-      case TwoHandTask::kCarry: {
-        const Pose up = Translated(rest, Vec3(0.05, 0.05, 0.15));
-        const Pose down = Translated(rest, Vec3(0.10, 0.05, 0));
-        fr.object_pose = u <= 0.24   ? rest
-                         : u <= 0.50 ? Interpolate(rest, up, MinJerk(Seg(u, 0.24, 0.50)))
-                         : u <= 0.76 ? Interpolate(up, down, MinJerk(Seg(u, 0.50, 0.76)))
-                                     : down;
-        for (const auto& [hand, wrist, curl] : {std::tie(right, wr, cr), std::tie(left, wl, cl)}) {
-          wrist = u <= 0.18 ? hand.Reach(rest, u, 0, 0.18)
-                  : u <= 0.82 ? hand.At(fr.object_pose)
-                              : Interpolate(hand.At(down), hand.Back(down, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
-          curl = u <= 0.82 ? Closing(u, 0.18, 0.24, 0.76, 0.82) : 0;
-        }
-        touch_r = touch_l = u >= 0.24 && u < 0.76;
-        fr.phase = u < 0.24 ? "reach" : u < 0.76 ? "carry" : "release";
-        break;
-      }
-      case TwoHandTask::kHoldAndAct: {
-        fr.object_pose = rest;
-        wl = u <= 0.18 ? left.Reach(rest, u, 0, 0.18)
-             : u <= 0.92 ? left.At(rest)
-                         : Interpolate(left.At(rest), left.Back(rest, 0.16), MinJerk(Seg(u, 0.92, 1.0)));
-        cl = u <= 0.92 ? Closing(u, 0.18, 0.24, 0.86, 0.92) : 0;
-        // Twisting about the object's own vertical axis keeps a round object's surface under the fingers.
-        const double twist = u > 0.48 && u < 0.76 ? 0.4 * std::sin(2 * kPi * 2 * Seg(u, 0.48, 0.76)) : 0.0;
-        const Pose turned = rest * Pose{Quat(Eigen::AngleAxisd(twist, Vec3::UnitZ())), Vec3::Zero()};
-        wr = u <= 0.24 ? right.Back(rest, 0.16)
-             : u <= 0.42 ? right.Reach(rest, u, 0.24, 0.42)
-             : u <= 0.82 ? right.At(turned)
-                         : Interpolate(right.At(rest), right.Back(rest, 0.16), MinJerk(Seg(u, 0.82, 1.0)));
-        cr = u > 0.42 && u <= 0.82 ? Closing(u, 0.42, 0.48, 0.76, 0.82) : 0;
-        touch_l = u >= 0.24 && u < 0.86;
-        touch_r = u >= 0.48 && u < 0.76;
-        fr.phase = u < 0.24 ? "reach" : u < 0.48 ? "steady" : u < 0.76 ? "act" : "release";
-        break;
-      }
+      case TwoHandTask::kHandover: w = HandoverFrame(u, rest, right, left, fr); break;
+      case TwoHandTask::kCarry: w = CarryFrame(u, rest, right, left, fr); break;
+      case TwoHandTask::kHoldAndAct: w = HoldAndActFrame(u, rest, right, left, fr); break;
       case TwoHandTask::kNone:
         throw std::logic_error("ScriptTwoHands needs a two-hand task");
     }
-    fr.hands[static_cast<int>(Side::kRight)] = Closed(wr, right.grasp, cr);
-    fr.hands[static_cast<int>(Side::kLeft)] = Closed(wl, left.grasp, cl);
-    fr.contact[static_cast<int>(Side::kRight)] = touch_r;
-    fr.contact[static_cast<int>(Side::kLeft)] = touch_l;
+    fr.hands[static_cast<int>(Side::kRight)] = Closed(w.right, right.grasp, w.right_curl);
+    fr.hands[static_cast<int>(Side::kLeft)] = Closed(w.left, left.grasp, w.left_curl);
+    fr.contact[static_cast<int>(Side::kRight)] = w.right_touch;
+    fr.contact[static_cast<int>(Side::kLeft)] = w.left_touch;
     ep.frames.push_back(std::move(fr));
   }
   return ep;

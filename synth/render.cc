@@ -80,7 +80,8 @@ void CopyFrame(const RenderedFrame& from, RenderedFrame& to) {
 // The table and the wall behind it, rasterised and shaded with their
 // textures into a fresh frame.
 void RenderBackground(const World& world, const Camera& cam, const Pose& cw,
-                      const RasterOptions& options, const Shader& shade, RenderedFrame& out) {
+                      const video::RasterOptions& options, const Shader& shade,
+                      RenderedFrame& out) {
   const Pose wc = cw.Inverse();
   out.raster.Reset(cam.width, cam.height);
   TriMesh table = MakePlane(2 * world.table_half, world.wall_y + world.table_half);
@@ -89,8 +90,8 @@ void RenderBackground(const World& world, const Camera& cam, const Pose& cw,
   TriMesh wall = MakePlane(2 * world.table_half, 2.0);
   const Mat3 wall_rot = (Mat3() << 1, 0, 0, 0, 0, -1, 0, 1, 0).finished();  // +z -> -y
   wall = wall.Transformed(cw * Pose{Quat(wall_rot), Vec3(0, world.wall_y, 0.99)});
-  Rasterize(table, cam, kSurfaceTable, out.raster, options);
-  Rasterize(wall, cam, kSurfaceWall, out.raster, options);
+  video::Rasterize(table, cam, kSurfaceTable, out.raster, options);
+  video::Rasterize(wall, cam, kSurfaceWall, out.raster, options);
   out.bgr.create(cam.height, cam.width, CV_8UC3);
   const Vec3 n_table = cw.R() * Vec3::UnitZ(), n_wall = cw.R() * -Vec3::UnitY();
   for (int y = 0; y < cam.height; ++y) {
@@ -151,7 +152,7 @@ void ShadeForeground(const World& world, const FrameState& state, const TriMesh&
 }  // namespace
 
 RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const FrameState& state,
-                          const RasterOptions& options, BackgroundCache* cache) {
+                          const video::RasterOptions& options, BackgroundCache* cache) {
   const Camera& cam = state.camera;
   const Pose& cw = state.camera_from_world;
   const Shader shade{world, cw.R() * world.light_dir};
@@ -170,13 +171,14 @@ RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const 
   TriMesh object_cam;
   if (state.object_present) {
     object_cam = object_mesh.Transformed(cw * state.object_pose);
-    Rasterize(object_cam, cam, kSurfaceObject, out.raster, options);
+    video::Rasterize(object_cam, cam, kSurfaceObject, out.raster, options);
   }
   std::array<TriMesh, 2> hand_cam;
   for (int s = 0; s < 2; ++s) {
     if (!state.hands[s]) continue;
     hand_cam[s] = state.hands[s]->mesh.Transformed(cw);
-    Rasterize(hand_cam[s], cam, s == 0 ? kSurfaceHandLeft : kSurfaceHandRight, out.raster, options);
+    video::Rasterize(hand_cam[s], cam, s == 0 ? kSurfaceHandLeft : kSurfaceHandRight, out.raster,
+                     options);
   }
   ShadeForeground(world, state, object_cam, hand_cam, shade, out);
   return out;
@@ -194,7 +196,7 @@ void AddSensorNoise(cv::Mat& bgr, double sigma, std::uint64_t seed) {
   }
 }
 
-cv::Mat SurfaceMask(const RasterTarget& raster, std::uint8_t id) {
+cv::Mat SurfaceMask(const video::RasterTarget& raster, std::uint8_t id) {
   cv::Mat mask;
   cv::compare(raster.surface, id, mask, cv::CMP_EQ);
   return mask;

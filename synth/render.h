@@ -12,12 +12,12 @@
 #include "core/geometry.h"
 #include "core/mesh.h"
 #include "synth/hand_model.h"
-#include "synth/rasterizer.h"
+#include "video/mesh_rasterizer.h"
 #include "synth/texture.h"
 
 namespace doasido::synth {
 
-// Surface ids in RasterTarget::surface.
+// Surface ids in video::RasterTarget::surface.
 enum SurfaceId : std::uint8_t {
   kSurfaceNone = 0,
   kSurfaceTable = 1,
@@ -50,7 +50,7 @@ struct FrameState {
 
 struct RenderedFrame {
   cv::Mat bgr;          // CV_8UC3
-  RasterTarget raster;  // depth (camera z, metres), surface ids, faces
+  video::RasterTarget raster;  // depth (camera z, metres), surface ids, faces
 };
 
 // The rendered table and wall of one view, reused while the camera stays
@@ -67,13 +67,14 @@ struct BackgroundCache {
 // world), the background is drawn once per camera view; the result is
 // identical to rendering without it.
 RenderedFrame RenderFrame(const World& world, const TriMesh& object_mesh, const FrameState& state,
-                          const RasterOptions& options = {}, BackgroundCache* cache = nullptr);
+                          const video::RasterOptions& options = {},
+                          BackgroundCache* cache = nullptr);
 
 // Adds zero-mean Gaussian sensor noise (sigma in 8-bit levels), reproducibly.
 void AddSensorNoise(cv::Mat& bgr, double sigma, std::uint64_t seed);
 
 // 0/255 mask of pixels whose visible surface is `id`.
-cv::Mat SurfaceMask(const RasterTarget& raster, std::uint8_t id);
+cv::Mat SurfaceMask(const video::RasterTarget& raster, std::uint8_t id);
 
 // Camera-frame point map (CV_32FC3) from a depth map; NaN where depth is not
 // finite.

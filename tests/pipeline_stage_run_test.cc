@@ -13,7 +13,10 @@
 #include "core/error.h"
 #include "core/error_codes.h"
 #include "db/database.h"
+#include "ingest/download.h"
+#include "stages/probe_stage.h"
 #include "stages/stage_registry.h"
+#include "stages/stage_timeouts.h"
 #include "tests/test_util.h"
 
 namespace doasido::pipeline {
@@ -129,6 +132,39 @@ TEST(StageRun, APermanentErrorIsNotRetriedAndATransientOneIs) {
               std::string::npos)
         << run.error;
   }
+}
+
+// A timeout decides through the same table: the watchdog fails a run of a
+// deterministic stage with a permanent code (once), a run of the network
+// stage with a transient one (every attempt), by the registry's entry.
+TEST(StageRun, ADeterministicStagesTimeoutIsNotRetriedAndTheDownloadsIs) {
+  for (const auto& entry : StageTable()) {
+    EXPECT_EQ(IsPermanentError(StageTimeoutCode(entry.name)), entry.deterministic) << entry.name;
+  }
+  EXPECT_STREQ(StageTimeoutCode(video::kProbeStageName), kStageTimeout);
+  EXPECT_STREQ(StageTimeoutCode(ingest::kDownloadStageName), kStageTimeoutTransient);
+  EXPECT_STREQ(StageTimeoutCode("no_such_stage"), kStageTimeout);
+  TempDir dir;
+  Database db(dir / "q.db");
+  db.SetPipeline({"picky"});
+  const ClipId probe = AddClip(db, "probe");
+  const ClipId download = AddClip(db, "download");
+  std::map<ClipId, int> tries;
+  while (auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
+    // What TimeOut records: Fail with the attempts AttemptsAllowed gives.
+    const std::string stage =
+        claim->clip_id == probe ? video::kProbeStageName : ingest::kDownloadStageName;
+    const int allowed = AttemptsAllowed(*claim, StageTimeoutCode(stage), kDefaultMaxAttempts);
+    ASSERT_TRUE(db.Fail(*claim, "w", std::string(StageTimeoutCode(stage)) + ": " + stage, allowed));
+    ++tries[claim->clip_id];
+  }
+  ASSERT_GT(kDefaultMaxAttempts, 1);
+  EXPECT_EQ(tries[probe], 1);
+  EXPECT_EQ(tries[download], kDefaultMaxAttempts);
+  // An exception that is not an Error has no code: transient.
+  Claim first{1, probe, "picky", 1};
+  EXPECT_EQ(AttemptsAllowed(first, "", kDefaultMaxAttempts), kDefaultMaxAttempts);
+  EXPECT_EQ(AttemptsAllowed(first, kVideoUnavailable, kDefaultMaxAttempts), 1);
 }
 
 TEST(StageRun, ALostLeaseDropsTheResultAndTheCommitHookStillRuns) {

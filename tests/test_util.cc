@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/file_text.h"
 
@@ -90,19 +91,12 @@ std::string ReadFile(const std::filesystem::path& path) {
 
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path) {
   std::vector<std::vector<std::string>> rows;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::string cell;
-    bool quoted = false;
-    for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.push_back(cell), cell.clear();
-      else cell += c;
-    }
-    cells.push_back(cell);
-    rows.push_back(cells);
+  if (!std::filesystem::exists(path)) return rows;
+  CsvReader reader = CsvReader::Open(path, "bad_csv");
+  CsvRecord record;
+  while (reader.Next(record)) {
+    EXPECT_EQ(record.error, "") << path << ":" << record.line;
+    rows.push_back(record.fields);
   }
   return rows;
 }

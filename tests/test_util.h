@@ -55,9 +55,8 @@ void SynthPool(const std::filesystem::path& out, int clips, int seed, int frames
 // Writes `text` to `path`, creating parent folders.
 void WriteFile(const std::filesystem::path& path, const std::string& text);
 std::string ReadFile(const std::filesystem::path& path);
-// Rows of a CSV file the project wrote, split at commas outside double
-// quotes (quotes dropped; enough for the project's own files, not for
-// quotes inside cells).
+// Every record of a CSV file the project wrote (header included), through
+// the one reader (core/csv.h); none for a file that is not there.
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path);
 
 // Starts `args` (argv[0] looked up in PATH) with stdout and stderr to

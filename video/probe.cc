@@ -91,15 +91,9 @@ std::string CannotBeJudged(const VideoInfo& info) {
   return "";
 }
 
-}  // namespace
-
-void CheckConfig(const ProbeConfig& c, const std::string& section) {
-  RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
-  RequireInRange(section, "max_missing_fraction", c.max_missing_fraction, 0, 1);
-}
-
-VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
-  const ErrorSite site{.file = path.string()};
+// Refuses a URL that was never downloaded, a missing file and anything but
+// a regular file, before FFmpeg opens it.
+void RequireLocalFile(const std::filesystem::path& path, const ErrorSite& site) {
   if (path.string().find("://") != std::string::npos) {
     throw Error(kVideoNotDownloaded,
                          "the video is a URL that was not downloaded (put the `download` stage "
@@ -115,7 +109,11 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
                              ", not a regular file: it may never end, so it is not opened",
                          site);
   }
-  Container c;
+}
+
+// Opens `path` into `c`; the index of its video stream, refusing audio-only
+// files and still images.
+int OpenVideoStream(const std::filesystem::path& path, Container& c, const ErrorSite& site) {
   if (avformat_open_input(&c.format, path.c_str(), nullptr, nullptr) < 0 ||
       avformat_find_stream_info(c.format, nullptr) < 0) {
     throw Error(kVideoUnreadable,
@@ -133,7 +131,13 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
                              "), not a video, whatever its name says",
                          site);
   }
-  const AVStream* stream = c.format->streams[index];
+  return index;
+}
+
+// Size as displayed, rate, codec and rotation from the stream's header,
+// checked to be a video a stage can judge.
+VideoInfo HeaderInfo(const AVStream* stream, const std::filesystem::path& path) {
+  const ErrorSite site{.file = path.string()};
   const AVCodecParameters* par = stream->codecpar;
   VideoInfo info;
   info.rotation_deg = DisplayRotation(stream);
@@ -153,42 +157,65 @@ VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& confi
   if (const std::string why = CannotBeJudged(info); !why.empty()) {
     throw Error(kUnsupportedVideo, why, site);
   }
-  const std::int64_t declared = stream->nb_frames;
-  info.frame_count = declared;
-  if (config.count_frames) {
-    // Packets, not frames: every video packet of these containers is one
-    // frame, and reading them costs no decoding.
-    std::vector<std::int64_t> pts;
-    AVPacket* packet = av_packet_alloc();
-    while (av_read_frame(c.format, packet) >= 0) {
-      if (packet->stream_index == index && packet->size > 0) {
-        pts.push_back(packet->pts != AV_NOPTS_VALUE ? packet->pts : packet->dts);
-        ReportStageProgress();
-      }
-      av_packet_unref(packet);
+  return info;
+}
+
+// Counts the stream's frames (info.frame_count holds the declared count) and
+// judges the rate from their presentation times; refuses a video with
+// fewer than kMinFrames or more missing than the config allows.
+void CountFrames(const Container& c, int index, const ProbeConfig& config,
+                 const std::filesystem::path& path, VideoInfo& info) {
+  const std::int64_t declared = info.frame_count;
+  // Packets, not frames: every video packet of these containers is one
+  // frame, and reading them costs no decoding.
+  std::vector<std::int64_t> pts;
+  AVPacket* packet = av_packet_alloc();
+  while (av_read_frame(c.format, packet) >= 0) {
+    if (packet->stream_index == index && packet->size > 0) {
+      pts.push_back(packet->pts != AV_NOPTS_VALUE ? packet->pts : packet->dts);
+      ReportStageProgress();
     }
-    av_packet_free(&packet);
-    const auto counted = static_cast<std::int64_t>(pts.size());
-    if (counted < kMinFrames) {
-      throw Error(kUnsupportedVideo,
-                           counted == 0 ? "the video stream holds no frames"
-                                        : "a single frame: no motion to judge",
-                           {.file = path.string(), .field = "frame_count"});
-    }
-    const auto allowed = std::max(
-        MissingFramesAllowed(declared),
-        static_cast<std::int64_t>(std::ceil(config.max_missing_fraction * static_cast<double>(declared))));
-    if (declared > 0 && counted < declared - allowed) {
-      throw Error(kVideoTruncated,
-                           "holds " + std::to_string(counted) + " of the " +
-                               std::to_string(declared) +
-                               " frames the container declares (truncated or corrupt file)",
-                           {.file = path.string(), .field = "frame_count"});
-    }
-    info.frame_count = counted;
-    info.variable_frame_rate =
-        VariableRate(std::move(pts), av_q2d(stream->time_base), info.fps, config.vfr_tolerance);
+    av_packet_unref(packet);
   }
+  av_packet_free(&packet);
+  const auto counted = static_cast<std::int64_t>(pts.size());
+  if (counted < kMinFrames) {
+    throw Error(kUnsupportedVideo,
+                         counted == 0 ? "the video stream holds no frames"
+                                      : "a single frame: no motion to judge",
+                         {.file = path.string(), .field = "frame_count"});
+  }
+  const auto allowed = std::max(
+      MissingFramesAllowed(declared),
+      static_cast<std::int64_t>(std::ceil(config.max_missing_fraction * static_cast<double>(declared))));
+  if (declared > 0 && counted < declared - allowed) {
+    throw Error(kVideoTruncated,
+                         "holds " + std::to_string(counted) + " of the " +
+                             std::to_string(declared) +
+                             " frames the container declares (truncated or corrupt file)",
+                         {.file = path.string(), .field = "frame_count"});
+  }
+  info.frame_count = counted;
+  const double time_base = av_q2d(c.format->streams[index]->time_base);
+  info.variable_frame_rate = VariableRate(std::move(pts), time_base, info.fps, config.vfr_tolerance);
+}
+
+}  // namespace
+
+void CheckConfig(const ProbeConfig& c, const std::string& section) {
+  RequireInRange(section, "vfr_tolerance", c.vfr_tolerance, 0, 1);
+  RequireInRange(section, "max_missing_fraction", c.max_missing_fraction, 0, 1);
+}
+
+VideoInfo ProbeVideo(const std::filesystem::path& path, const ProbeConfig& config) {
+  const ErrorSite site{.file = path.string()};
+  RequireLocalFile(path, site);
+  Container c;
+  const int index = OpenVideoStream(path, c, site);
+  const AVStream* stream = c.format->streams[index];
+  VideoInfo info = HeaderInfo(stream, path);
+  info.frame_count = stream->nb_frames;
+  if (config.count_frames) CountFrames(c, index, config, path, info);
   info.duration_s = static_cast<double>(info.frame_count) / info.fps;
   return info;
 }

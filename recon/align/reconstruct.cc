@@ -91,20 +91,9 @@ void AddQuality(ReconOutput& out, const TriMesh& mesh) {
   m[kMeasurePoseJitter] = std::isfinite(median_jitter) ? Json(median_jitter) : Json(nullptr);
 }
 
-}  // namespace
-
-ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
-                        const std::vector<bool>& pose_valid, const ReconStageConfig& config) {
-  ReconOutput out;
-  out.alignment = AlignHandObject(b, poses, pose_valid, config.alignment);
-  out.gravity = EstimateGravity(b, config.gravity);
-  const Mat3 R = UpToZ(out.gravity.up);
-  out.camera_to_world = R;
-  const HandObjectAlignment& a = out.alignment;
-  const int T = b.frames;
-
-  Reconstruction& r = out.reconstruction;
-  r.fps = b.fps > 0 ? b.fps : 30.0;
+// The object's poses in the gravity-aligned frame (rotation R), valid where
+// the alignment found a scale.
+void PlaceObject(const HandObjectAlignment& a, const Mat3& R, int T, Reconstruction& r) {
   r.object_valid.assign(T, false);
   r.object_poses.assign(T, Pose::Identity());
   for (int t = 0; t < T; ++t) {
@@ -112,33 +101,35 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
     r.object_valid[t] = true;
     r.object_poses[t] = {Quat(R) * a.poses[t].q, R * a.poses[t].t};
   }
-  const TriMesh& mesh = *b.object_mesh;
-  const int rest = RestingFrame(r.object_poses, r.object_valid, config.rest_speed);
-  double floor_h = 0;
-  if (rest >= 0) {
-    floor_h = 1e30;
-    for (int v = 0; v < mesh.num_vertices(); ++v) {
-      floor_h = std::min(floor_h, (r.object_poses[rest] * Vec3(mesh.vertices.row(v).transpose())).z());
-    }
-  }
-  out.floor_offset = floor_h;
-  for (Pose& p : r.object_poses) p.t.z() -= floor_h;
-  // A hand's joints in the gravity-aligned frame, floor at z = 0.
-  const auto place = [&](const HandTrack& h, std::vector<bool>& valid, std::vector<Joints21>& joints) {
-    valid.assign(T, false);
-    joints.assign(T, Joints21::Zero());
-    for (int t = 0; t < T && static_cast<size_t>(t) < h.joints.size(); ++t) {
-      valid[t] = static_cast<size_t>(t) < h.valid.size() ? static_cast<bool>(h.valid[t]) : true;
-      joints[t] = (h.joints[t] * R.transpose()).eval();
-      joints[t].col(2).array() -= floor_h;
-    }
-  };
-  r.right_valid.assign(T, false);
-  r.right_joints.assign(T, Joints21::Zero());
-  if (b.hand_right) place(*b.hand_right, r.right_valid, r.right_joints);
-  if (b.hand_left) place(*b.hand_left, r.left_valid, r.left_joints);
-  r.floor_z = 0;
+}
 
+// The height of the mesh's lowest vertex at the resting frame (the floor),
+// 0 without one.
+double FloorHeight(const TriMesh& mesh, const Reconstruction& r, int rest) {
+  if (rest < 0) return 0;
+  double floor_h = 1e30;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    floor_h = std::min(floor_h, (r.object_poses[rest] * Vec3(mesh.vertices.row(v).transpose())).z());
+  }
+  return floor_h;
+}
+
+// A hand's joints in the gravity-aligned frame, floor at z = 0.
+void PlaceHand(const HandTrack& h, const Mat3& R, double floor_h, int T, std::vector<bool>& valid,
+               std::vector<Joints21>& joints) {
+  valid.assign(T, false);
+  joints.assign(T, Joints21::Zero());
+  for (int t = 0; t < T && static_cast<size_t>(t) < h.joints.size(); ++t) {
+    valid[t] = static_cast<size_t>(t) < h.valid.size() ? static_cast<bool>(h.valid[t]) : true;
+    joints[t] = (h.joints[t] * R.transpose()).eval();
+    joints[t].col(2).array() -= floor_h;
+  }
+}
+
+// Frame counts, the share of posed frames the alignment used, the scale's
+// median and spread, and the gravity's source and inliers.
+void AddAlignmentMeasurements(ReconOutput& out, const std::vector<bool>& pose_valid, int T) {
+  const HandObjectAlignment& a = out.alignment;
   int posed = 0;
   for (int t = 0; t < T; ++t) posed += static_cast<size_t>(t) < pose_valid.size() && pose_valid[t];
   Json& m = out.measurements;
@@ -155,8 +146,13 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
   m[kMeasureGravitySource] = out.gravity.source;
   m[kMeasureGravityInlierShare] =
       std::isfinite(out.gravity.inlier_share) ? Json(out.gravity.inlier_share) : Json(nullptr);
-  AddQuality(out, mesh);
+}
 
+// The reconstruction's `info`: units, world frame, gravity, floor and the
+// alignment frame by frame (with the frames it skipped, by why).
+Json ReconstructionInfo(const ReconOutput& out, const ReconStageConfig& config, int T, int rest,
+                        double floor_h) {
+  const HandObjectAlignment& a = out.alignment;
   Json frames = Json::array();
   Json skipped = Json::object();
   for (int t = 0; t < T; ++t) {
@@ -168,18 +164,44 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
                       {"skipped", f.skipped}});
     if (!f.aligned) skipped[f.skipped].push_back(t);
   }
-  r.info = {{"units", "m"},
-            {"world", "gravity -z, floor z = 0 under the object's resting pose"},
-            {"gravity", {{"source", out.gravity.source},
-                         {"up_camera", {out.gravity.up.x(), out.gravity.up.y(), out.gravity.up.z()}},
-                         {"inlier_share", m[kMeasureGravityInlierShare]},
-                         {"fitted_frame", out.gravity.frame},
-                         {"spread_deg", out.gravity.spread_deg}}},
-            {"floor", {{"resting_frame", rest}, {"camera_frame_height", floor_h}}},
-            {"alignment", {{"config", config.alignment},
-                           {"aligned_frames", a.aligned_frames},
-                           {"skipped_frames", skipped},
-                           {"frames", frames}}}};
+  return {{"units", "m"},
+          {"world", "gravity -z, floor z = 0 under the object's resting pose"},
+          {"gravity", {{"source", out.gravity.source},
+                       {"up_camera", {out.gravity.up.x(), out.gravity.up.y(), out.gravity.up.z()}},
+                       {"inlier_share", out.measurements.at(kMeasureGravityInlierShare)},
+                       {"fitted_frame", out.gravity.frame},
+                       {"spread_deg", out.gravity.spread_deg}}},
+          {"floor", {{"resting_frame", rest}, {"camera_frame_height", floor_h}}},
+          {"alignment", {{"config", config.alignment},
+                         {"aligned_frames", a.aligned_frames},
+                         {"skipped_frames", skipped},
+                         {"frames", frames}}}};
+}
+
+}  // namespace
+
+ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
+                        const std::vector<bool>& pose_valid, const ReconStageConfig& config) {
+  ReconOutput out;
+  out.alignment = AlignHandObject(b, poses, pose_valid, config.alignment);
+  out.gravity = EstimateGravity(b, config.gravity);
+  const Mat3 R = UpToZ(out.gravity.up);
+  out.camera_to_world = R;
+  Reconstruction& r = out.reconstruction;
+  r.fps = b.fps > 0 ? b.fps : 30.0;
+  PlaceObject(out.alignment, R, b.frames, r);
+  const int rest = RestingFrame(r.object_poses, r.object_valid, config.rest_speed);
+  const double floor_h = FloorHeight(*b.object_mesh, r, rest);
+  out.floor_offset = floor_h;
+  for (Pose& p : r.object_poses) p.t.z() -= floor_h;
+  r.right_valid.assign(b.frames, false);
+  r.right_joints.assign(b.frames, Joints21::Zero());
+  if (b.hand_right) PlaceHand(*b.hand_right, R, floor_h, b.frames, r.right_valid, r.right_joints);
+  if (b.hand_left) PlaceHand(*b.hand_left, R, floor_h, b.frames, r.left_valid, r.left_joints);
+  r.floor_z = 0;
+  AddAlignmentMeasurements(out, pose_valid, b.frames);
+  AddQuality(out, *b.object_mesh);
+  r.info = ReconstructionInfo(out, config, b.frames, rest, floor_h);
   return out;
 }
 

@@ -255,7 +255,6 @@ class Reader {
   void ReadHands() {
     const std::string rel = "hands.npz";
     if (!fs::exists(dir_ / rel)) return;
-    const std::string file = (dir_ / rel).string();
     const NpzArchive npz = Npz(rel);
     if (npz.count("joint_order")) {
       const NpyArray& order = npz.at("joint_order");
@@ -270,70 +269,85 @@ class Reader {
         if (npz.count(vk)) Fail(rel, jk, "missing while " + vk + " is present");
         continue;
       }
-      HandTrack hand;
-      WithClip([&] {
-        const NpyArray& valid = RequireKey(npz, vk, file);
-        CheckInteger(valid, file, vk);
-        CheckShape(valid, {T()}, file, vk);
-        const NpyArray& joints = npz.at(jk);
-        CheckFloat(joints, file, jk);
-        CheckShape(joints, {T(), 21, 3}, file, jk);
-      });
-      const NpyArray& valid = npz.at(vk);
-      const NpyArray& joints = npz.at(jk);
-      hand.valid.resize(static_cast<size_t>(T()));
-      hand.joints.resize(static_cast<size_t>(T()));
-      for (std::int64_t t = 0; t < T(); ++t) {
-        hand.valid[static_cast<size_t>(t)] = valid.AsInt(t) != 0;
-        Joints21& j = hand.joints[static_cast<size_t>(t)];
-        for (int k = 0; k < 63; ++k) j.data()[k] = joints.AsDouble(t * 63 + k);
-        if (hand.valid[static_cast<size_t>(t)] && !j.allFinite()) {
-          Fail(rel, jk, "non-finite joint in frame " + std::to_string(t) + " marked valid");
-        }
-      }
-      const std::string verts_key = side + "_verts", faces_key = side + "_faces";
-      if (npz.count(verts_key)) {
-        const NpyArray& verts = npz.at(verts_key);
-        WithClip([&] {
-          CheckFloat(verts, file, verts_key);
-          CheckShape(verts, {T(), -1, 3}, file, verts_key);
-        });
-        const std::int64_t v = verts.shape[1];
-        hand.verts.resize(static_cast<size_t>(T()));
-        for (std::int64_t t = 0; t < T(); ++t) {
-          Eigen::MatrixX3d& m = hand.verts[static_cast<size_t>(t)];
-          m.resize(v, 3);
-          for (std::int64_t r = 0; r < v; ++r) {
-            for (int c = 0; c < 3; ++c) m(r, c) = verts.AsDouble((t * v + r) * 3 + c);
-          }
-          if (v > 0 && m.array().isNaN().all()) {
-            m.resize(0, 3);  // the frame has no mesh
-          } else if (hand.valid[static_cast<size_t>(t)] && !m.allFinite()) {
-            Fail(rel, verts_key, "non-finite vertex in frame " + std::to_string(t) +
-                                     " marked valid");
-          }
-        }
-        if (npz.count(faces_key)) {
-          const NpyArray& faces = npz.at(faces_key);
-          WithClip([&] {
-            CheckInteger(faces, file, faces_key);
-            CheckShape(faces, {-1, 3}, file, faces_key);
-          });
-          hand.faces.resize(faces.shape[0], 3);
-          for (std::int64_t i = 0; i < faces.size(); ++i) {
-            const std::int64_t idx = faces.AsInt(i);
-            if (idx < 0 || idx >= v) {
-              Fail(rel, faces_key, "vertex index " + std::to_string(idx) + " outside [0, " +
-                                       std::to_string(v) + ")");
-            }
-            hand.faces.data()[i] = static_cast<int>(idx);
-          }
-        }
-      } else if (npz.count(faces_key)) {
-        Fail(rel, faces_key, "faces given without " + verts_key);
-      }
+      HandTrack hand = ReadHandJoints(npz, rel, side);
+      ReadHandMesh(npz, rel, side, hand);
       (side == "left" ? b_.hand_left : b_.hand_right) = std::move(hand);
       b_.present.insert("hand_" + side);
+    }
+  }
+
+  // `side`'s validity and joints per frame from hands.npz (`rel`).
+  HandTrack ReadHandJoints(const NpzArchive& npz, const std::string& rel, const std::string& side) {
+    const std::string file = (dir_ / rel).string();
+    const std::string jk = side + "_joints", vk = side + "_valid";
+    HandTrack hand;
+    WithClip([&] {
+      const NpyArray& valid = RequireKey(npz, vk, file);
+      CheckInteger(valid, file, vk);
+      CheckShape(valid, {T()}, file, vk);
+      const NpyArray& joints = npz.at(jk);
+      CheckFloat(joints, file, jk);
+      CheckShape(joints, {T(), 21, 3}, file, jk);
+    });
+    const NpyArray& valid = npz.at(vk);
+    const NpyArray& joints = npz.at(jk);
+    hand.valid.resize(static_cast<size_t>(T()));
+    hand.joints.resize(static_cast<size_t>(T()));
+    for (std::int64_t t = 0; t < T(); ++t) {
+      hand.valid[static_cast<size_t>(t)] = valid.AsInt(t) != 0;
+      Joints21& j = hand.joints[static_cast<size_t>(t)];
+      for (int k = 0; k < 63; ++k) j.data()[k] = joints.AsDouble(t * 63 + k);
+      if (hand.valid[static_cast<size_t>(t)] && !j.allFinite()) {
+        Fail(rel, jk, "non-finite joint in frame " + std::to_string(t) + " marked valid");
+      }
+    }
+    return hand;
+  }
+
+  // `side`'s mesh per frame (and its faces) when hands.npz holds one.
+  void ReadHandMesh(const NpzArchive& npz, const std::string& rel, const std::string& side,
+                    HandTrack& hand) {
+    const std::string file = (dir_ / rel).string();
+    const std::string verts_key = side + "_verts", faces_key = side + "_faces";
+    if (npz.count(verts_key)) {
+      const NpyArray& verts = npz.at(verts_key);
+      WithClip([&] {
+        CheckFloat(verts, file, verts_key);
+        CheckShape(verts, {T(), -1, 3}, file, verts_key);
+      });
+      const std::int64_t v = verts.shape[1];
+      hand.verts.resize(static_cast<size_t>(T()));
+      for (std::int64_t t = 0; t < T(); ++t) {
+        Eigen::MatrixX3d& m = hand.verts[static_cast<size_t>(t)];
+        m.resize(v, 3);
+        for (std::int64_t r = 0; r < v; ++r) {
+          for (int c = 0; c < 3; ++c) m(r, c) = verts.AsDouble((t * v + r) * 3 + c);
+        }
+        if (v > 0 && m.array().isNaN().all()) {
+          m.resize(0, 3);  // the frame has no mesh
+        } else if (hand.valid[static_cast<size_t>(t)] && !m.allFinite()) {
+          Fail(rel, verts_key, "non-finite vertex in frame " + std::to_string(t) +
+                                   " marked valid");
+        }
+      }
+      if (npz.count(faces_key)) {
+        const NpyArray& faces = npz.at(faces_key);
+        WithClip([&] {
+          CheckInteger(faces, file, faces_key);
+          CheckShape(faces, {-1, 3}, file, faces_key);
+        });
+        hand.faces.resize(faces.shape[0], 3);
+        for (std::int64_t i = 0; i < faces.size(); ++i) {
+          const std::int64_t idx = faces.AsInt(i);
+          if (idx < 0 || idx >= v) {
+            Fail(rel, faces_key, "vertex index " + std::to_string(idx) + " outside [0, " +
+                                     std::to_string(v) + ")");
+          }
+          hand.faces.data()[i] = static_cast<int>(idx);
+        }
+      }
+    } else if (npz.count(faces_key)) {
+      Fail(rel, faces_key, "faces given without " + verts_key);
     }
   }
 

@@ -120,23 +120,34 @@ HandTrajectory ReadTrajectoryJson(const std::filesystem::path& path) {
 }
 
 void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& path) {
-  std::ofstream out(path);
-  out << "frame,time,valid,fingertip_error";
-  for (const auto& n : t.qpos_names) out << "," << n;
+  std::vector<std::string> header = {"frame", "time", "valid", "fingertip_error"};
+  header.insert(header.end(), t.qpos_names.begin(), t.qpos_names.end());
   const bool object = !t.object_poses.empty();
-  if (object) out << ",obj_tx,obj_ty,obj_tz,obj_qw,obj_qx,obj_qy,obj_qz";
-  out << "\n";
-  out.precision(9);
+  if (object) {
+    header.insert(header.end(),
+                  {"obj_tx", "obj_ty", "obj_tz", "obj_qw", "obj_qx", "obj_qy", "obj_qz"});
+  }
+  std::ofstream out(path);
+  out << CsvLine(header);
+  std::ostringstream number;
+  number.precision(9);
+  const auto text = [&number](double v) {
+    number.str("");
+    number << v;
+    return number.str();
+  };
   for (size_t f = 0; f < t.qpos.size(); ++f) {
-    out << f << "," << f / t.fps << "," << (t.valid[f] ? 1 : 0) << ",";
-    if (std::isfinite(t.fingertip_error[f])) out << t.fingertip_error[f];
-    for (int k = 0; k < t.qpos[f].size(); ++k) out << "," << t.qpos[f][k];
+    const double error = t.fingertip_error[f];
+    std::vector<std::string> row = {std::to_string(f), text(f / t.fps), t.valid[f] ? "1" : "0",
+                                    std::isfinite(error) ? text(error) : ""};
+    for (int k = 0; k < t.qpos[f].size(); ++k) row.push_back(text(t.qpos[f][k]));
     if (object && f < t.object_poses.size()) {
       const Pose& p = t.object_poses[f];
-      out << "," << p.t.x() << "," << p.t.y() << "," << p.t.z() << "," << p.q.w() << ","
-          << p.q.x() << "," << p.q.y() << "," << p.q.z();
+      for (double v : {p.t.x(), p.t.y(), p.t.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z()}) {
+        row.push_back(text(v));
+      }
     }
-    out << "\n";
+    out << CsvLine(row);
   }
   if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
 }

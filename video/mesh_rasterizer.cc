@@ -1,11 +1,11 @@
-#include "synth/rasterizer.h"
+#include "video/mesh_rasterizer.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 
-namespace doasido::synth {
+namespace doasido::video {
 namespace {
 
 struct ScreenVertex {
@@ -146,4 +146,4 @@ std::int64_t RasterizeBruteForce(const TriMesh& mesh, const Camera& cam, std::ui
   return written;
 }
 
-}  // namespace doasido::synth
+}  // namespace doasido::video

@@ -14,7 +14,7 @@
 #include "core/geometry.h"
 #include "core/mesh.h"
 
-namespace doasido::synth {
+namespace doasido::video {
 
 struct RasterTarget {
   cv::Mat depth;    // CV_32F (H,W), +inf where nothing was drawn
@@ -42,4 +42,4 @@ std::int64_t Rasterize(const TriMesh& mesh_cam, const Camera& camera, std::uint8
 std::int64_t RasterizeBruteForce(const TriMesh& mesh_cam, const Camera& camera, std::uint8_t id,
                                  RasterTarget& target);
 
-}  // namespace doasido::synth
+}  // namespace doasido::video

@@ -25,7 +25,10 @@ Json Analyze(const std::string& video, bool thinned) {
   // The models on every clip, so the verdicts that read the hands are seen
   // on the negatives too (the default defers them: filters_deferred_models_test).
   config.learned_detector.after_cheap_verdicts = false;
-  if (!thinned) config.learned_detector.still_sample_fps = config.learned_detector.sample_fps;
+  if (!thinned) {
+    config.learned_detector.still_sample_fps = config.learned_detector.sample_fps;
+    config.learned_detector.no_hand_palm_every = 1;  // the palm gate off too
+  }
   return AnalyzeClip(testing::SharedData() / "videos" / video, DecoderOptions{}, {}, config)
       .measurements;
 }
@@ -82,9 +85,16 @@ TEST_F(MotionSampling, ThinnedSamplingKeepsTheLabelledVerdicts) {
     ASSERT_EQ(hands.at("samples").size(), all.at("samples").size()) << l.video;
     const double fps = thinned.at("clip").at("fps").get<double>();
     std::map<std::int64_t, Json> modelled;
-    int held = 0;
+    int held = 0, gated = 0;
     for (const Json& s : hands.at("samples")) {
       const std::int64_t frame = s.at("frame").get<std::int64_t>();
+      if (s.contains("palm_gated")) {
+        // The palm gate kept the palm detector from a hand-less sample.
+        ++gated;
+        EXPECT_TRUE(s.at("hands").empty()) << l.video << " frame " << frame;
+        EXPECT_EQ(s.at("ms").get<double>(), 0.0);
+        continue;
+      }
       if (!s.contains("held_from")) {
         modelled[frame] = s.at("hands");
         continue;
@@ -97,7 +107,8 @@ TEST_F(MotionSampling, ThinnedSamplingKeepsTheLabelledVerdicts) {
       EXPECT_LT(frame - from, fps * 1.0 + 1) << l.video << " frame " << frame;
       EXPECT_EQ(s.at("ms").get<double>(), 0.0);
     }
-    EXPECT_EQ(held + hands.at("model_samples").get<int>(),
+    EXPECT_EQ(gated, hands.at("palm_gated").get<int>()) << l.video;
+    EXPECT_EQ(held + gated + hands.at("model_samples").get<int>(),
               static_cast<int>(hands.at("samples").size()));
     // yoga's room stands still: most of its samples need no model run.
     if (std::string(l.video) == "yoga.mp4") {
@@ -129,6 +140,12 @@ TEST(MotionSamplingConfig, BadValuesAreRefusedAtLoad) {
   c = {};
   c.palm_every = 0;
   refused(c, "palm_every");
+  c = {};
+  c.no_hand_palm_every = 0;
+  refused(c, "no_hand_palm_every");
+  c = {};
+  c.no_hand_changed_fraction = -0.1;
+  refused(c, "no_hand_changed_fraction");
   // Thinning off (the rate where nothing moves is the sampling rate) is valid.
   c = {};
   c.still_sample_fps = c.sample_fps;

@@ -145,30 +145,28 @@ void LearnedHandDetector::Consume(FrameContext& context) {
       d.frame = context.frame->index;
       detections_.push_back(d);
     }
-    HoldMissedHands(&found, &age);
-    last_ = found;
-    last_age_ = age;
-    context.boxes = found;
+    Settle(context, std::move(found), std::move(age));
     return;
   }
   if (!landmarker_.tracking() && !palm_gate_.Look(context.gray)) {
-    // Nothing changed since the palm detector last found no hand: none is
-    // there (the hands held from before stay held).
+    // The gate says no new hand can be here: none is found (the hands held
+    // from before stay held).
     ++palm_gated_;
     samples_.push_back({{"frame", context.frame->index},
                         {"ms", 0.0},
                         {"palm_gated", true},
                         {"hands", Json::array()}});
-    FrameBoxes found;
-    found.known = true;
-    found.complete = false;
-    std::vector<int> age;
-    HoldMissedHands(&found, &age);
-    last_ = found;
-    last_age_ = age;
-    context.boxes = found;
+    FrameBoxes none;
+    none.known = true;
+    none.complete = false;
+    Settle(context, std::move(none), {});
     return;
   }
+  RunModels(context);
+}
+
+// A sample the models see: their hands, each with its object evidence.
+void LearnedHandDetector::RunModels(FrameContext& context) {
   const std::vector<LandmarkedHand> hands = landmarker_.Detect(context.frame->bgr);
   ++model_samples_;
   const std::size_t detections_before = detections_.size();
@@ -207,13 +205,19 @@ void LearnedHandDetector::Consume(FrameContext& context) {
     seen_detections_.assign(
         detections_.begin() + static_cast<std::ptrdiff_t>(detections_before), detections_.end());
   }
-  HoldMissedHands(&found, &age);
   samples_.push_back({{"frame", context.frame->index},
                       {"ms", Round(landmarker_.last_ms(), 0.1)},
                       {"hands", std::move(sample_hands)}});
+  Settle(context, std::move(found), std::move(age));
+}
+
+// A sample's hands are `found` (ages `age`) plus the ones held from the last
+// sample; they hold until the next sample.
+void LearnedHandDetector::Settle(FrameContext& context, FrameBoxes found, std::vector<int> age) {
+  HoldMissedHands(&found, &age);
   last_ = found;
-  last_age_ = age;
-  context.boxes = found;
+  last_age_ = std::move(age);
+  context.boxes = std::move(found);
 }
 
 // A hand of the last sample that no hand of this one overlaps is still

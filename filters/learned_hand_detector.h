@@ -162,6 +162,8 @@ class LearnedHandDetector : public FrameConsumer {
 
  private:
   void HoldMissedHands(FrameBoxes* found, std::vector<int>* age) const;
+  void RunModels(FrameContext& context);
+  void Settle(FrameContext& context, FrameBoxes found, std::vector<int> age);
   void AddDetection(const cv::Rect2d& box, const char* kind, double score, int contact,
                     std::int64_t frame);
 

@@ -11,7 +11,12 @@
 //   every palm:  the palm detector on every sample with fewer than two
 //                hands tracked (MediaPipe's VIDEO mode; palm_every = 1);
 //   tracked:     the palm detector on every palm_every-th sample while a
-//                hand is tracked (the analysis pass's default), both runtimes;
+//                hand is tracked;
+//   gated:       tracked, and on a sample with no hand tracked the palm
+//                detector runs only where the palm gate lets it (PalmGate:
+//                every no_hand_palm_every-th such sample, where the frame
+//                changed since the last one it ran on; the analysis pass's
+//                default), both runtimes;
 //   analysis:    as the analysis pass runs them (LearnedHandDetector with
 //                its defaults: tracked, and still samples keep the last
 //                hands without a model run): model ms per sample of the
@@ -20,7 +25,12 @@
 // The model pair (full or lite) is the second argument; each model alone
 // is timed for both pairs.
 //
-// Usage: filters_hand_models_bench [samples per video=40] [full|lite=full]
+// Usage: filters_hand_models_bench [samples per video=40] [full|lite|lite_landmark=full]
+//          [no_hand_palm_every] [no_hand_changed_fraction] (the palm gate,
+//          LearnedDetectorConfig's defaults when not given)
+//          [unchanged_crop_fraction=0] (HandLandmarkerOptions: a tracked hand
+//          whose crop barely changed keeps its last keypoints; applied to
+//          the "gated" column and the WebAssembly one)
 #include <time.h>
 
 #include <algorithm>
@@ -50,7 +60,7 @@ double ThreadCpuMs() {
 struct Sampled {
   VideoGeometry geometry;
   int every = 1;
-  std::vector<cv::Mat> frames;
+  std::vector<cv::Mat> frames, grays;
 };
 
 Sampled Samples(const std::filesystem::path& video, int count) {
@@ -62,7 +72,10 @@ Sampled Samples(const std::filesystem::path& video, int count) {
   const int every = out.every;
   AnalysisFrame frame;
   for (int i = 0; static_cast<int>(out.frames.size()) < count && decoder.Next(&frame); ++i) {
-    if (i % every == 0) out.frames.push_back(frame.bgr.clone());
+    if (i % every != 0) continue;
+    out.frames.push_back(frame.bgr.clone());
+    out.grays.emplace_back();
+    cv::cvtColor(frame.bgr, out.grays.back(), cv::COLOR_BGR2GRAY);
   }
   return out;
 }
@@ -70,10 +83,8 @@ Sampled Samples(const std::filesystem::path& video, int count) {
 // The analysis pass's detector on the samples (it sees only the sample
 // frames, which is all it looks at): model CPU ms per sample, and how many
 // samples ran the models.
-void Analysis(const Sampled& s, const std::string& models, double* ms_per_sample,
+void Analysis(const Sampled& s, LearnedDetectorConfig config, double* ms_per_sample,
               int* model_samples) {
-  LearnedDetectorConfig config;
-  config.models = models;
   LearnedHandDetector detector(config, "");
   detector.Begin(s.geometry);
   AnalysisFrame frame;
@@ -83,7 +94,7 @@ void Analysis(const Sampled& s, const std::string& models, double* ms_per_sample
     frame.bgr = s.frames[i];
     context.frame = &frame;
     context.ordinal = frame.index;
-    cv::cvtColor(frame.bgr, context.gray, cv::COLOR_BGR2GRAY);
+    context.gray = s.grays[i];
     detector.Consume(context);
   }
   const Json m = detector.Measurements();
@@ -98,14 +109,22 @@ struct Totals {
   double model_ms = 0, detect_ms = 0;
 };
 
-void Measure(HandLandmarker& landmarker, const std::vector<cv::Mat>& samples, Totals* t) {
+// The landmarker on every sample; with a palm gate, a sample with no hand
+// tracked that the gate keeps from the palm detector costs nothing but the
+// gate (as in LearnedHandDetector).
+void Measure(HandLandmarker& landmarker, const Sampled& s, PalmGate* gate, Totals* t) {
   landmarker.Reset();
-  for (const cv::Mat& frame : samples) {
+  if (gate) gate->Reset();
+  for (std::size_t i = 0; i < s.frames.size(); ++i) {
+    ++t->samples;
     const double start = ThreadCpuMs();
-    t->hands += static_cast<int>(landmarker.Detect(frame).size());
+    if (gate && !landmarker.tracking() && !gate->Look(s.grays[i])) {
+      t->detect_ms += ThreadCpuMs() - start;
+      continue;
+    }
+    t->hands += static_cast<int>(landmarker.Detect(s.frames[i]).size());
     t->detect_ms += ThreadCpuMs() - start;
     t->model_ms += landmarker.last_ms();
-    ++t->samples;
   }
 }
 
@@ -122,68 +141,102 @@ void PerModel(HandModels& models, int runs, double* palm_ms, double* landmark_ms
   *landmark_ms = models.TakeModelMs() / runs;
 }
 
-int Main(int argc, char** argv) {
-  const int per_video = argc > 1 ? std::atoi(argv[1]) : 40;
-  const std::string models = argc > 2 ? argv[2] : kModelsFull;
+std::vector<std::filesystem::path> RealVideos() {
   const std::filesystem::path dir = std::filesystem::path(DOASIDO_SHARED_DATA) / "videos";
-  const int palm_every = LearnedDetectorConfig{}.palm_every;
-  HandLandmarker every_palm({.backend = kBackendNative, .models = models, .palm_every = 1});
-  HandLandmarker native({.backend = kBackendNative, .models = models, .palm_every = palm_every});
-  std::string why;
-  const bool have_wasm = WasmHandModelsAvailable(&why);
-  std::unique_ptr<HandLandmarker> wasm;
-  if (have_wasm) {
-    wasm = std::make_unique<HandLandmarker>(
-        HandLandmarkerOptions{.backend = kBackendWasm, .models = models, .palm_every = palm_every});
-  }
   std::vector<std::filesystem::path> videos;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const std::string ext = e.path().extension().string();
     if (ext == ".mp4" || ext == ".avi") videos.push_back(e.path());
   }
   std::sort(videos.begin(), videos.end());
-  std::printf("MediaPipe Hands (%s models), CPU ms per sample (palm + landmark per hand), one "
-              "core; tracked: palm detector every %d samples while a hand is tracked\n",
-              models.c_str(), palm_every);
-  std::printf("%-20s %7s %6s | %10s | %10s %10s | %10s %7s | %10s | %7s\n", "video", "samples",
-              "hands", "every palm", "tracked", "tracked all", "analysis", "modelled", "wasm trkd",
-              "speedup");
-  Totals all_every, all_native, all_wasm;
-  double all_analysis = 0;
-  int all_modelled = 0;
-  const auto add = [](const Totals& from, Totals* to) {
-    to->samples += from.samples;
-    to->hands += from.hands;
-    to->model_ms += from.model_ms;
-    to->detect_ms += from.detect_ms;
-  };
-  for (const auto& video : videos) {
-    const Sampled sampled = Samples(video, per_video);
-    const std::vector<cv::Mat>& samples = sampled.frames;
-    Totals e, n, w;
-    Measure(every_palm, samples, &e);
-    Measure(native, samples, &n);
-    if (wasm) Measure(*wasm, samples, &w);
-    double analysis_ms = 0;
-    int modelled = 0;
-    Analysis(sampled, models, &analysis_ms, &modelled);
-    std::printf("%-20s %7d %6.2f | %10.2f | %10.2f %10.2f | %10.2f %6.0f%% | %10.2f | %6.1fx\n",
-                video.filename().string().c_str(), n.samples, double(n.hands) / n.samples,
-                e.model_ms / e.samples, n.model_ms / n.samples, n.detect_ms / n.samples,
-                analysis_ms, 100.0 * modelled / n.samples, wasm ? w.model_ms / w.samples : 0.0,
-                wasm ? w.model_ms / n.model_ms : 0.0);
-    add(e, &all_every);
-    add(n, &all_native);
-    add(w, &all_wasm);
-    all_analysis += analysis_ms * n.samples;
-    all_modelled += modelled;
+  return videos;
+}
+
+// One video's (or all videos') row: every palm, tracked, gated (native),
+// the analysis pass, gated on wasm.
+struct Row {
+  Totals every, tracked, gated, wasm;
+  double analysis_ms = 0;  // total over the samples
+  int modelled = 0;
+  void Add(const Row& r) {
+    for (auto [from, to] : {std::pair{&r.every, &every}, {&r.tracked, &tracked},
+                            {&r.gated, &gated}, {&r.wasm, &wasm}}) {
+      to->samples += from->samples;
+      to->hands += from->hands;
+      to->model_ms += from->model_ms;
+      to->detect_ms += from->detect_ms;
+    }
+    analysis_ms += r.analysis_ms;
+    modelled += r.modelled;
   }
-  const double ns = all_native.samples;
-  std::printf("%-20s %7d %6.2f | %10.2f | %10.2f %10.2f | %10.2f %6.0f%% | %10.2f | %6.1fx\n",
-              "all", all_native.samples, all_native.hands / ns, all_every.model_ms / ns,
-              all_native.model_ms / ns, all_native.detect_ms / ns, all_analysis / ns,
-              100.0 * all_modelled / ns, wasm ? all_wasm.model_ms / all_wasm.samples : 0.0,
-              wasm ? all_wasm.model_ms / all_native.model_ms : 0.0);
+  void Print(const std::string& name, bool have_wasm) const {
+    const double n = gated.samples;
+    std::printf("%-20s %7d %6.2f | %10.2f | %10.2f | %10.2f %10.2f | %10.2f %7.0f%% | %10.2f | "
+                "%6.1fx\n",
+                name.c_str(), gated.samples, gated.hands / n, every.model_ms / n,
+                tracked.model_ms / n, gated.model_ms / n, gated.detect_ms / n, analysis_ms / n,
+                100.0 * modelled / n, have_wasm ? wasm.model_ms / n : 0.0,
+                have_wasm ? wasm.model_ms / gated.model_ms : 0.0);
+  }
+};
+
+int Main(int argc, char** argv) {
+  const int per_video = argc > 1 ? std::atoi(argv[1]) : 40;
+  LearnedDetectorConfig config;
+  config.models = argc > 2 ? argv[2] : kModelsFull;
+  if (argc > 3) config.no_hand_palm_every = std::atoi(argv[3]);
+  if (argc > 4) config.no_hand_changed_fraction = std::atof(argv[4]);
+  CheckConfig(config, "filters_hand_models_bench");
+  const double unchanged_crop = argc > 5 ? std::atof(argv[5]) : 0.0;
+  const std::string& models = config.models;
+  const int palm_every = config.palm_every;
+  HandLandmarker every_palm({.backend = kBackendNative, .models = models, .palm_every = 1});
+  HandLandmarker native({.backend = kBackendNative, .models = models, .palm_every = palm_every});
+  HandLandmarker gated({.backend = kBackendNative,
+                        .models = models,
+                        .palm_every = palm_every,
+                        .unchanged_crop_fraction = unchanged_crop});
+  PalmGate gate(config.no_hand_palm_every, config.no_hand_changed_fraction, {});
+  std::string why;
+  const bool have_wasm = WasmHandModelsAvailable(&why);
+  std::unique_ptr<HandLandmarker> wasm;
+  if (have_wasm) {
+    wasm = std::make_unique<HandLandmarker>(
+        HandLandmarkerOptions{.backend = kBackendWasm,
+                              .models = models,
+                              .palm_every = palm_every,
+                              .unchanged_crop_fraction = unchanged_crop});
+  }
+  std::printf("MediaPipe Hands (%s models), CPU ms per sample (palm + landmark per hand), one "
+              "core; tracked: palm detector every %d samples while a hand is tracked; gated: "
+              "and with no hand tracked on every %d-th such sample where %.3f of the frame "
+              "changed\n",
+              models.c_str(), palm_every, config.no_hand_palm_every,
+              config.no_hand_changed_fraction);
+  std::printf("%-20s %7s %6s | %10s | %10s | %10s %10s | %10s %8s | %10s | %7s\n", "video",
+              "samples", "hands", "every palm", "tracked", "gated", "gated all", "analysis",
+              "modelled", "wasm gated", "speedup");
+  Row all;
+  for (const auto& video : RealVideos()) {
+    const Sampled sampled = Samples(video, per_video);
+    Row row;
+    Measure(every_palm, sampled, nullptr, &row.every);
+    Measure(native, sampled, nullptr, &row.tracked);
+    Measure(gated, sampled, &gate, &row.gated);
+    if (wasm) Measure(*wasm, sampled, &gate, &row.wasm);
+    double analysis_ms = 0;
+    Analysis(sampled, config, &analysis_ms, &row.modelled);
+    row.analysis_ms = analysis_ms * row.gated.samples;
+    row.Print(video.filename().string(), have_wasm);
+    all.Add(row);
+  }
+  all.Print("all", have_wasm);
+  if (unchanged_crop > 0) {
+    std::printf("unchanged crops (at most %.3f of the pixels changed): %d landmark runs saved\n",
+                unchanged_crop, gated.reused());
+  }
+  const Totals& all_native = all.gated;
+  const Totals& all_wasm = all.wasm;
   if (!wasm) std::printf("(no wasm runtime to compare: %s)\n", why.c_str());
   std::printf("\nEach model alone, 30 runs: CPU ms per run\n%-15s %8s %8s\n", "", "native",
               "wasm");

@@ -22,7 +22,9 @@
 //   hands_bench jumps [frames] the largest wrist moves between frames on the
 //                              bundled positives and what PnP did there.
 // [frames] limits each video to its first frames (default: all); a third
-// argument picks the hand models ([hands] models: full, lite, lite_landmark).
+// argument picks the hand models ([hands] models: full, lite, lite_landmark),
+// a fourth keeps a tracked hand's keypoints where its crop barely changed
+// (HandLandmarkerOptions::unchanged_crop_fraction; not a [hands] option).
 #include <dirent.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -86,13 +88,17 @@ double CpuSeconds() {
 }
 
 std::string g_models = HandsConfig{}.models;  // the third argument
+// The fourth: HandLandmarkerOptions::unchanged_crop_fraction (0: off, the
+// hands stage's behaviour), to measure keeping a still hand's keypoints.
+double g_unchanged_crop = 0;
 
 filters::HandLandmarker& Landmarker() {
   static filters::HandLandmarker landmarker({.max_hands = HandsConfig{}.max_hands,
                                              .max_side = HandsConfig{}.max_side,
                                              .models = g_models,
                                              .palm_every = HandsConfig{}.palm_every,
-                                             .lost_search = HandsConfig{}.palm_every});
+                                             .lost_search = HandsConfig{}.palm_every,
+                                             .unchanged_crop_fraction = g_unchanged_crop});
   return landmarker;
 }
 
@@ -490,6 +496,7 @@ int main(int argc, char** argv) {
   const std::string mode = argc > 1 ? argv[1] : "real";
   const long arg = argc > 2 ? std::atol(argv[2]) : 0;
   if (argc > 3) g_models = argv[3];
+  if (argc > 4) g_unchanged_crop = std::atof(argv[4]);
   if (mode == "real")
     Real(arg);
   else if (mode == "dex")

@@ -177,6 +177,8 @@ void CheckConfig(const LearnedDetectorConfig& c, const std::string& section) {
                 {.field = section + ".still_sample_fps"});
   }
   RequireFraction(section, "still_changed_fraction", c.still_changed_fraction);
+  RequireInRange(section, "no_hand_palm_every", c.no_hand_palm_every, 1, 1000);
+  RequireFraction(section, "no_hand_changed_fraction", c.no_hand_changed_fraction);
 }
 
 }  // namespace doasido::filters

@@ -166,6 +166,26 @@ HandCrop CropFromHand(const LandmarkedHand& hand) {
                   kTrackCropScale, kTrackCropShift);
 }
 
+// Crop pixel (u, v) -> frame: centre + rotation of ((u, v) / size - 0.5) * side.
+cv::Matx23d CropMap(const HandCrop& crop) {
+  const double c = std::cos(crop.rotation), s = std::sin(crop.rotation);
+  const double k = crop.side / kLandmarkInputSize;
+  return {k * c, -k * s, crop.cx - crop.side / 2 * (c - s),
+          k * s, k * c,  crop.cy - crop.side / 2 * (s + c)};
+}
+
+// The fraction of pixels of two input tensors (RGB in [0, 1]) where some
+// channel differs by more than `level` gray levels.
+double ChangedFraction(const std::vector<float>& a, const std::vector<float>& b, int level) {
+  const float limit = level / 255.0f;
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+    changed += std::abs(a[i] - b[i]) > limit || std::abs(a[i + 1] - b[i + 1]) > limit ||
+               std::abs(a[i + 2] - b[i + 2]) > limit;
+  }
+  return a.empty() ? 1.0 : static_cast<double>(changed) / (a.size() / 3);
+}
+
 LandmarkedHand Scaled(LandmarkedHand hand, double scale) {
   hand.box = cv::Rect2d(hand.box.tl() * scale, hand.box.br() * scale);
   for (cv::Point3d& p : hand.keypoints) p *= scale;
@@ -239,11 +259,8 @@ std::vector<DetectedPalm> HandLandmarker::DetectPalms(const cv::Mat& bgr) {
 }
 
 bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand) {
-  const double c = std::cos(crop.rotation), s = std::sin(crop.rotation);
+  const cv::Matx23d map = CropMap(crop);
   const double k = crop.side / kLandmarkInputSize;
-  // Crop pixel (u, v) -> frame: centre + rotation of ((u, v) / size - 0.5) * side.
-  const cv::Matx23d map(k * c, -k * s, crop.cx - crop.side / 2 * (c - s), k * s, k * c,
-                        crop.cy - crop.side / 2 * (s + c));
   SampleRgb(rgb, kLandmarkInputSize, map, &input_);
   LandmarkOutput out;
   models_->Landmark(input_.data(), &out);
@@ -264,6 +281,15 @@ bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, Landmar
   }
   hand->box = cv::Rect2d(cv::Point2d(x1, y1), cv::Point2d(x2, y2));
   return true;
+}
+
+// The tracked hand's last landmark crop, sampled again from this frame,
+// barely changed: the model would see (nearly) what it saw.
+bool HandLandmarker::CropUnchanged(const cv::Mat& rgb, const TrackedHand& track) {
+  if (options_.unchanged_crop_fraction <= 0 || track.run_input.empty()) return false;
+  SampleRgb(rgb, kLandmarkInputSize, CropMap(track.run_crop), &compare_);
+  return ChangedFraction(compare_, track.run_input, options_.unchanged_crop_level) <=
+         options_.unchanged_crop_fraction;
 }
 
 cv::Mat HandLandmarker::Rgb(const cv::Mat& bgr, double* shrink) const {
@@ -288,15 +314,29 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
   const cv::Mat rgb = Rgb(bgr, &shrink);
   models_->TakeModelMs();
   std::vector<LandmarkedHand> hands;
-  const auto consider = [&](const HandCrop& crop) {
-    LandmarkedHand hand;
-    if (!Landmarks(rgb, crop, &hand)) return;
+  std::vector<TrackedHand> runs;  // per hand found: its last landmark run
+  const auto add = [&](const LandmarkedHand& hand, TrackedHand run) {
     for (const LandmarkedHand& h : hands) {
       if (IoU(h.box, hand.box) >= 0.5) return;
     }
     hands.push_back(hand);
+    runs.push_back(std::move(run));
   };
-  for (const HandCrop& crop : tracked_) consider(crop);
+  const auto consider = [&](const HandCrop& crop) {
+    LandmarkedHand hand;
+    if (!Landmarks(rgb, crop, &hand)) return;
+    TrackedHand run{.run_crop = crop, .run_hand = hand};
+    if (options_.unchanged_crop_fraction > 0) run.run_input = input_;  // kept only to compare
+    add(hand, std::move(run));
+  };
+  for (TrackedHand& track : tracked_) {
+    if (!CropUnchanged(rgb, track)) {
+      consider(track.next);
+      continue;
+    }
+    ++reused_;
+    add(track.run_hand, std::move(track));
+  }
   // A hand lost on this frame is looked for on this frame and the next
   // lost_search - 1 (until max_hands hands are tracked).
   if (hands.size() < tracked_.size()) searching_ = options_.lost_search;
@@ -323,8 +363,8 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
   }
   if (searching_ > 0) --searching_;
   if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = 0;
-  tracked_.clear();
-  for (const LandmarkedHand& h : hands) tracked_.push_back(CropFromHand(h));
+  tracked_ = std::move(runs);
+  for (std::size_t i = 0; i < hands.size(); ++i) tracked_[i].next = CropFromHand(hands[i]);
   last_ms_ = models_->TakeModelMs();
   for (LandmarkedHand& h : hands) h = Scaled(h, 1.0 / shrink);
   return hands;

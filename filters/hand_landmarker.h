@@ -60,6 +60,14 @@ struct HandLandmarkerOptions {
   // the next lost_search - 1 (fewer when max_hands hands are tracked again).
   int palm_every = 1;
   int lost_search = 1;
+  // A tracked hand whose crop (the landmark model's input, sampled where
+  // the model last ran on that hand) changed on at most this fraction of
+  // its pixels, by more than unchanged_crop_level gray levels in some
+  // channel, since that run keeps that run's keypoints without running the
+  // model again. Compared with the last run, not the last frame, so slow
+  // motion adds up until it counts. 0: the model runs on every tracked hand.
+  double unchanged_crop_fraction = 0;
+  int unchanged_crop_level = 15;  // the activity signal's pixel_threshold
 };
 
 // A square crop of the frame, rotated: where the landmark model looks.
@@ -67,6 +75,16 @@ struct HandCrop {
   double cx = 0, cy = 0;  // centre, pixels of the (shrunk) frame
   double side = 0;        // pixels
   double rotation = 0;    // radians; the crop's up is the hand's up
+};
+
+// A hand followed from one frame to the next: where to look next, and
+// its last landmark run (the crop it ran on, that crop's input tensor, and
+// what it found, in the shrunk frame's pixels).
+struct TrackedHand {
+  HandCrop next;
+  HandCrop run_crop;
+  std::vector<float> run_input;
+  LandmarkedHand run_hand;
 };
 
 // A palm the palm detector found (after non-maximum suppression).
@@ -92,10 +110,16 @@ class HandLandmarker {
   // Error("hand_detector_failed") when the process dies or answers garbage.
   std::vector<LandmarkedHand> Detect(const cv::Mat& bgr);
   void Reset();
+  // True when a hand of the last frame is tracked into the next (else
+  // Detect runs the palm detector; PalmGate in filters/learned_hand_detector.h
+  // decides whether to call it at all).
+  bool tracking() const { return !tracked_.empty(); }
   // The palm detector alone on a BGR frame (no tracking, no landmarks).
   std::vector<DetectedPalm> DetectPalms(const cv::Mat& bgr);
   // CPU milliseconds the models took on the last frame (in the runtime).
   double last_ms() const { return last_ms_; }
+  // Landmark runs saved by unchanged crops since the landmarker was made.
+  int reused() const { return reused_; }
   // The runtime that runs the models ("native" or "wasm"), and why it is
   // not the one asked for (empty when it is).
   const char* backend() const;
@@ -105,16 +129,18 @@ class HandLandmarker {
   cv::Mat Rgb(const cv::Mat& bgr, double* shrink) const;
   std::vector<DetectedPalm> Palms(const cv::Mat& rgb);
   bool Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand);
+  bool CropUnchanged(const cv::Mat& rgb, const TrackedHand& track);
 
   HandLandmarkerOptions options_;
   std::unique_ptr<HandModels> models_;
   std::string note_;
   std::vector<cv::Point2d> anchors_;
-  std::vector<HandCrop> tracked_;  // where to look first in the next frame
+  std::vector<TrackedHand> tracked_;  // where to look first in the next frame
   int since_palms_ = 0;            // frames since the palm detector last ran
   int searching_ = 0;              // frames left to look for a lost hand on every frame
-  std::vector<float> input_;
+  std::vector<float> input_, compare_;
   double last_ms_ = 0;
+  int reused_ = 0;
 };
 
 // True when the models can run on some runtime (the model files for the

@@ -72,7 +72,26 @@ LearnedHandDetector::LearnedHandDetector(LearnedDetectorConfig config, const std
                                         .clip = clip,
                                         .backend = config.backend,
                                         .models = config.models,
-                                        .palm_every = config.palm_every}) {}
+                                        .palm_every = config.palm_every}),
+      palm_gate_(config.no_hand_palm_every, config.no_hand_changed_fraction, activity) {}
+
+void PalmGate::Reset() {
+  looked_.release();
+  since_ = 0;
+}
+
+bool PalmGate::Look(const cv::Mat& gray) {
+  ++since_;
+  const bool look = looked_.empty() || gray.empty() || gray.size() != looked_.size() ||
+                    (since_ >= every_ && (changed_fraction_ <= 0 ||
+                                          MovingFraction(gray, looked_, {}, activity_) >=
+                                              changed_fraction_));
+  if (look) {
+    gray.copyTo(looked_);
+    since_ = 0;
+  }
+  return look;
+}
 
 std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config) {
   const double fps = geometry.fps > 0 ? geometry.fps : 30.0;
@@ -93,6 +112,7 @@ void LearnedHandDetector::Begin(const VideoGeometry& geometry) {
   still_every_ = StillEvery(geometry, config_);
   seen_gray_.release();
   landmarker_.Reset();
+  palm_gate_.Reset();
 }
 
 // Still: nothing moved around the hands of the last sample the models saw
@@ -125,12 +145,28 @@ void LearnedHandDetector::Consume(FrameContext& context) {
       d.frame = context.frame->index;
       detections_.push_back(d);
     }
-    HoldMissedHands(&found, &age);
-    last_ = found;
-    last_age_ = age;
-    context.boxes = found;
+    Settle(context, std::move(found), std::move(age));
     return;
   }
+  if (!landmarker_.tracking() && !palm_gate_.Look(context.gray)) {
+    // The gate says no new hand can be here: none is found (the hands held
+    // from before stay held).
+    ++palm_gated_;
+    samples_.push_back({{"frame", context.frame->index},
+                        {"ms", 0.0},
+                        {"palm_gated", true},
+                        {"hands", Json::array()}});
+    FrameBoxes none;
+    none.known = true;
+    none.complete = false;
+    Settle(context, std::move(none), {});
+    return;
+  }
+  RunModels(context);
+}
+
+// A sample the models see: their hands, each with its object evidence.
+void LearnedHandDetector::RunModels(FrameContext& context) {
   const std::vector<LandmarkedHand> hands = landmarker_.Detect(context.frame->bgr);
   ++model_samples_;
   const std::size_t detections_before = detections_.size();
@@ -169,13 +205,19 @@ void LearnedHandDetector::Consume(FrameContext& context) {
     seen_detections_.assign(
         detections_.begin() + static_cast<std::ptrdiff_t>(detections_before), detections_.end());
   }
-  HoldMissedHands(&found, &age);
   samples_.push_back({{"frame", context.frame->index},
                       {"ms", Round(landmarker_.last_ms(), 0.1)},
                       {"hands", std::move(sample_hands)}});
+  Settle(context, std::move(found), std::move(age));
+}
+
+// A sample's hands are `found` (ages `age`) plus the ones held from the last
+// sample; they hold until the next sample.
+void LearnedHandDetector::Settle(FrameContext& context, FrameBoxes found, std::vector<int> age) {
+  HoldMissedHands(&found, &age);
   last_ = found;
-  last_age_ = age;
-  context.boxes = found;
+  last_age_ = std::move(age);
+  context.boxes = std::move(found);
 }
 
 // A hand of the last sample that no hand of this one overlaps is still
@@ -232,6 +274,7 @@ Json LearnedHandDetector::Measurements() const {
           {"sample_every", every_},
           {"ms_per_sample", n > 0 ? Round(total_ms_ / n, 0.1) : 0.0},
           {"model_samples", model_samples_},
+          {"palm_gated", palm_gated_},
           {"samples", samples_}};
 }
 

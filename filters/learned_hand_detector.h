@@ -84,12 +84,22 @@ struct LearnedDetectorConfig {
   // sample runs the models.
   double still_sample_fps = 1;
   double still_changed_fraction = 0.01;
+  // The palm detector on a sample the models see with no hand tracked (it
+  // costs three lite landmark runs; MediaPipe runs it on every such frame).
+  // It runs on every no_hand_palm_every-th such sample (a hand coming in is
+  // found up to no_hand_palm_every - 1 samples later), and only when at
+  // least no_hand_changed_fraction of the frame changed (the activity
+  // signal, whole frame) since the last hand-less sample it ran on: a hand
+  // cannot appear where nothing changed (PalmGate). 1 and 0: every sample.
+  int no_hand_palm_every = 3;
+  double no_hand_changed_fraction = 0.01;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedDetectorConfig, sample_fps, max_hands,
                                                 min_score, fingertip_reach, hand_thickness,
                                                 min_object_edges, hold_samples, border_reach, backend, models,
                                                 after_cheap_verdicts, keep_mb, palm_every,
-                                                still_sample_fps, still_changed_fraction)
+                                                still_sample_fps, still_changed_fraction,
+                                                no_hand_palm_every, no_hand_changed_fraction)
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const LearnedDetectorConfig& c, const std::string& section);
 
@@ -110,6 +120,26 @@ std::int64_t SampleEvery(const VideoGeometry& geometry, const LearnedDetectorCon
 // (a multiple of SampleEvery; equal to it when thinning is off).
 std::int64_t StillEvery(const VideoGeometry& geometry, const LearnedDetectorConfig& config);
 
+// Whether the palm detector looks at a frame where no hand is tracked
+// (LearnedDetectorConfig::no_hand_palm_every, no_hand_changed_fraction:
+// both must hold).
+class PalmGate {
+ public:
+  PalmGate(int every, double changed_fraction, ActivitySignalConfig activity)
+      : every_(every), changed_fraction_(changed_fraction), activity_(activity) {}
+  void Reset();
+  // Call on each frame with no hand tracked, with its gray image: true when
+  // the palm detector is to run on it (that frame becomes the reference).
+  bool Look(const cv::Mat& gray);
+
+ private:
+  int every_;
+  double changed_fraction_;
+  ActivitySignalConfig activity_;
+  cv::Mat looked_;  // the last hand-less frame the palm detector ran on
+  int since_ = 0;   // hand-less frames since then
+};
+
 class LearnedHandDetector : public FrameConsumer {
  public:
   // Starts the landmarker (throws what HandLandmarker throws). `activity`:
@@ -122,14 +152,18 @@ class LearnedHandDetector : public FrameConsumer {
   const std::vector<Detection>& detections() const { return detections_; }
   // {"sample_every", "samples": [{"frame", "ms", "hands": [{"score",
   //  "right", "object_edges", "box", "keypoints", "world"}]}],
-  //  "ms_per_sample", "model_samples"}: pixels at full resolution. A still
-  // sample (no model run) has "held_from": the frame whose hands it repeats,
-  // and ms 0; ms_per_sample is over all samples, model_samples counts the
-  // ones the models saw.
+  //  "ms_per_sample", "model_samples", "palm_gated"}: pixels at full
+  // resolution. A still sample (no model run) has "held_from": the frame
+  // whose hands it repeats, and ms 0; a sample with no hand tracked that
+  // the palm gate kept from the palm detector has "palm_gated": true, no
+  // hands and ms 0. ms_per_sample is over all samples, model_samples counts
+  // the ones the models saw, palm_gated the gated ones.
   Json Measurements() const;
 
  private:
   void HoldMissedHands(FrameBoxes* found, std::vector<int>* age) const;
+  void RunModels(FrameContext& context);
+  void Settle(FrameContext& context, FrameBoxes found, std::vector<int> age);
   void AddDetection(const cv::Rect2d& box, const char* kind, double score, int contact,
                     std::int64_t frame);
 
@@ -138,6 +172,7 @@ class LearnedHandDetector : public FrameConsumer {
   LearnedDetectorConfig config_;
   ActivitySignalConfig activity_;
   HandLandmarker landmarker_;
+  PalmGate palm_gate_;
   VideoGeometry geometry_;
   std::int64_t every_ = 1;
   std::int64_t still_every_ = 1;
@@ -148,7 +183,7 @@ class LearnedHandDetector : public FrameConsumer {
   Json seen_hands_ = Json::array();
   FrameBoxes seen_found_;
   std::vector<Detection> seen_detections_;
-  int model_samples_ = 0;
+  int model_samples_ = 0, palm_gated_ = 0;
   FrameBoxes last_;
   std::vector<int> last_age_;  // samples since each of last_'s hands was seen
   std::vector<Detection> detections_;

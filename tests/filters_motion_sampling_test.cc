@@ -12,6 +12,7 @@
 #include "filters/analyze.h"
 #include "filters/hand_landmarker.h"
 #include "filters/interaction.h"
+#include "filters/learned_hand_detector.h"
 #include "filters/out_of_frame.h"
 #include "filters/verdict.h"
 #include "stages/verdict_stages.h"
@@ -28,7 +29,10 @@ Json Analyze(const std::string& video, bool thinned) {
   // The models on every clip, so the verdicts that read the hands are seen
   // on the negatives too (the default defers them: filters_deferred_models_test).
   config.learned_detector.after_cheap_verdicts = false;
-  if (!thinned) config.learned_detector.still_sample_fps = config.learned_detector.sample_fps;
+  if (!thinned) {
+    config.learned_detector.still_sample_fps = config.learned_detector.sample_fps;
+    config.learned_detector.no_hand_palm_every = 1;  // the palm gate off too
+  }
   return AnalyzeClip(testing::SharedData() / "videos" / video, DecoderOptions{}, {}, config)
       .measurements;
 }
@@ -85,9 +89,16 @@ TEST_F(MotionSampling, ThinnedSamplingKeepsTheLabelledVerdicts) {
     ASSERT_EQ(hands.at("samples").size(), all.at("samples").size()) << l.video;
     const double fps = thinned.at("clip").at("fps").get<double>();
     std::map<std::int64_t, Json> modelled;
-    int held = 0;
+    int held = 0, gated = 0;
     for (const Json& s : hands.at("samples")) {
       const std::int64_t frame = s.at("frame").get<std::int64_t>();
+      if (s.contains("palm_gated")) {
+        // The palm gate kept the palm detector from a hand-less sample.
+        ++gated;
+        EXPECT_TRUE(s.at("hands").empty()) << l.video << " frame " << frame;
+        EXPECT_EQ(s.at("ms").get<double>(), 0.0);
+        continue;
+      }
       if (!s.contains("held_from")) {
         modelled[frame] = s.at("hands");
         continue;
@@ -100,13 +111,36 @@ TEST_F(MotionSampling, ThinnedSamplingKeepsTheLabelledVerdicts) {
       EXPECT_LT(frame - from, fps * 1.0 + 1) << l.video << " frame " << frame;
       EXPECT_EQ(s.at("ms").get<double>(), 0.0);
     }
-    EXPECT_EQ(held + hands.at("model_samples").get<int>(),
+    EXPECT_EQ(gated, hands.at("palm_gated").get<int>()) << l.video;
+    EXPECT_EQ(held + gated + hands.at("model_samples").get<int>(),
               static_cast<int>(hands.at("samples").size()));
-    // yoga's room stands still: most of its samples need no model run.
+    // yoga's room stands still: most of its samples need no model run
+    // (held, or kept from the palm detector by the palm gate: no hand is
+    // tracked there).
     if (std::string(l.video) == "yoga.mp4") {
-      EXPECT_GT(held, static_cast<int>(hands.at("samples").size()) / 3) << held;
+      EXPECT_GT(held + gated, static_cast<int>(hands.at("samples").size()) / 3) << held;
     }
   }
+}
+
+// The palm gate on frames with no hand: the palm detector looks at the
+// first, then at most every 3rd, and never where nothing changed since it
+// last looked (a gray square standing in for a hand coming in).
+TEST(PalmGate, LooksEveryThirdHandlessFrameAndOnlyWhereTheFrameChanged) {
+  PalmGate gate(3, 0.01, ActivitySignalConfig{});
+  const cv::Mat empty(120, 160, CV_8U, cv::Scalar(40));
+  cv::Mat hand = empty.clone();
+  hand(cv::Rect(60, 40, 30, 30)).setTo(200);  // 900 of 19,200 pixels: 4.7 %
+  EXPECT_TRUE(gate.Look(empty));  // nothing to compare with
+  for (int i = 0; i < 6; ++i) EXPECT_FALSE(gate.Look(empty)) << i;  // nothing changed
+  EXPECT_TRUE(gate.Look(hand));   // changed, 7 frames since
+  EXPECT_FALSE(gate.Look(empty));  // changed back, but 1 frame since
+  EXPECT_FALSE(gate.Look(empty));  // 2 frames
+  EXPECT_TRUE(gate.Look(empty));   // 3 frames, and it differs from the square
+  gate.Reset();
+  EXPECT_TRUE(gate.Look(empty));
+  PalmGate every(1, 0, ActivitySignalConfig{});  // off: every frame
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(every.Look(empty)) << i;
 }
 
 TEST(MotionSamplingConfig, BadValuesAreRefusedAtLoad) {
@@ -132,6 +166,12 @@ TEST(MotionSamplingConfig, BadValuesAreRefusedAtLoad) {
   c = {};
   c.palm_every = 0;
   refused(c, "palm_every");
+  c = {};
+  c.no_hand_palm_every = 0;
+  refused(c, "no_hand_palm_every");
+  c = {};
+  c.no_hand_changed_fraction = -0.1;
+  refused(c, "no_hand_changed_fraction");
   // Thinning off (the rate where nothing moves is the sampling rate) is valid.
   c = {};
   c.still_sample_fps = c.sample_fps;

@@ -187,11 +187,7 @@ void ReplayBimanualPlan(BimanualPlan& plan, const retarget::HandTrajectory& both
     }
     const size_t i = static_cast<size_t>(f), j = std::min(i + 1, count - 1);
     const double s = (1 - (f - i)) * source[i] + (f - i) * source[j];
-    const VectorXd qpos = RowAt(both.qpos, both.fps, s);
-    for (const auto& [act, c] : drive.from_joint) d->ctrl[act] = qpos[c];
-    if (drive.from_ctrl.empty()) return;
-    const VectorXd ctrl = RowAt(both.ctrl, both.fps, s);
-    for (const auto& [act, c] : drive.from_ctrl) d->ctrl[act] = ctrl[c];
+    DriveHand(drive, both, s, d);
   };
   drive_at(0, true);
   const VectorXd first = RowAt(both.qpos, both.fps, source[0]);

@@ -54,6 +54,16 @@ HandDrive MatchActuators(const mjModel* m, const std::vector<std::pair<int, int>
   return drive;
 }
 
+void DriveHand(const HandDrive& drive, const retarget::HandTrajectory& t, double s, mjData* d) {
+  if (!drive.from_joint.empty()) {
+    const VectorXd qpos = RowAt(t.qpos, t.fps, s);
+    for (const auto& [act, c] : drive.from_joint) d->ctrl[act] = qpos[c];
+  }
+  if (drive.from_ctrl.empty()) return;
+  const VectorXd ctrl = RowAt(t.ctrl, t.fps, s);
+  for (const auto& [act, c] : drive.from_ctrl) d->ctrl[act] = ctrl[c];
+}
+
 double Mean(const std::vector<double>& v) {
   double sum = 0;
   for (double x : v) sum += x;
@@ -224,13 +234,7 @@ class ReplayRun {
   void DriveHand(double f) {
     const Between b = At(f);
     const double s = (1 - b.a) * source_[b.i] + b.a * source_[b.j];
-    if (!drive_.from_joint.empty()) {
-      const VectorXd qpos = RowAt(t_.qpos, t_.fps, s);
-      for (const auto& [act, c] : drive_.from_joint) d_->ctrl[act] = qpos[c];
-    }
-    if (drive_.from_ctrl.empty()) return;
-    const VectorXd ctrl = RowAt(t_.ctrl, t_.fps, s);
-    for (const auto& [act, c] : drive_.from_ctrl) d_->ctrl[act] = ctrl[c];
+    replay::DriveHand(drive_, t_, s, d_);
   }
 
   void Drive(double f, bool start) {

@@ -32,6 +32,9 @@ struct HandDrive {
 HandDrive MatchActuators(const mjModel* m, const std::vector<std::pair<int, int>>& joints,
                          const retarget::HandTrajectory& t);
 
+// The rig's hand actuators set from the trajectory at trajectory time s.
+void DriveHand(const HandDrive& drive, const retarget::HandTrajectory& t, double s, mjData* d);
+
 double Mean(const std::vector<double>& v);
 double Max(const std::vector<double>& v);
 

@@ -138,12 +138,12 @@ TEST(StageRun, APermanentErrorIsNotRetriedAndATransientOneIs) {
 // deterministic stage with a permanent code (once), a run of the network
 // stage with a transient one (every attempt), by the registry's entry.
 TEST(StageRun, ADeterministicStagesTimeoutIsNotRetriedAndTheDownloadsIs) {
-  for (const auto& entry : StageTable()) {
-    EXPECT_EQ(IsPermanentError(StageTimeoutCode(entry.name)), entry.deterministic) << entry.name;
+  for (const auto& entry : stages::StageTable()) {
+    EXPECT_EQ(IsPermanentError(stages::StageTimeoutCode(entry.name)), entry.deterministic) << entry.name;
   }
-  EXPECT_STREQ(StageTimeoutCode(video::kProbeStageName), kStageTimeout);
-  EXPECT_STREQ(StageTimeoutCode(ingest::kDownloadStageName), kStageTimeoutTransient);
-  EXPECT_STREQ(StageTimeoutCode("no_such_stage"), kStageTimeout);
+  EXPECT_STREQ(stages::StageTimeoutCode(stages::kProbeStageName), kStageTimeout);
+  EXPECT_STREQ(stages::StageTimeoutCode(ingest::kDownloadStageName), kStageTimeoutTransient);
+  EXPECT_STREQ(stages::StageTimeoutCode("no_such_stage"), kStageTimeout);
   TempDir dir;
   Database db(dir / "q.db");
   db.SetPipeline({"picky"});
@@ -153,9 +153,9 @@ TEST(StageRun, ADeterministicStagesTimeoutIsNotRetriedAndTheDownloadsIs) {
   while (auto claim = db.ClaimNext("w", {}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
     // What TimeOut records: Fail with the attempts AttemptsAllowed gives.
     const std::string stage =
-        claim->clip_id == probe ? video::kProbeStageName : ingest::kDownloadStageName;
-    const int allowed = AttemptsAllowed(*claim, StageTimeoutCode(stage), kDefaultMaxAttempts);
-    ASSERT_TRUE(db.Fail(*claim, "w", std::string(StageTimeoutCode(stage)) + ": " + stage, allowed));
+        claim->clip_id == probe ? stages::kProbeStageName : ingest::kDownloadStageName;
+    const int allowed = AttemptsAllowed(*claim, stages::StageTimeoutCode(stage), kDefaultMaxAttempts);
+    ASSERT_TRUE(db.Fail(*claim, "w", std::string(stages::StageTimeoutCode(stage)) + ": " + stage, allowed));
     ++tries[claim->clip_id];
   }
   ASSERT_GT(kDefaultMaxAttempts, 1);

@@ -8,6 +8,8 @@
 #include "core/stage_progress.h"
 #include "video/display_rotation.h"
 #include "video/frame_count.h"
+#include "video/sws_buffer.h"
+#include "video/weighed_pixels.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -39,6 +41,11 @@ struct VideoDecoder::Codec {
   AVPacket* packet = nullptr;
   AVFrame* frame = nullptr;
   SwsContext* sws = nullptr;
+  // The exact path's conversion of the weighed pixels only, once the
+  // clip's first frame showed it equal to the full conversion.
+  std::unique_ptr<WeighedPixels> weighed;
+  bool weighed_checked = false;
+  bool weighed_off = false;
   int stream = -1;
   double time_base = 0;     // seconds per pts unit
   std::int64_t start_pts = 0;
@@ -206,25 +213,6 @@ std::int64_t VideoDecoder::DecodedIndex() const {
                       geometry_.fps);
 }
 
-namespace {
-
-// libswscale's vector code may store past the end of its last output row
-// (24 bytes behind 568-pixel BGR rows, found as heap corruption on
-// yoga.mp4): the frame is a view of the first rows of a buffer with spare
-// bytes behind it. A view of whole rows stays continuous (its dataend is
-// the buffer's, so the room is measured from the last row).
-void EnsureSwsOutput(cv::Mat* m, int rows, int cols) {
-  constexpr std::ptrdiff_t kSpare = 256;
-  if (m->rows == rows && m->cols == cols && m->type() == CV_8UC3 && m->isContinuous() &&
-      m->datalimit - (m->data + m->total() * 3) >= kSpare) {
-    return;
-  }
-  const int spare_rows = static_cast<int>(kSpare / (3 * cols)) + 1;
-  *m = cv::Mat(rows + spare_rows, cols, CV_8UC3).rowRange(0, rows);
-}
-
-}  // namespace
-
 bool VideoDecoder::DecodeNext() {
   Codec& c = *codec_;
   while (true) {
@@ -262,35 +250,82 @@ void VideoDecoder::Convert(cv::Mat* out) {
                                 : cv::ROTATE_90_CLOCKWISE);
 }
 
-void VideoDecoder::ConvertCoded(cv::Mat* bgr) {
+namespace {
+
+// libswscale's flags for every conversion here (OpenCV's FFmpeg reader
+// converts at the same size, where the scaler's filter does not matter).
+constexpr int kSwsFlags = SWS_BILINEAR;
+
+}  // namespace
+
+void VideoDecoder::SwsConvert(int width, int height, cv::Mat* bgr) {
   Codec& c = *codec_;
   const AVFrame* f = c.frame;
-  const bool sideways = rotation_ == 90 || rotation_ == 270;
-  const int width = sideways ? geometry_.height : geometry_.width;  // analysis size, coded
-  const int height = sideways ? geometry_.width : geometry_.height;
-  const bool resize_here = options_.exact_scaling;
-  const int out_w = resize_here ? f->width : width;
-  const int out_h = resize_here ? f->height : height;
   c.sws = sws_getCachedContext(c.sws, f->width, f->height, static_cast<AVPixelFormat>(f->format),
-                               out_w, out_h, AV_PIX_FMT_BGR24, SWS_BILINEAR, nullptr, nullptr,
+                               width, height, AV_PIX_FMT_BGR24, kSwsFlags, nullptr, nullptr,
                                nullptr);
   if (c.sws == nullptr) {
     throw Error("corrupt_video", "cannot convert the decoded pixel format",
                 {.clip = options_.clip, .file = path_.string()});
   }
-  cv::Mat& target = resize_here ? full_ : *bgr;
-  EnsureSwsOutput(&target, out_h, out_w);
-  uint8_t* planes[1] = {target.data};
-  const int strides[1] = {static_cast<int>(target.step[0])};
+  EnsureSwsOutput(bgr, height, width);
+  uint8_t* planes[1] = {bgr->data};
+  const int strides[1] = {static_cast<int>(bgr->step[0])};
   sws_scale(c.sws, f->data, f->linesize, 0, f->height, planes, strides);
-  if (resize_here) {
-    if (out_w == width && out_h == height) {
-      *bgr = full_;
-    } else {
-      cv::resize(full_, *bgr, cv::Size(width, height), 0, 0,
-                 cv::INTER_LINEAR);
-    }
+}
+
+bool VideoDecoder::ConvertWeighed(cv::Size target) {
+  Codec& c = *codec_;
+  const AVFrame* f = c.frame;
+  if (c.weighed_off || f->format != AV_PIX_FMT_YUV420P) return false;
+  const cv::Size full(f->width, f->height);
+  if (!c.weighed) {
+    c.weighed = std::make_unique<WeighedPixels>(full, target, kSwsFlags);
+    // Its small frame has 4 pixels per weighed one: worth it where that is
+    // well under the whole frame (the larger shrinks: 720p and up to 256).
+    c.weighed_off = 4 * c.weighed->fraction() > 0.5;
+    if (c.weighed_off) return false;
   }
+  EnsureSwsOutput(&full_, full.height, full.width);
+  const uint8_t* const planes[3] = {f->data[0], f->data[1], f->data[2]};
+  const int strides[3] = {f->linesize[0], f->linesize[1], f->linesize[2]};
+  if (!c.weighed->Convert(planes, strides, &full_)) {
+    c.weighed_off = true;
+    return false;
+  }
+  if (!c.weighed_checked) {
+    // The first frame, both ways: the full conversion stays for the clip
+    // unless the two agree to the byte.
+    cv::Mat weighed, reference;
+    cv::resize(full_, weighed, target, 0, 0, cv::INTER_LINEAR);
+    SwsConvert(full.width, full.height, &full_);
+    cv::resize(full_, reference, target, 0, 0, cv::INTER_LINEAR);
+    c.weighed_checked = true;
+    c.weighed_off = cv::norm(weighed, reference, cv::NORM_INF) != 0;
+  }
+  return true;
+}
+
+bool VideoDecoder::converts_weighed_pixels() const {
+  return codec_->weighed_checked && !codec_->weighed_off;
+}
+
+void VideoDecoder::ConvertCoded(cv::Mat* bgr) {
+  const AVFrame* f = codec_->frame;
+  const bool sideways = rotation_ == 90 || rotation_ == 270;
+  const int width = sideways ? geometry_.height : geometry_.width;  // analysis size, coded
+  const int height = sideways ? geometry_.width : geometry_.height;
+  if (!options_.exact_scaling) {
+    SwsConvert(width, height, bgr);
+    return;
+  }
+  if (f->width == width && f->height == height) {
+    SwsConvert(width, height, &full_);
+    *bgr = full_;
+    return;
+  }
+  if (!ConvertWeighed(cv::Size(width, height))) SwsConvert(f->width, f->height, &full_);
+  cv::resize(full_, *bgr, cv::Size(width, height), 0, 0, cv::INTER_LINEAR);
 }
 
 std::int64_t VideoDecoder::Tolerance() const {

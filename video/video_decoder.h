@@ -17,8 +17,10 @@
 // PySceneDetect golden still matches: tests/filters_shot_boundary_test.cc).
 // Frames are converted from the decoder's YUV straight to BGR at analysis
 // size by libswscale (bilinear), so no full-resolution BGR image is ever
-// made; `exact_scaling` instead converts at full size and resizes with
-// cv::resize as PySceneDetect does.
+// made; `exact_scaling` instead gives the pixels of converting at full size
+// and resizing with cv::resize as PySceneDetect does, converting only the
+// pixels that resize weighs where that is much less than the frame
+// (video/weighed_pixels.h).
 //
 // Frames before the span are decoded but not converted; a span that starts
 // more than `seek_after_frames` into the file seeks to the key frame before
@@ -113,6 +115,10 @@ class VideoDecoder {
   std::int64_t first_frame() const { return options_.first_frame; }
   // Frames delivered so far.
   std::int64_t delivered() const { return delivered_; }
+  // True once the exact path converts only the pixels cv::resize weighs:
+  // after the first frame, where that was worth it and gave the full
+  // conversion's bytes (video/weighed_pixels.h).
+  bool converts_weighed_pixels() const;
 
  private:
   struct Codec;  // libav state (video/video_decoder.cc)
@@ -130,6 +136,12 @@ class VideoDecoder {
   void Convert(cv::Mat* bgr);
   // The same in the coded (unrotated) orientation.
   void ConvertCoded(cv::Mat* bgr);
+  // The whole decoded frame as BGR of `width` x `height` (libswscale).
+  void SwsConvert(int width, int height, cv::Mat* bgr);
+  // The exact path's full-size BGR (full_) at the pixels cv::resize weighs
+  // for `target` (video/weighed_pixels.h); false when the whole frame must
+  // be converted instead.
+  bool ConvertWeighed(cv::Size target);
 
   std::filesystem::path path_;
   DecoderOptions options_;

@@ -87,7 +87,9 @@ void MotionBetween(const cv::Mat& prev_gray, const cv::Mat& gray,
   std::vector<unsigned char> status;
   std::vector<float> error;
   cv::calcOpticalFlowPyrLK(prev_gray, gray, corners, tracked, status, error,
-                           cv::Size(config.lk_window, config.lk_window), config.lk_levels);
+                           cv::Size(config.lk_window, config.lk_window), config.lk_levels,
+                           cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                            config.lk_iterations, config.lk_epsilon));
   std::vector<cv::Point2f> src, dst;
   for (size_t i = 0; i < corners.size(); ++i) {
     if (status[i]) {

@@ -90,6 +90,8 @@ void CheckConfig(const CameraMotionSignalConfig& c, const std::string& section) 
   RequireInRange(section, "min_distance", c.min_distance, 0, 1000);
   RequireInRange(section, "lk_window", c.lk_window, 3, 201);
   RequireInRange(section, "lk_levels", c.lk_levels, 0, 10);
+  RequireInRange(section, "lk_iterations", c.lk_iterations, 1, 1000);
+  RequireInRange(section, "lk_epsilon", c.lk_epsilon, 1e-6, 10);
   RequireInRange(section, "ransac_threshold", c.ransac_threshold, 0, 1000);
   RequireOneOf(section, "model", c.model, {"similarity", "homography"});
   RequireInRange(section, "box_margin", c.box_margin, 0, 2);

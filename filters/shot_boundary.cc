@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <set>
 
@@ -94,12 +95,39 @@ void ShotSignalExtractor::Begin(const VideoGeometry& geometry) {
   signals_.blend_step = std::max(1, config_.blend_step);
 }
 
+void Luma(const cv::Mat& bgr, cv::Mat* y) {
+  // OpenCV's RGB2Y coefficients (0.114, 0.587, 0.299 of 2^14) and rounding.
+  constexpr int kB = 1868, kG = 9617, kR = 4899, kHalf = 1 << 13, kShift = 14;
+  y->create(bgr.size(), CV_8U);
+  for (int r = 0; r < bgr.rows; ++r) {
+    const std::uint8_t* in = bgr.ptr<std::uint8_t>(r);
+    std::uint8_t* out = y->ptr<std::uint8_t>(r);
+    for (int c = 0; c < bgr.cols; ++c, in += 3) {
+      out[c] = static_cast<std::uint8_t>((in[0] * kB + in[1] * kG + in[2] * kR + kHalf) >> kShift);
+    }
+  }
+}
+
 void ShotSignalExtractor::Consume(FrameContext& context) {
   const cv::Mat& bgr = context.frame->bgr;
+  ColourSignals(bgr);
+  HashSignal(context.gray);
+  HistogramSignals(bgr);
+  ChangedLongSignal(context.gray);
+  BlendSignal();
+}
+
+// ContentDetector's inputs: the mean of all B, G, R values and the mean
+// absolute change of H, S and V.
+void ShotSignalExtractor::ColourSignals(const cv::Mat& bgr) {
   const double pixels = static_cast<double>(bgr.rows) * bgr.cols;
-  // Mean of all B, G, R values.
-  const cv::Scalar sums = cv::sum(bgr);
-  signals_.mean_intensity.push_back((sums[0] + sums[1] + sums[2]) / (pixels * 3.0));
+  // One channel's sum of every byte: the same exact integer as the three
+  // channel sums added, summed at vector width.
+  const double sum = bgr.isContinuous() ? cv::sum(bgr.reshape(1))[0] : [&bgr] {
+    const cv::Scalar s = cv::sum(bgr);
+    return s[0] + s[1] + s[2];
+  }();
+  signals_.mean_intensity.push_back(sum / (pixels * 3.0));
 
   cv::cvtColor(bgr, hsv_, cv::COLOR_BGR2HSV);
   if (prev_hsv_.empty()) {
@@ -114,8 +142,11 @@ void ShotSignalExtractor::Consume(FrameContext& context) {
     signals_.delta_lum.push_back(d[2] / pixels);
   }
   std::swap(hsv_, prev_hsv_);
+}
 
-  cv::Mat hash = Hash(context.gray);
+// HashDetector's: the share of perceptual-hash bits that changed.
+void ShotSignalExtractor::HashSignal(const cv::Mat& gray) {
+  cv::Mat hash = Hash(gray);
   if (prev_hash_.empty()) {
     signals_.hash_distance.push_back(0);
   } else {
@@ -124,15 +155,18 @@ void ShotSignalExtractor::Consume(FrameContext& context) {
                                      (config_.hash_size * config_.hash_size));
   }
   prev_hash_ = hash;
+}
 
-  cv::Mat yuv, y, hist;
-  cv::cvtColor(bgr, yuv, cv::COLOR_BGR2YUV);
-  cv::extractChannel(yuv, y, 0);
+// HistogramDetector's: the correlation of consecutive Y histograms, and the
+// same over the long window.
+void ShotSignalExtractor::HistogramSignals(const cv::Mat& bgr) {
+  Luma(bgr, &luma_);
+  cv::Mat hist;
   const int channels[] = {0};
   const int bins[] = {config_.histogram_bins};
   const float range[] = {0, 256};
   const float* ranges[] = {range};
-  cv::calcHist(&y, 1, channels, cv::Mat(), hist, 1, bins, ranges);
+  cv::calcHist(&luma_, 1, channels, cv::Mat(), hist, 1, bins, ranges);
   cv::normalize(hist, hist);
   if (prev_hist_.empty()) {
     signals_.histogram_correlation.push_back(1.0);
@@ -148,15 +182,24 @@ void ShotSignalExtractor::Consume(FrameContext& context) {
     signals_.histogram_correlation_long.push_back(1.0);
   }
   hist_window_.push_back(hist);
+}
+
+// The share of pixels that changed by more than 25 grey levels over the
+// long window.
+void ShotSignalExtractor::ChangedLongSignal(const cv::Mat& gray) {
+  const double pixels = static_cast<double>(gray.rows) * gray.cols;
   if (static_cast<int>(gray_window_.size()) == signals_.long_window) {
-    cv::absdiff(context.gray, gray_window_.front(), diff_);
+    cv::absdiff(gray, gray_window_.front(), diff_);
     signals_.changed_fraction_long.push_back(cv::countNonZero(diff_ > 25) / pixels);
     gray_window_.pop_front();
   } else {
     signals_.changed_fraction_long.push_back(0.0);
   }
-  gray_window_.push_back(context.gray.clone());
+  gray_window_.push_back(gray.clone());
+}
 
+// The linear-blend test of the frame blend_step frames back (BlendCuts).
+void ShotSignalExtractor::BlendSignal() {
   const int step = signals_.blend_step;
   blend_window_.push_back(gray_window_.back());
   if (static_cast<int>(blend_window_.size()) > 2 * step + 1) blend_window_.pop_front();
@@ -167,6 +210,7 @@ void ShotSignalExtractor::Consume(FrameContext& context) {
   }
   const cv::Mat& before = blend_window_.front();
   const cv::Mat& after = blend_window_.back();
+  const double pixels = static_cast<double>(after.rows) * after.cols;
   // In 16-bit integers, doubled so that the average stays exact:
   // |2 mid - (before + after)| <= 2 tolerance |after - before|.
   cv::add(before, after, blend_sum_, cv::noArray(), CV_16S);

@@ -174,6 +174,11 @@ struct ShotSignals {
 Json ToJson(const ShotSignals& s);
 ShotSignals ShotSignalsFromJson(const Json& j);  // throws Error("bad_measurements")
 
+// The Y channel of OpenCV's COLOR_BGR2YUV for an 8-bit BGR image (BT.601 in
+// 14-bit fixed point with its rounding: equal for every one of the 2^24
+// colours), without making the U and V the histogram does not use.
+void Luma(const cv::Mat& bgr, cv::Mat* y);
+
 class ShotSignalExtractor : public FrameConsumer {
  public:
   explicit ShotSignalExtractor(ShotSignalConfig config = {}) : config_(config) {}
@@ -182,10 +187,16 @@ class ShotSignalExtractor : public FrameConsumer {
   const ShotSignals& signals() const { return signals_; }
 
  private:
+  // The steps of Consume, one signal group each, in PySceneDetect's order.
+  void ColourSignals(const cv::Mat& bgr);
+  void HashSignal(const cv::Mat& gray);
+  void HistogramSignals(const cv::Mat& bgr);
+  void ChangedLongSignal(const cv::Mat& gray);
+  void BlendSignal();
   cv::Mat Hash(const cv::Mat& gray) const;
   ShotSignalConfig config_;
   ShotSignals signals_;
-  cv::Mat hsv_, prev_hsv_, diff_, prev_hash_, prev_hist_;
+  cv::Mat hsv_, prev_hsv_, diff_, prev_hash_, prev_hist_, luma_;
   std::deque<cv::Mat> hist_window_, gray_window_;
   std::deque<cv::Mat> blend_window_;
   cv::Mat blend_sum_, blend_mid_, blend_diff_;

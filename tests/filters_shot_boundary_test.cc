@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/config.h"
 #include "filters/frame_analyzer.h"
 #include "filters/shot_boundary.h"
@@ -31,6 +33,26 @@ ShotSignals Signals(const std::string& video) {
   exact.skip_loop_filter = false;
   AnalyzeFrames(testing::SharedData() / "shots" / video, exact, {}, {&extractor});
   return extractor.signals();
+}
+
+TEST(Luma, EqualsOpenCVsYuvConversionForEveryColour) {
+  // All 2^24 BGR colours, one image row per (B, G) pair.
+  cv::Mat colours(256 * 256, 256, CV_8UC3);
+  for (int b = 0; b < 256; ++b) {
+    for (int g = 0; g < 256; ++g) {
+      cv::Vec3b* row = colours.ptr<cv::Vec3b>(b * 256 + g);
+      for (int r = 0; r < 256; ++r) row[r] = cv::Vec3b(b, g, r);
+    }
+  }
+  cv::Mat yuv, opencv_y, ours;
+  cv::cvtColor(colours, yuv, cv::COLOR_BGR2YUV);
+  cv::extractChannel(yuv, opencv_y, 0);
+  Luma(colours, &ours);
+  EXPECT_EQ(cv::countNonZero(ours != opencv_y), 0);
+  // A view that is not continuous (a column range) gives the same.
+  cv::Mat part;
+  Luma(colours.colRange(7, 200), &part);
+  EXPECT_EQ(cv::countNonZero(part != opencv_y.colRange(7, 200)), 0);
 }
 
 class ShotGoldens : public ::testing::TestWithParam<std::string> {

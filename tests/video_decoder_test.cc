@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "video/video_decoder.h"
@@ -219,6 +220,44 @@ TEST(VideoDecoder, FileCutBeforeItsIndexCannotBeOpened) {
     EXPECT_EQ(e.code(), "video_open_failed");
     EXPECT_EQ(e.site().file, truncated.string());
   }
+}
+
+}  // namespace
+}  // namespace doasido
+
+namespace doasido {
+namespace {
+
+// The first frame of `video` through the exact path, and the frame after it.
+std::vector<cv::Mat> FirstFrames(const std::filesystem::path& video) {
+  VideoDecoder decoder(video, {.skip_loop_filter = false, .exact_scaling = true});
+  AnalysisFrame frame;
+  std::vector<cv::Mat> frames;
+  for (int i = 0; i < 2 && decoder.Next(&frame); ++i) frames.push_back(frame.bgr.clone());
+  return frames;
+}
+
+TEST(VideoDecoder, AFrameDoesNotDependOnWhatWasDecodedBefore) {
+  // 470 pixels wide: libswscale's converter at that size leaves the last 6
+  // columns unwritten; they used to hold whatever the buffer held.
+  const auto bass = testing::SharedData() / "videos" / "bass_guitar.mp4";
+  const std::vector<cv::Mat> first = FirstFrames(bass);
+  FirstFrames(Cups());
+  FirstFrames(testing::SharedData() / "videos" / "yoga.mp4");  // 568 wide
+  const std::vector<cv::Mat> again = FirstFrames(bass);
+  ASSERT_EQ(first.size(), 2u);
+  ASSERT_EQ(again.size(), 2u);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(cv::norm(first[i], again[i], cv::NORM_INF), 0) << i;
+  // The full-size conversion's last columns are real pixels of the frame:
+  // they continue the columns before them.
+  VideoDecoder whole(bass, {.analysis_size = 0, .skip_loop_filter = false});
+  AnalysisFrame frame;
+  ASSERT_TRUE(whole.Next(&frame));
+  ASSERT_EQ(frame.bgr.cols, 470);
+  cv::Mat last, before;
+  frame.bgr.colRange(464, 470).convertTo(last, CV_32F);
+  frame.bgr.colRange(458, 464).convertTo(before, CV_32F);
+  EXPECT_LT(std::abs(cv::mean(last)[0] - cv::mean(before)[0]), 20.0);
 }
 
 }  // namespace

@@ -261,17 +261,35 @@ constexpr int kSwsFlags = SWS_BILINEAR;
 void VideoDecoder::SwsConvert(int width, int height, cv::Mat* bgr) {
   Codec& c = *codec_;
   const AVFrame* f = c.frame;
-  c.sws = sws_getCachedContext(c.sws, f->width, f->height, static_cast<AVPixelFormat>(f->format),
-                               width, height, AV_PIX_FMT_BGR24, kSwsFlags, nullptr, nullptr,
-                               nullptr);
+  // libswscale's vector converter at the frame's own size writes whole
+  // blocks of 8 pixels and leaves a row's last width % 8 pixels as they
+  // were (bass_guitar.mp4, 470 wide: its last 6 columns were whatever the
+  // buffer held, so a clip's pixels depended on what the worker decoded
+  // before). It converts a width rounded up to 16 instead, reading the
+  // decoder's padding (decoded macroblocks or the plane's alignment), and
+  // the frame is a copy of the first `width` columns of that.
+  const bool same_size = width == f->width && height == f->height;
+  const int padded = (width + 15) / 16 * 16;
+  const bool pad = same_size && padded != width && f->linesize[0] >= padded &&
+                   (f->format != AV_PIX_FMT_YUV420P ||
+                    (f->linesize[1] >= padded / 2 && f->linesize[2] >= padded / 2));
+  const int sws_width = pad ? padded : width;
+  c.sws = sws_getCachedContext(c.sws, pad ? padded : f->width, f->height,
+                               static_cast<AVPixelFormat>(f->format), sws_width, height,
+                               AV_PIX_FMT_BGR24, kSwsFlags, nullptr, nullptr, nullptr);
   if (c.sws == nullptr) {
     throw Error("corrupt_video", "cannot convert the decoded pixel format",
                 {.clip = options_.clip, .file = path_.string()});
   }
-  EnsureSwsOutput(bgr, height, width);
-  uint8_t* planes[1] = {bgr->data};
-  const int strides[1] = {static_cast<int>(bgr->step[0])};
+  cv::Mat& target = pad ? padded_ : *bgr;
+  EnsureSwsOutput(&target, height, sws_width);
+  uint8_t* planes[1] = {target.data};
+  const int strides[1] = {static_cast<int>(target.step[0])};
   sws_scale(c.sws, f->data, f->linesize, 0, f->height, planes, strides);
+  if (pad) {
+    EnsureSwsOutput(bgr, height, width);  // the same room as a direct conversion
+    padded_.colRange(0, width).copyTo(*bgr);
+  }
 }
 
 bool VideoDecoder::ConvertWeighed(cv::Size target) {

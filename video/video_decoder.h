@@ -148,6 +148,7 @@ class VideoDecoder {
   VideoGeometry geometry_;
   std::unique_ptr<Codec> codec_;
   cv::Mat full_;
+  cv::Mat padded_;    // a conversion at a width rounded up to 16 (SwsConvert)
   cv::Mat coded_;     // a rotated file's frame before turning
   int rotation_ = 0;  // video/display_rotation.h
   std::int64_t next_index_ = 0;  // index of the next decoded frame

@@ -105,10 +105,14 @@ double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right
 namespace {
 
 // The commands of `plan` that fail a check: either arm's unreachable
-// frames and limit excesses, and the arm-arm collisions.
+// frames, limit excesses and commands off the wrist path, and the arm-arm
+// collisions.
 size_t FailingCount(const BimanualPlan& plan) {
   size_t n = plan.collisions.size();
-  for (const Plan* p : {&plan.left, &plan.right}) n += p->unreachable.size() + p->too_fast.size() + p->over_acceleration.size();
+  for (const Plan* p : {&plan.left, &plan.right}) {
+    n += p->unreachable.size() + p->too_fast.size() + p->over_acceleration.size() +
+         p->path_deviation.OffPathCommands();
+  }
   return n;
 }
 

@@ -30,6 +30,7 @@ VectorXd QposAt(const retarget::HandTrajectory& t, double s) {
 
 // Step 2: the arm's IK at every trajectory frame.
 struct ArmPath {
+  std::vector<Pose> targets;  // the wrist per frame in the arm's base frame
   std::vector<ArmQ> q;
   std::vector<double> position_error, rotation_error;
   std::vector<FrameIssue> unreachable;
@@ -42,7 +43,8 @@ ArmPath SolveArmPath(const retarget::HandTrajectory& t, const Pose& world_to_bas
   const int frames = static_cast<int>(t.qpos.size());
   Progress progress("ik", frames);
   for (int f = 0; f < frames; ++f) {
-    const IkResult r = ik.Solve(world_to_base * WristPose(t, f), q);
+    path.targets.push_back(world_to_base * WristPose(t, f));
+    const IkResult r = ik.Solve(path.targets.back(), q);
     q = r.q;
     path.q.push_back(r.q);
     path.position_error.push_back(r.position_error);
@@ -175,6 +177,7 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   RequireInRange(section, "follow_rounds", c.follow_rounds, 0, 5);
   RequireInRange(section, "follow_smoothing", c.follow_smoothing, 0, 2);
   CheckConfig(c.wrist_smoothing, section + ".wrist_smoothing");
+  CheckConfig(c.path_check, section + ".path_check");
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -283,8 +286,11 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
     }
     if (within) break;
   }
-  for (Plan& plan : plans) {
-    plan.ok = plan.unreachable.empty() && plan.too_fast.empty() && plan.over_acceleration.empty();
+  for (size_t a = 0; a < arms; ++a) {
+    Plan& plan = plans[a];
+    plan.path_deviation = CheckPathDeviation(plan, paths[a].targets, first.fps, paths[a].q, config.path_check);
+    plan.ok = plan.unreachable.empty() && plan.too_fast.empty() && plan.over_acceleration.empty() &&
+              plan.path_deviation.off_path.empty();
   }
   return plans;
 }

@@ -36,7 +36,16 @@
 //    "over_acceleration", with their plan time; the arm at rest before the
 //    first command and after the last). If a command exceeds a limit, step
 //    3 runs again aiming at a smaller share of the limits (time_scaling
-//    attempts). The plan is ok when no frame or command is listed.
+//    attempts). Then the commands between the frames ("off_path",
+//    PathDeviation): the IK solved the arm only at the trajectory's
+//    frames, and where its answer jumps from one solution to another
+//    between two frames the arm swings through the jump while the frames
+//    themselves are reached; so the flange of every command of the
+//    re-timed path (forward kinematics of what the arm will receive) is
+//    compared with the wrist path interpolated at the command's trajectory
+//    time, and runs of commands beyond path_check's tolerances are listed
+//    with the frames they lie between. The plan is ok when no frame or
+//    command is listed.
 // 5. Replay (replay.cc; when the trajectory has object poses and a scene):
 //    the arm tracks the commands by a joint servo (PlanConfig servo_omega),
 //    the fingers by the hand's position actuators
@@ -87,6 +96,20 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WorkspaceConfig, x, y, yaw, base
                                                 search_restarts, manipulability_floor)
 void CheckConfig(const WorkspaceConfig& c, const std::string& section);
 
+// Step 4's between-frames check (PathDeviation): how far the flange of a
+// commanded joint vector may stray from the wrist path, interpolated
+// between the trajectory's frames (positions linearly, rotations by slerp)
+// at the command's trajectory time. A clean plan strays a few millimetres
+// at most (the joint spline between IK solutions against a straight line
+// between wrist poses); an IK branch jump swings the flange tens of
+// centimetres off.
+struct PathCheckConfig {
+  double position_tolerance = 0.01;  // m
+  double rotation_tolerance = 0.1;   // rad
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathCheckConfig, position_tolerance, rotation_tolerance)
+void CheckConfig(const PathCheckConfig& c, const std::string& section);
+
 struct PlanConfig {
   double rate_hz = 50;  // command rate
   bool replay = true;
@@ -119,10 +142,13 @@ struct PlanConfig {
   double follow_smoothing = 0.2;
   // Step 0 (wrist_smoothing.h): the wrist path low-passed before planning.
   WristSmoothingConfig wrist_smoothing;
+  // Step 4's check of the commands between the frames.
+  PathCheckConfig path_check;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
                                                 home, lead_in, lead_out, approach_height, approach_speed,
-                                                servo_omega, follow_rounds, follow_smoothing, wrist_smoothing)
+                                                servo_omega, follow_rounds, follow_smoothing, wrist_smoothing,
+                                                path_check)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -143,6 +169,38 @@ struct FrameIssue {
   double value = 0;  // unreachable: position error (m); too_fast: speed (rad/s); over_acceleration: rad/s^2
   double limit = 0;  // too_fast, over_acceleration: the joint's limit; unreachable: rotation error (rad)
   int joint = -1;    // too_fast, over_acceleration: arm joint index
+};
+
+// The names of step 4's checks: the plan file's lists and what `deploy
+// plan` prints.
+inline constexpr const char* kCheckUnreachable = "unreachable";
+inline constexpr const char* kCheckTooFast = "too_fast";
+inline constexpr const char* kCheckOverAcceleration = "over_acceleration";
+inline constexpr const char* kCheckOffPath = "off_path";
+
+// A run of consecutive path commands whose flange strays beyond the
+// path check's tolerance (either of them) from the wrist path.
+struct OffPathSpan {
+  int first_command = 0, last_command = 0;  // plan commands, inclusive
+  double start_time = 0, end_time = 0;      // s, their plan times
+  int from_frame = 0, to_frame = 0;         // the trajectory frames the run lies between
+  double position_deviation = 0;            // m, the largest in the run
+  double rotation_deviation = 0;            // rad
+  // rad: the largest change of one joint of the IK's answer from one frame
+  // to the next within [from_frame, to_frame]: the branch jump, if any.
+  double joint_jump = 0;
+};
+
+// Step 4's between-frames check over the path's commands (the lead moves
+// have no wrist target).
+struct PathDeviation {
+  bool checked = false;     // false: a plan file from before the check
+  double position_max = 0;  // m, over every path command
+  double rotation_max = 0;  // rad
+  int worst_command = -1;   // the command of position_max
+  double position_tolerance = 0, rotation_tolerance = 0;  // the config's, recorded
+  std::vector<OffPathSpan> off_path;
+  int OffPathCommands() const;  // commands in the runs
 };
 
 struct ReplayReport {
@@ -188,10 +246,17 @@ struct Plan {
   double slowdown = 1;                // re-timed path duration / trajectory_duration
   std::vector<double> position_error, rotation_error;  // IK residual per trajectory frame
   std::vector<FrameIssue> unreachable, too_fast, over_acceleration;
+  PathDeviation path_deviation;  // step 4's off_path
   ReplayReport replay;
   WristSmoothingReport wrist_smoothing;  // step 0
-  bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration
+  bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration, off_path
 };
+
+// Step 4's between-frames check of `plan`'s path commands: `wrists` are the
+// wrist poses the arm was planned on, one per trajectory frame at `fps`,
+// in the arm's base frame; `frame_q` the IK's joints at those frames.
+PathDeviation CheckPathDeviation(const Plan& plan, const std::vector<Pose>& wrists, double fps,
+                                 const std::vector<ArmQ>& frame_q, const PathCheckConfig& config);
 
 // The floating-wrist pose of `frame` in the trajectory's world (joints
 // doasido_wrist_x..rz, rotation Rx Ry Rz). Throws Error("bad_trajectory").
@@ -273,7 +338,11 @@ FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajector
 // "position_error", "rotation_error", "unreachable": [{frame, time,
 // position_error, rotation_error}], "too_fast": [{frame, time, joint, speed,
 // limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],
-// "replay": {...}, "ok"}. Version 1 files (no time map) read with
+// "path_deviation": {position_max, rotation_max, worst_command,
+// position_tolerance, rotation_tolerance, "off_path": [{first_command,
+// last_command, start_time, end_time, from_frame, to_frame,
+// position_deviation, rotation_deviation, joint_jump}]} (absent in files
+// from before the check: read unchecked), "replay": {...}, "ok"}. Version 1 files (no time map) read with
 // source_times = times and slowdown 1.
 // The "format" member of a plan file.
 inline constexpr const char* kPlanFormat = "doasido_deploy_plan";

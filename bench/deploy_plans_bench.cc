@@ -8,9 +8,12 @@
 //  - --carries synthetic two-hand carries of --carry_seconds (both Sharpa
 //    hands, `deploy plan-two`),
 // the share of plans passing every check (reach, joint speed and
-// acceleration at every command), the slowdowns (median, max), the arm
-// replay's object success against the floating hand's, and the wrist
-// tracking error (mean, max).
+// acceleration at every command, the flange on the wrist path between
+// frames), the slowdowns (median, max), the arm replay's object success
+// against the floating hand's, and the wrist tracking error (mean, max).
+// Per plan, "betw. mm" is the largest flange deviation from the wrist path
+// over the re-timed commands (plan.h PathDeviation), and the checks column
+// names the frames of the worst run off the path and the placement used.
 //
 // Retargeting is the slow part (275-680 s a 10-s clip on 2 threads, ~1000 s
 // on one thread of a loaded machine), so the
@@ -312,6 +315,12 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   row.wrist_max = plan.replay.wrist_position_error_max;
   row.between_frames = plan.path_deviation.position_max;
   row.why = Checks(plan);
+  {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "; placed yaw %.0f deg at (%.2f, %.2f) m", plan.placement.yaw * 180 / M_PI,
+                  plan.placement.x, plan.placement.y);
+    row.why += buf;
+  }
   if (plan.wrist_smoothing.applied) {
     char buf[128];
     std::snprintf(buf, sizeof(buf), "; smoothed at %.1f Hz: wrist moved <= %.1f mm / %.3f rad, %d frames bounded",

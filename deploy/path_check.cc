@@ -8,6 +8,7 @@
 #include "core/config_check.h"
 #include "deploy/plan.h"
 #include "deploy/replay_rig.h"
+#include "deploy/time_scaling.h"
 
 namespace doasido::deploy {
 namespace {
@@ -28,9 +29,31 @@ void CheckConfig(const PathCheckConfig& c, const std::string& section) {
   RequireInRange(section, "rotation_tolerance", c.rotation_tolerance, 1e-3, 3.2);
 }
 
+SplineDeviation JointSplineDeviation(const std::vector<ArmQ>& frame_q, const std::vector<Pose>& wrists, double fps,
+                                     int samples) {
+  SplineDeviation out;
+  if (frame_q.size() < 2) return out;
+  std::vector<double> knots;
+  std::vector<Eigen::VectorXd> values;
+  for (size_t f = 0; f < frame_q.size(); ++f) {
+    knots.push_back(f / fps);
+    values.push_back(frame_q[f]);
+  }
+  const JointSpline spline(knots, values);
+  for (size_t f = 0; f + 1 < frame_q.size(); ++f) {
+    for (int i = 1; i < samples; ++i) {
+      const double s = (f + double(i) / samples) / fps;
+      const Pose flange = DhForwardPose(spline.Value(s)), target = replay::PoseAt(wrists, fps, s);
+      out.position = std::max(out.position, (flange.t - target.t).norm());
+      out.rotation = std::max(out.rotation, RotationAngle(flange.q, target.q));
+    }
+  }
+  return out;
+}
+
 int PathDeviation::OffPathCommands() const {
   int n = 0;
-  for (const OffPathSpan& s : off_path) n += s.last_command - s.first_command + 1;
+  for (const OffPathSpan& s : off_path) n += s.commands;
   return n;
 }
 
@@ -57,11 +80,13 @@ PathDeviation CheckPathDeviation(const Plan& plan, const std::vector<Pose>& wris
       continue;
     }
     const int frame = static_cast<int>(std::floor(s * fps));
+    if (!open && !out.off_path.empty() && out.off_path.back().to_frame >= frame) open = &out.off_path.back();
     if (!open) {
       out.off_path.push_back({.first_command = k, .start_time = plan.times[k], .from_frame = frame});
       open = &out.off_path.back();
     }
     open->last_command = k;
+    ++open->commands;
     open->end_time = plan.times[k];
     open->to_frame = std::min(static_cast<int>(std::ceil(s * fps)), static_cast<int>(wrists.size()) - 1);
     open->to_frame = std::max(open->to_frame, open->from_frame);

@@ -14,10 +14,18 @@
 //    -base_height), c = (mean wrist x, mean wrist y, 0). The workspace
 //    config gives the default (x, y, yaw); a grid search over yaw and
 //    offsets around it keeps the placement that reaches most frames, then
-//    needs the least slowdown away from singularities.
+//    needs the least slowdown away from singularities; when the plan there
+//    fails step 4's off_path check, the next placements of the search
+//    (workspace.fallback_placements) are planned too and the plan with the
+//    fewest failing commands is kept.
 // 2. Arm IK (arm_ik.h) for the wrist pose of every trajectory frame, warm
 //    started from the previous frame (the first from home): the joint path
 //    q(s), s the trajectory's time, a cubic spline through the frames.
+//    Where that chain jumps between two of a pose's solutions, the flange
+//    swings off the wrist path between the frames (JointSplineDeviation
+//    beyond path_check's tolerances): the chain of least motion over the
+//    poses' closed-form solutions (ArmIk::LeastMotionPath) is taken
+//    instead when it strays less.
 // 3. Time scaling (time_scaling.h): s(t) so that every joint stays within
 //    its speed and acceleration limits, never faster than the video,
 //    starting and ending at rest. The commands are at t = k / rate: a
@@ -90,10 +98,13 @@ struct WorkspaceConfig {
   // Manipulability (ur3e.h, 0..1) below which a placement's cost grows
   // (placement.h); 0 ignores singularities.
   double manipulability_floor = 0.05;
+  // Runner-up placements planned when the best one's plan leaves the
+  // wrist path between frames (step 4's off_path; MakePlan).
+  int fallback_placements = 3;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WorkspaceConfig, x, y, yaw, base_height, yaw_steps,
                                                 offset_range, offset_steps, search_frames,
-                                                search_restarts, manipulability_floor)
+                                                search_restarts, manipulability_floor, fallback_placements)
 void CheckConfig(const WorkspaceConfig& c, const std::string& section);
 
 // Step 4's between-frames check (PathDeviation): how far the flange of a
@@ -171,6 +182,11 @@ struct FrameIssue {
   int joint = -1;    // too_fast, over_acceleration: arm joint index
 };
 
+// The error of a joint path the re-timing gives up on
+// (TimeScalingConfig::max_slowdown): MakePlansOnOneClock names the arm,
+// the frames and the placement.
+inline constexpr const char* kUnfollowablePath = "unfollowable_path";
+
 // The names of step 4's checks: the plan file's lists and what `deploy
 // plan` prints.
 inline constexpr const char* kCheckUnreachable = "unreachable";
@@ -178,10 +194,13 @@ inline constexpr const char* kCheckTooFast = "too_fast";
 inline constexpr const char* kCheckOverAcceleration = "over_acceleration";
 inline constexpr const char* kCheckOffPath = "off_path";
 
-// A run of consecutive path commands whose flange strays beyond the
-// path check's tolerance (either of them) from the wrist path.
+// A run of path commands whose flange strays beyond the path check's
+// tolerance (either of them) from the wrist path; runs only apart where
+// the joint spline passes through a frame's IK answer (back on the path
+// for an instant) are one.
 struct OffPathSpan {
   int first_command = 0, last_command = 0;  // plan commands, inclusive
+  int commands = 0;                         // of them, beyond the tolerance
   double start_time = 0, end_time = 0;      // s, their plan times
   int from_frame = 0, to_frame = 0;         // the trajectory frames the run lies between
   double position_deviation = 0;            // m, the largest in the run
@@ -252,6 +271,19 @@ struct Plan {
   bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration, off_path
 };
 
+// Step 2's test of a joint path before it is re-timed: the flange's
+// largest deviation (m, rad) from the wrist path between frames along the
+// joint spline through `frame_q` (the IK's answers at `wrists`' frames, at
+// `fps`), sampled `samples` times per frame interval.
+struct SplineDeviation {
+  double position = 0, rotation = 0;
+  bool Within(const PathCheckConfig& c) const {
+    return position <= c.position_tolerance && rotation <= c.rotation_tolerance;
+  }
+};
+SplineDeviation JointSplineDeviation(const std::vector<ArmQ>& frame_q, const std::vector<Pose>& wrists, double fps,
+                                     int samples);
+
 // Step 4's between-frames check of `plan`'s path commands: `wrists` are the
 // wrist poses the arm was planned on, one per trajectory frame at `fps`,
 // in the arm's base frame; `frame_q` the IK's joints at those frames.
@@ -274,7 +306,10 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
 // Steps 2-4 for arms that share one clock (deploy plan-two): each
 // trajectory at its fixed placement, one time map for all (the slowest
 // joint of any arm sets the pace), lead moves as long as the longest arm's.
-// Trajectories have the same frames and frame rate.
+// Trajectories have the same frames and frame rate. Throws
+// Error(kUnfollowablePath) naming the arm that holds the pace back, the
+// frames where, its unreachable frames and the placement, when the
+// re-timing would exceed time_scaling.max_slowdown (MakePlan too).
 std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& trajectories,
                                       const std::vector<const retarget::Embodiment*>& embodiments,
                                       const std::vector<Placement>& placements, const PlanConfig& config);
@@ -340,7 +375,7 @@ FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajector
 // limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],
 // "path_deviation": {position_max, rotation_max, worst_command,
 // position_tolerance, rotation_tolerance, "off_path": [{first_command,
-// last_command, start_time, end_time, from_frame, to_frame,
+// last_command, commands, start_time, end_time, from_frame, to_frame,
 // position_deviation, rotation_deviation, joint_jump}]} (absent in files
 // from before the check: read unchecked), "replay": {...}, "ok"}. Version 1 files (no time map) read with
 // source_times = times and slowdown 1.

@@ -48,7 +48,7 @@ std::vector<FrameIssue> ReadIssues(const Json& j, const std::string& rate_key) {
 Json PathDeviationJson(const PathDeviation& d) {
   Json spans = Json::array();
   for (const OffPathSpan& s : d.off_path) {
-    spans.push_back({{"first_command", s.first_command}, {"last_command", s.last_command},
+    spans.push_back({{"first_command", s.first_command}, {"last_command", s.last_command}, {"commands", s.commands},
                      {"start_time", s.start_time}, {"end_time", s.end_time}, {"from_frame", s.from_frame},
                      {"to_frame", s.to_frame}, {"position_deviation", s.position_deviation},
                      {"rotation_deviation", s.rotation_deviation}, {"joint_jump", s.joint_jump}});
@@ -67,6 +67,7 @@ PathDeviation PathDeviationFromJson(const Json& j) {
                   .rotation_tolerance = j.at("rotation_tolerance")};
   for (const Json& s : j.at(kCheckOffPath)) {
     d.off_path.push_back({.first_command = s.at("first_command"), .last_command = s.at("last_command"),
+                          .commands = s.at("commands"),
                           .start_time = s.at("start_time"), .end_time = s.at("end_time"),
                           .from_frame = s.at("from_frame"), .to_frame = s.at("to_frame"),
                           .position_deviation = s.at("position_deviation"),

@@ -1,9 +1,9 @@
 // The arm between the trajectory's frames (deploy/plan.h step 4's
-// off_path check, deploy/arm_ik.h's nearest branch): wrist paths made by
-// forward kinematics of known joint paths, so every frame's answer and
-// every branch is known; a jump between two of a pose's IK solutions put
-// into a plan by hand; a base turned past its joint limit, where a jump
-// cannot be avoided.
+// off_path check; deploy/arm_ik.h's closed-form branches and least-motion
+// path): wrist paths made by forward kinematics of known joint paths, so
+// every frame's answer and every branch is known; a jump between two of a
+// pose's IK solutions put into a plan by hand; a base turned past its
+// joint limit, where a jump cannot be avoided.
 #include <cmath>
 #include <functional>
 #include <random>
@@ -15,54 +15,15 @@
 #include "deploy/plan.h"
 #include "deploy/time_scaling.h"
 #include "robot/embodiment.h"
+#include "tests/joint_path_trajectory.h"
 #include "tests/test_util.h"
 
 namespace doasido::deploy {
 namespace {
 
+using doasido::testing::FromJointPath;
+using doasido::testing::PlanInBaseFrame;
 using JointPath = std::function<ArmQ(double)>;  // joints at time t (s)
-
-// A hand-only trajectory whose wrist at frame k is the flange of q(k / fps)
-// (the arm's base frame is the trajectory's world).
-retarget::HandTrajectory WristsOf(const JointPath& q, int frames, double fps) {
-  retarget::HandTrajectory t;
-  t.embodiment = "sharpa_right";
-  t.fps = fps;
-  t.qpos_names = {"doasido_wrist_x",  "doasido_wrist_y",  "doasido_wrist_z",
-                  "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
-  for (int k = 0; k < frames; ++k) {
-    const Pose w = DhForwardPose(q(k / fps));
-    const Vec3 e = w.R().eulerAngles(0, 1, 2);  // R = Rx Ry Rz, as WristPose reads it
-    Eigen::VectorXd v(6);
-    v << w.t, e;
-    t.qpos.push_back(v);
-    t.valid.push_back(true);
-    t.fingertip_error.push_back(0);
-  }
-  return t;
-}
-
-// The placement that maps the trajectory's world onto the arm's base frame
-// (PlacementPose: the wrists' mean at (x, y)), no search, no smoothing,
-// home at q(0).
-PlanConfig InPlace(const retarget::HandTrajectory& t, const ArmQ& home) {
-  Vec3 centre = Vec3::Zero();
-  for (int k = 0; k < static_cast<int>(t.qpos.size()); ++k) centre += WristPose(t, k).t;
-  centre /= static_cast<double>(t.qpos.size());
-  PlanConfig config;
-  config.workspace.x = centre.x();
-  config.workspace.y = centre.y();
-  config.workspace.yaw_steps = 1;
-  config.workspace.offset_steps = 1;
-  config.wrist_smoothing.cutoff_hz = 0;
-  for (int i = 0; i < 6; ++i) config.home[i] = home[i];
-  return config;
-}
-
-const retarget::Embodiment& Hand() {
-  static const retarget::Embodiment e = retarget::FindEmbodiment("sharpa_right", testing::SharedData() / "robots");
-  return e;
-}
 
 // A smooth working motion around a bent-elbow pose.
 ArmQ Working(double t) {
@@ -145,8 +106,7 @@ TEST(ArmIk, APathStaysOnTheBranchItWasMadeOn) {
 }
 
 TEST(PathCheck, APlanOnOneBranchStaysOnTheWristPathBetweenFrames) {
-  const retarget::HandTrajectory t = WristsOf(Sweeping, 300, 30);
-  const Plan plan = MakePlan(t, Hand(), InPlace(t, Sweeping(0)));
+  const Plan plan = PlanInBaseFrame(FromJointPath(Sweeping, 300, 30), Sweeping(0));
   const PathDeviation& d = plan.path_deviation;
   std::printf("sweep: slowdown %.2fx, between frames %.2f mm / %.4f rad, %zu runs off the path\n", plan.slowdown,
               1000 * d.position_max, d.rotation_max, d.off_path.size());
@@ -229,8 +189,7 @@ TEST(PathCheck, ABaseTurnedPastItsLimitMustJumpAndFailsNamingTheFrames) {
   constexpr double kFps = 30, kTurnRate = 2.5 * 2 * M_PI / 10;  // 2.5 turns in 10 s
   const ArmQ bent(0, -1.9, 1.7, -1.4, -1.5, 0.2);
   const JointPath turning = [&](double t) { ArmQ q = bent; q[0] += kTurnRate * t; return q; };
-  const retarget::HandTrajectory t = WristsOf(turning, 300, kFps);
-  const Plan plan = MakePlan(t, Hand(), InPlace(t, bent));
+  const Plan plan = PlanInBaseFrame(FromJointPath(turning, 300, kFps), bent);
   int limit_frame = 0;  // the first frame 720 degrees into the turn
   while (turning(limit_frame / kFps)[0] - bent[0] <= 4 * M_PI) ++limit_frame;
   EXPECT_TRUE(plan.unreachable.empty());  // every frame is reached, by some branch
@@ -273,8 +232,7 @@ TEST(PathCheck, TheToleranceIsCheckedAtLoadAndOlderPlanFilesReadUnchecked) {
     EXPECT_NE(std::string(e.what()).find("rotation_tolerance"), std::string::npos) << e.what();
   }
   // A plan file from before the check: no "path_deviation" member.
-  const retarget::HandTrajectory t = WristsOf(Working, 30, 30);
-  Json j = PlanToJson(MakePlan(t, Hand(), InPlace(t, Working(0))));
+  Json j = PlanToJson(PlanInBaseFrame(FromJointPath(Working, 30, 30), Working(0)));
   ASSERT_TRUE(j.contains("path_deviation"));
   j.erase("path_deviation");
   const Plan old = PlanFromJson(j, "old.json");

@@ -76,6 +76,23 @@ ArmPath SolveArmPath(const retarget::HandTrajectory& t, const Pose& world_to_bas
   return path;
 }
 
+// A plan's description and step 2's outcome, before its commands.
+Plan StartPlan(const retarget::Embodiment& embodiment, const Placement& placement,
+               const WristSmoothingReport& smoothing, const ArmPath& path, double duration, const PlanConfig& config) {
+  Plan plan;
+  plan.embodiment = embodiment.name;
+  plan.rate_hz = config.rate_hz;
+  for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
+  plan.hand_joints = BuildArmHandModel(embodiment, Pose::Identity()).hand_joints;
+  plan.placement = placement;
+  plan.wrist_smoothing = smoothing;
+  plan.trajectory_duration = duration;
+  plan.position_error = path.position_error;
+  plan.rotation_error = path.rotation_error;
+  plan.unreachable = path.unreachable;
+  return plan;
+}
+
 // The trajectory's qpos index of each of the plan's hand joints (-1: absent).
 std::vector<int> HandSource(const Plan& plan, const retarget::HandTrajectory& t) {
   std::vector<int> from(plan.hand_joints.size(), -1);
@@ -317,18 +334,8 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
   std::vector<Plan> plans(arms);
   std::vector<ArmPath> paths;
   for (size_t a = 0; a < arms; ++a) {
-    Plan& plan = plans[a];
-    plan.embodiment = embodiments[a]->name;
-    plan.rate_hz = config.rate_hz;
-    for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
-    plan.hand_joints = BuildArmHandModel(*embodiments[a], Pose::Identity()).hand_joints;
-    plan.placement = placements[a];
-    plan.wrist_smoothing = smoothing[a];
-    plan.trajectory_duration = (frames - 1) / first.fps;
     paths.push_back(SolveArmPath(*trajectories[a], placements[a].world_to_base, config));
-    plan.position_error = paths[a].position_error;
-    plan.rotation_error = paths[a].rotation_error;
-    plan.unreachable = paths[a].unreachable;
+    plans[a] = StartPlan(*embodiments[a], placements[a], smoothing[a], paths[a], (frames - 1) / first.fps, config);
   }
   // One joint path over every arm's joints: the re-timing's slowest joint
   // of any arm sets the pace for all.

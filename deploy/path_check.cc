@@ -29,17 +29,21 @@ void CheckConfig(const PathCheckConfig& c, const std::string& section) {
   RequireInRange(section, "rotation_tolerance", c.rotation_tolerance, 1e-3, 3.2);
 }
 
-SplineDeviation JointSplineDeviation(const std::vector<ArmQ>& frame_q, const std::vector<Pose>& wrists, double fps,
-                                     int samples) {
-  SplineDeviation out;
-  if (frame_q.size() < 2) return out;
+JointSpline JointPathThroughFrames(const std::vector<ArmQ>& frame_q, double fps) {
   std::vector<double> knots;
   std::vector<Eigen::VectorXd> values;
   for (size_t f = 0; f < frame_q.size(); ++f) {
     knots.push_back(f / fps);
     values.push_back(frame_q[f]);
   }
-  const JointSpline spline(knots, values);
+  return JointSpline(knots, values);
+}
+
+SplineDeviation JointSplineDeviation(const std::vector<ArmQ>& frame_q, const std::vector<Pose>& wrists, double fps,
+                                     int samples) {
+  SplineDeviation out;
+  if (frame_q.size() < 2) return out;
+  const JointSpline spline = JointPathThroughFrames(frame_q, fps);
   for (size_t f = 0; f + 1 < frame_q.size(); ++f) {
     for (int i = 1; i < samples; ++i) {
       const double s = (f + double(i) / samples) / fps;

@@ -271,6 +271,10 @@ struct Plan {
   bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration, off_path
 };
 
+// Step 2's joint path of one arm: the natural cubic spline through the
+// IK's answers `frame_q` at the trajectory's frames (knot f at f / fps).
+JointSpline JointPathThroughFrames(const std::vector<ArmQ>& frame_q, double fps);
+
 // Step 2's test of a joint path before it is re-timed: the flange's
 // largest deviation (m, rad) from the wrist path between frames along the
 // joint spline through `frame_q` (the IK's answers at `wrists`' frames, at

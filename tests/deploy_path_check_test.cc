@@ -121,15 +121,10 @@ TEST(PathCheck, APlanOnOneBranchStaysOnTheWristPathBetweenFrames) {
 // The joint path through each frame's IK answer, sampled at 50 Hz without
 // re-timing (the time map the identity), as MakePlan's commands are.
 Plan CommandsThrough(const std::vector<ArmQ>& frame_q, double fps) {
-  std::vector<double> knots;
-  std::vector<Eigen::VectorXd> values;
-  for (size_t f = 0; f < frame_q.size(); ++f) {
-    knots.push_back(f / fps);
-    values.push_back(frame_q[f]);
-  }
-  const JointSpline spline(knots, values);
+  const JointSpline spline = JointPathThroughFrames(frame_q, fps);
+  const double end = (frame_q.size() - 1) / fps;
   Plan plan;
-  for (int k = 0; k / 50.0 <= knots.back() + 1e-9; ++k) {
+  for (int k = 0; k / 50.0 <= end + 1e-9; ++k) {
     plan.times.push_back(k / 50.0);
     plan.source_times.push_back(k / 50.0);
     plan.arm.push_back(spline.Value(k / 50.0));

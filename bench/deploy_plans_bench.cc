@@ -8,9 +8,12 @@
 //  - --carries synthetic two-hand carries of --carry_seconds (both Sharpa
 //    hands, `deploy plan-two`),
 // the share of plans passing every check (reach, joint speed and
-// acceleration at every command), the slowdowns (median, max), the arm
-// replay's object success against the floating hand's, and the wrist
-// tracking error (mean, max).
+// acceleration at every command, the flange on the wrist path between
+// frames), the slowdowns (median, max), the arm replay's object success
+// against the floating hand's, and the wrist tracking error (mean, max).
+// Per plan, "betw. mm" is the largest flange deviation from the wrist path
+// over the re-timed commands (plan.h PathDeviation), and the checks column
+// names the frames of the worst run off the path and the placement used.
 //
 // Retargeting is the slow part (275-680 s a 10-s clip on 2 threads, ~1000 s
 // on one thread of a loaded machine), so the
@@ -196,8 +199,29 @@ struct Row {
   double slowdown = 0;
   int reference_success = -1, arm_success = -1;
   double wrist_mean = 0, wrist_max = 0;
+  double between_frames = 0;  // m: the largest flange deviation between frames (plan.h PathDeviation)
   std::string why;
 };
+
+// The plan's checks for a row's `why`: counts, and the between-frames
+// deviation with the frames of its worst run.
+std::string Checks(const deploy::Plan& plan) {
+  const deploy::PathDeviation& d = plan.path_deviation;
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), "%zu unreachable, %zu too fast, %zu too abrupt, %d off path (between frames "
+                "%.1f mm / %.3f rad", plan.unreachable.size(), plan.too_fast.size(), plan.over_acceleration.size(),
+                d.OffPathCommands(), 1000 * d.position_max, d.rotation_max);
+  std::string out = buf;
+  if (!d.off_path.empty()) {
+    const auto worst = std::max_element(d.off_path.begin(), d.off_path.end(), [](const auto& a, const auto& b) {
+      return a.position_deviation < b.position_deviation;
+    });
+    std::snprintf(buf, sizeof(buf), "; worst between frames %d-%d, joint step %.2f rad", worst->from_frame,
+                  worst->to_frame, worst->joint_jump);
+    out += buf;
+  }
+  return out + ")";
+}
 
 // The plan's commands at the video's own clock (no lead moves, time map
 // the identity): what the floating hand did in the retargeting.
@@ -289,8 +313,14 @@ Row PlanOne(const Flags& f, const fs::path& dir, std::string name = {}) {
   row.arm_success = plan.replay.ran ? plan.replay.success : -1;
   row.wrist_mean = plan.replay.wrist_position_error_mean;
   row.wrist_max = plan.replay.wrist_position_error_max;
-  row.why = std::to_string(plan.unreachable.size()) + " unreachable, " + std::to_string(plan.too_fast.size()) +
-            " too fast, " + std::to_string(plan.over_acceleration.size()) + " too abrupt";
+  row.between_frames = plan.path_deviation.position_max;
+  row.why = Checks(plan);
+  {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "; placed yaw %.0f deg at (%.2f, %.2f) m", plan.placement.yaw * 180 / M_PI,
+                  plan.placement.x, plan.placement.y);
+    row.why += buf;
+  }
   if (plan.wrist_smoothing.applied) {
     char buf[128];
     std::snprintf(buf, sizeof(buf), "; smoothed at %.1f Hz: wrist moved <= %.1f mm / %.3f rad, %d frames bounded",
@@ -354,12 +384,10 @@ Row PlanTwo(const Flags& f, const fs::path& dir) {
   row.slowdown = plan.right.slowdown;
   row.reference_success = left.metrics.value("success", false);
   const double closest = *std::min_element(plan.arm_distance.begin(), plan.arm_distance.end());
-  row.why = "left " + std::to_string(plan.left.unreachable.size() + plan.left.too_fast.size() +
-                                     plan.left.over_acceleration.size()) +
-            " / right " + std::to_string(plan.right.unreachable.size() + plan.right.too_fast.size() +
-                                        plan.right.over_acceleration.size()) +
-            " issues, " + std::to_string(plan.collisions.size()) + " collisions, closest " +
-            std::to_string(closest).substr(0, 5) + " m";
+  row.between_frames = std::max(plan.left.path_deviation.position_max, plan.right.path_deviation.position_max);
+  row.why = "left " + Checks(plan.left) + " / right " + Checks(plan.right) + "; " +
+            std::to_string(plan.collisions.size()) + " collisions, closest " + std::to_string(closest).substr(0, 5) +
+            " m";
   if (plan.right.replay.ran) {
     const deploy::ReplayReport& l = plan.left.replay;
     const deploy::ReplayReport& r = plan.right.replay;
@@ -372,15 +400,16 @@ Row PlanTwo(const Flags& f, const fs::path& dir) {
 }
 
 void Report(const std::vector<Row>& rows) {
-  std::printf("%-14s | %-4s | %8s | %-13s | %-17s | %s\n", "reference", "ok", "slowdown", "success f/arm",
-              "wrist mm mean/max", "checks");
+  std::printf("%-14s | %-4s | %8s | %-13s | %-17s | %-8s | %s\n", "reference", "ok", "slowdown", "success f/arm",
+              "wrist mm mean/max", "betw. mm", "checks");
   std::vector<double> slowdowns;
   int ok = 0, ref_success = 0, arm_success = 0, replays = 0, kept = 0;
-  double wrist_sum = 0, wrist_max = 0;
+  double wrist_sum = 0, wrist_max = 0, between_max = 0;
   for (const Row& r : rows) {
-    std::printf("%-14s | %-4s | %7.2fx | %4d / %-6d | %6.1f / %-7.1f | %s\n", r.name.c_str(), r.ok ? "yes" : "NO",
-                r.slowdown, r.reference_success, r.arm_success, 1000 * r.wrist_mean, 1000 * r.wrist_max,
-                r.why.c_str());
+    std::printf("%-14s | %-4s | %7.2fx | %4d / %-6d | %6.1f / %-7.1f | %8.1f | %s\n", r.name.c_str(),
+                r.ok ? "yes" : "NO", r.slowdown, r.reference_success, r.arm_success, 1000 * r.wrist_mean,
+                1000 * r.wrist_max, 1000 * r.between_frames, r.why.c_str());
+    between_max = std::max(between_max, r.between_frames);
     ok += r.ok;
     slowdowns.push_back(r.slowdown);
     if (r.arm_success < 0) continue;
@@ -395,8 +424,8 @@ void Report(const std::vector<Row>& rows) {
   std::sort(slowdowns.begin(), slowdowns.end());
   const size_t n = slowdowns.size();
   const double median = n % 2 ? slowdowns[n / 2] : 0.5 * (slowdowns[n / 2 - 1] + slowdowns[n / 2]);
-  std::printf("passing every check: %d of %zu (%.0f%%); slowdown median %.2fx, max %.2fx\n", ok, n, 100.0 * ok / n,
-              median, slowdowns.back());
+  std::printf("passing every check: %d of %zu (%.0f%%); slowdown median %.2fx, max %.2fx; flange between frames "
+              "max %.1f mm\n", ok, n, 100.0 * ok / n, median, slowdowns.back(), 1000 * between_max);
   if (replays) {
     std::printf("object success over %d replays: floating hand %d (%.0f%%), arm %d (%.0f%%), the arm keeps %d of "
                 "the floating hand's %d; wrist tracking mean %.2f mm, max %.2f mm\n", replays, ref_success,

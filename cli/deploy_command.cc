@@ -53,7 +53,20 @@ void CheckPlanOut(const std::string& out, const char* format, bool force,
                    .databases = databases});
 }
 
-void PrintIssues(const deploy::Plan& plan) {
+// Step 4's between-frames check: the largest deviation, then each run of
+// commands off the wrist path with the frames it lies between.
+void PrintPathDeviation(const char* arm, const deploy::PathDeviation& d) {
+  std::printf("%sbetween frames: flange within %.1f mm / %.3f rad of the wrist path (tolerance %.1f mm / %.3f rad)\n",
+              arm, 1000 * d.position_max, d.rotation_max, 1000 * d.position_tolerance, d.rotation_tolerance);
+  for (const auto& s : d.off_path) {
+    std::printf("%soff path     commands %5d-%-5d t=%7.3f-%7.3f s  between frames %d and %d: flange %.1f mm / %.3f rad "
+                "off the wrist path (a joint moves %.2f rad from one frame to the next)\n",
+                arm, s.first_command, s.last_command, s.start_time, s.end_time, s.from_frame, s.to_frame,
+                1000 * s.position_deviation, s.rotation_deviation, s.joint_jump);
+  }
+}
+
+void PrintIssues(const deploy::Plan& plan, const char* arm = "") {
   for (const auto& u : plan.unreachable) {
     std::printf("unreachable  frame %5d  t=%7.3f s  position error %.1f mm  rotation error %.3f rad\n",
                 u.frame, u.time, 1000 * u.value, u.limit);
@@ -66,6 +79,7 @@ void PrintIssues(const deploy::Plan& plan) {
     std::printf("too abrupt   command %5d  t=%7.3f s  %s %.2f rad/s^2 > %.2f rad/s^2\n", f.frame, f.time,
                 plan.arm_joints.at(f.joint).c_str(), f.value, f.limit);
   }
+  PrintPathDeviation(arm, plan.path_deviation);
 }
 
 void PrintTiming(const deploy::Plan& plan) {
@@ -143,8 +157,9 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   PrintTiming(plan);
   PrintIssues(plan);
   if (plan.replay.ran) PrintReplay("replay", plan.replay);
-  std::printf("%s: %zu unreachable, %zu too fast, %zu too abrupt -> %s\n", plan.ok ? "ok" : "FAILED checks",
-              plan.unreachable.size(), plan.too_fast.size(), plan.over_acceleration.size(), a.out.c_str());
+  std::printf("%s: %zu unreachable, %zu too fast, %zu too abrupt, %d off the path -> %s\n",
+              plan.ok ? "ok" : "FAILED checks", plan.unreachable.size(), plan.too_fast.size(),
+              plan.over_acceleration.size(), plan.path_deviation.OffPathCommands(), a.out.c_str());
   if (!plan.ok) {
     throw Error("plan_failed_checks", "the plan was written but fails its checks (see above); "
                 "`deploy stream` will refuse it", {.file = a.out});
@@ -177,9 +192,11 @@ void AddPlan(CLI::App& deploy) {
       "its speed (180 deg/s base, shoulder, elbow; 360 deg/s wrists) or acceleration\n"
       "(5 rad/s^2) limit, starting and ending at rest, with a lead-in from the home pose and\n"
       "a lead-out back ([deploy.time_scaling], lead_in, lead_out, home). The plan records\n"
-      "each command's trajectory time and the slowdown. Frames the arm cannot reach, and\n"
-      "any command still beyond a limit, are listed with their times, and the command\n"
-      "exits non-zero; the plan file is written either way.\n\n"
+      "each command's trajectory time and the slowdown. Frames the arm cannot reach, any\n"
+      "command still beyond a limit, and runs of commands whose flange leaves the wrist path\n"
+      "between the frames (an IK branch jump; beyond [deploy.path_check], 10 mm / 0.1 rad)\n"
+      "are listed with their times and frames, and the command exits non-zero; the plan file\n"
+      "is written either way.\n\n"
       "Examples:\n"
       "  doasido deploy plan --db work/doasido.db --clip 12 --out work/plan12.json\n"
       "  doasido deploy plan --trajectory work/allegro/trajectory.json --hand sharpa_right \\\n"
@@ -260,7 +277,8 @@ void AddPlanTwo(CLI::App& deploy) {
     std::printf("%s + %s: bases %.3f m apart, closest approach %.3f m\n", lh.name.c_str(), rh.name.c_str(),
                 a->config.base_distance, closest);
     PrintTiming(plan.right);
-    for (const auto* side : {&plan.left, &plan.right}) PrintIssues(*side);
+    PrintIssues(plan.left, "left arm: ");
+    PrintIssues(plan.right, "right arm: ");
     if (plan.right.replay.ran) {
       PrintReplay("replay, both arms", plan.right.replay);
       std::printf("  left arm: wrist tracking mean %.1f mm (max %.1f); right arm: mean %.1f mm (max %.1f)\n",

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <numbers>
+#include <optional>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -105,10 +106,14 @@ double ArmArmDistance(const ArmQ& left, const Pose& left_base, const ArmQ& right
 namespace {
 
 // The commands of `plan` that fail a check: either arm's unreachable
-// frames and limit excesses, and the arm-arm collisions.
+// frames, limit excesses and commands off the wrist path, and the arm-arm
+// collisions.
 size_t FailingCount(const BimanualPlan& plan) {
   size_t n = plan.collisions.size();
-  for (const Plan* p : {&plan.left, &plan.right}) n += p->unreachable.size() + p->too_fast.size() + p->over_acceleration.size();
+  for (const Plan* p : {&plan.left, &plan.right}) {
+    n += p->unreachable.size() + p->too_fast.size() + p->over_acceleration.size() +
+         p->path_deviation.OffPathCommands();
+  }
   return n;
 }
 
@@ -175,26 +180,45 @@ BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarg
                 {.field = "qpos"});
   }
   const WorkspaceConfig& w = config.plan.workspace;
-  BimanualPlan best = PlanPairAt(left, right, left_hand, right_hand, config, w.x, w.y);
-  if (best.ok) return best;
+  // A spot where an arm cannot follow its path within the re-timing's
+  // bound (far out of reach) fails every command: it is passed over, and
+  // when every spot is, the first spot's error names the arm and frames.
+  std::optional<Error> unfollowable;
+  const auto plan_at = [&](double x, double y) -> std::optional<BimanualPlan> {
+    try {
+      return PlanPairAt(left, right, left_hand, right_hand, config, x, y);
+    } catch (const Error& e) {
+      if (e.code() != kUnfollowablePath) throw;
+      if (!unfollowable) unfollowable = e;
+      return std::nullopt;
+    }
+  };
+  std::optional<BimanualPlan> best = plan_at(w.x, w.y);
+  if (best && best->ok) return *best;
   // The default spot fails a check (two forearms crossing where the hands
   // meet, say): the pair's frame moved over the workspace's offset grid,
   // the fewest failing commands kept, then the least slowdown.
   int candidates = 1;
+  const auto offset = [&](int i) {
+    return w.offset_steps == 1 ? 0.0 : w.offset_range * (2.0 * i / (w.offset_steps - 1) - 1);
+  };
+  const auto key = [](const BimanualPlan& q) { return std::pair(FailingCount(q), q.right.slowdown); };
   for (int ix = 0; ix < w.offset_steps; ++ix) {
     for (int iy = 0; iy < w.offset_steps; ++iy) {
-      const auto offset = [&](int i) {
-        return w.offset_steps == 1 ? 0.0 : w.offset_range * (2.0 * i / (w.offset_steps - 1) - 1);
-      };
       if (offset(ix) == 0 && offset(iy) == 0) continue;
-      BimanualPlan p = PlanPairAt(left, right, left_hand, right_hand, config, w.x + offset(ix), w.y + offset(iy));
+      std::optional<BimanualPlan> p = plan_at(w.x + offset(ix), w.y + offset(iy));
       ++candidates;
-      const auto key = [](const BimanualPlan& q) { return std::pair(FailingCount(q), q.right.slowdown); };
-      if (key(p) < key(best)) best = std::move(p);
+      if (p && (!best || key(*p) < key(*best))) best = std::move(p);
     }
   }
-  best.left.placement.candidates = best.right.placement.candidates = candidates;
-  return best;
+  if (!best) {
+    const std::string others = candidates == 1 ? "" : " (and at the " + std::to_string(candidates - 1) +
+                                                          " other spots within " +
+                                                          std::to_string(w.offset_range).substr(0, 4) + " m of it)";
+    throw Error(kUnfollowablePath, unfollowable->message() + others, {.field = "deploy.workspace"});
+  }
+  best->left.placement.candidates = best->right.placement.candidates = candidates;
+  return *best;
 }
 
 StreamResult StreamBimanualPlan(const BimanualPlan& plan, const StreamOptions& options,

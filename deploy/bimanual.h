@@ -69,7 +69,11 @@ struct BimanualPlan {
 // offset_steps, as one arm's placement search) and the spot with the
 // fewest failing commands, then the least slowdown, is kept (a carry whose
 // forearms cross within the clearance where the hands meet, for one);
-// both placements' `candidates` count the spots tried.
+// both placements' `candidates` count the spots tried. A spot where an
+// arm's joint path cannot be re-timed within time_scaling.max_slowdown
+// (frames far out of reach) is passed over; when every spot is, throws
+// Error(kUnfollowablePath) naming the arm, its frames and the default
+// spot's placement (plan.h MakePlansOnOneClock).
 BimanualPlan MakeBimanualPlan(const retarget::HandTrajectory& left, const retarget::HandTrajectory& right,
                               const retarget::Embodiment& left_hand, const retarget::Embodiment& right_hand,
                               const BimanualConfig& config);

@@ -59,13 +59,12 @@ Score ScoreCandidate(const Pose& place, const std::vector<Pose>& wrists, double 
 
 }  // namespace
 
-Placement SearchPlacement(const std::vector<Pose>& wrists, double fps, const PlanConfig& config) {
+std::vector<Placement> RankPlacements(const std::vector<Pose>& wrists, double fps, const PlanConfig& config) {
   const WorkspaceConfig& w = config.workspace;
   IkConfig ik_config = config.ik;
   ik_config.restarts = w.search_restarts;
   ArmIk ik(ik_config);
-  Placement best;
-  Score best_score;
+  std::vector<std::pair<Score, Placement>> scored;
   const int frames = std::min<int>(w.search_frames, wrists.size());
   Progress progress("placement", w.yaw_steps * w.offset_steps * w.offset_steps);
   const auto offset = [&](int i) {
@@ -80,22 +79,32 @@ Placement SearchPlacement(const std::vector<Pose>& wrists, double fps, const Pla
         const double x = w.x + offset(ix), y = w.y + offset(iy);
         const Pose place = PlacementPose(yaw, x, y, wrists, w.base_height);
         const Score score = ScoreCandidate(place, wrists, fps, config, ik);
-        ++best.candidates;
         progress.Add();
-        if (!score.Beats(best_score)) continue;
-        best_score = score;
-        best.yaw = yaw;
-        best.x = x;
-        best.y = y;
-        best.world_to_base = place;
-        best.reachable_fraction = static_cast<double>(score.reached) / frames;
-        best.search_slowdown = score.slowdown;
-        best.manipulability = score.manipulability;
+        scored.push_back({score, {.yaw = yaw, .x = x, .y = y, .world_to_base = place,
+                                  .reachable_fraction = static_cast<double>(score.reached) / frames,
+                                  .search_slowdown = score.slowdown, .manipulability = score.manipulability}});
       }
     }
   }
   progress.Finish();
-  return best;
+  // Best first: the first candidate no later one beats (ties go to the
+  // default-nearer), then the rest by score.
+  size_t best = 0;
+  for (size_t i = 1; i < scored.size(); ++i) {
+    if (scored[i].first.Beats(scored[best].first)) best = i;
+  }
+  std::rotate(scored.begin(), scored.begin() + best, scored.begin() + best + 1);
+  std::stable_sort(scored.begin() + 1, scored.end(), [](const auto& a, const auto& b) { return a.first.Beats(b.first); });
+  std::vector<Placement> ranked;
+  for (auto& [score, placement] : scored) {
+    placement.candidates = static_cast<int>(scored.size());
+    ranked.push_back(placement);
+  }
+  return ranked;
+}
+
+Placement SearchPlacement(const std::vector<Pose>& wrists, double fps, const PlanConfig& config) {
+  return RankPlacements(wrists, fps, config).front();
 }
 
 }  // namespace doasido::deploy

@@ -18,7 +18,10 @@
 
 namespace doasido::deploy {
 
-// `wrists` are the trajectory's frames at `fps`, in its world.
+// `wrists` are the trajectory's frames at `fps`, in its world. The best
+// candidate, and all of them best first (MakePlan tries runner-ups when
+// the best one's plan leaves the wrist path between frames).
 Placement SearchPlacement(const std::vector<Pose>& wrists, double fps, const PlanConfig& config);
+std::vector<Placement> RankPlacements(const std::vector<Pose>& wrists, double fps, const PlanConfig& config);
 
 }  // namespace doasido::deploy

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <optional>
 
 #include "core/config_check.h"
 #include "core/error.h"
@@ -28,8 +30,13 @@ VectorXd QposAt(const retarget::HandTrajectory& t, double s) {
   return (1 - a) * t.qpos[i] + a * t.qpos[j];
 }
 
+// Step 2's samples per frame interval when it compares a joint path with
+// the wrist path (the commands at 50 Hz fall 1-2 times per 30-Hz frame).
+constexpr int kSplineSamples = 4;
+
 // Step 2: the arm's IK at every trajectory frame.
 struct ArmPath {
+  std::vector<Pose> targets;  // the wrist per frame in the arm's base frame
   std::vector<ArmQ> q;
   std::vector<double> position_error, rotation_error;
   std::vector<FrameIssue> unreachable;
@@ -37,13 +44,25 @@ struct ArmPath {
 
 ArmPath SolveArmPath(const retarget::HandTrajectory& t, const Pose& world_to_base, const PlanConfig& config) {
   ArmIk ik(config.ik);
-  ArmQ q = Home(config);
   ArmPath path;
   const int frames = static_cast<int>(t.qpos.size());
+  for (int f = 0; f < frames; ++f) path.targets.push_back(world_to_base * WristPose(t, f));
   Progress progress("ik", frames);
+  std::vector<IkResult> solved = ik.SolveChain(path.targets, Home(config));
+  const auto deviation = [&](const std::vector<IkResult>& chain) {
+    std::vector<ArmQ> q;
+    for (const IkResult& r : chain) q.push_back(r.q);
+    return JointSplineDeviation(q, path.targets, t.fps, kSplineSamples);
+  };
+  if (const SplineDeviation warm = deviation(solved); !warm.Within(config.path_check)) {
+    std::vector<IkResult> least = ik.LeastMotionPath(path.targets, Home(config));
+    const SplineDeviation other = deviation(least);
+    if (std::pair(!other.Within(config.path_check), other.position) < std::pair(true, warm.position)) {
+      solved = std::move(least);
+    }
+  }
   for (int f = 0; f < frames; ++f) {
-    const IkResult r = ik.Solve(world_to_base * WristPose(t, f), q);
-    q = r.q;
+    const IkResult& r = solved[f];
     path.q.push_back(r.q);
     path.position_error.push_back(r.position_error);
     path.rotation_error.push_back(r.rotation_error);
@@ -55,6 +74,23 @@ ArmPath SolveArmPath(const retarget::HandTrajectory& t, const Pose& world_to_bas
   }
   progress.Finish();
   return path;
+}
+
+// A plan's description and step 2's outcome, before its commands.
+Plan StartPlan(const retarget::Embodiment& embodiment, const Placement& placement,
+               const WristSmoothingReport& smoothing, const ArmPath& path, double duration, const PlanConfig& config) {
+  Plan plan;
+  plan.embodiment = embodiment.name;
+  plan.rate_hz = config.rate_hz;
+  for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
+  plan.hand_joints = BuildArmHandModel(embodiment, Pose::Identity()).hand_joints;
+  plan.placement = placement;
+  plan.wrist_smoothing = smoothing;
+  plan.trajectory_duration = duration;
+  plan.position_error = path.position_error;
+  plan.rotation_error = path.rotation_error;
+  plan.unreachable = path.unreachable;
+  return plan;
 }
 
 // The trajectory's qpos index of each of the plan's hand joints (-1: absent).
@@ -143,6 +179,75 @@ void CheckLimits(Plan& plan, const ArmLimits& limits) {
   }
 }
 
+// "frames 3-7, 12, 20-31" (at most `most` runs, then "...").
+std::string FrameRuns(const std::vector<FrameIssue>& issues, size_t most = 5) {
+  std::string out;
+  size_t runs = 0;
+  for (size_t i = 0; i < issues.size(); ++i) {
+    size_t j = i;
+    while (j + 1 < issues.size() && issues[j + 1].frame == issues[j].frame + 1) ++j;
+    if (runs++ == most) return out + ", ...";
+    out += (out.empty() ? "" : ", ") + std::to_string(issues[i].frame) +
+           (j > i ? "-" + std::to_string(issues[j].frame) : "");
+    i = j;
+  }
+  return out;
+}
+
+// Error(kUnfollowablePath) for a re-timing that gave up (TimeMap::exceeded):
+// the arm whose joint holds the path back, where, and what its IK found there.
+Error UnfollowablePath(const TimeMap& map, const std::vector<ArmPath>& paths, double fps,
+                       const std::vector<const retarget::Embodiment*>& embodiments,
+                       const std::vector<Placement>& placements, const PlanConfig& config) {
+  const size_t arm = static_cast<size_t>(std::max(map.slowest_joint, 0)) / 6;
+  const ArmPath& path = paths[arm];
+  const int frames = static_cast<int>(path.q.size());
+  const int frame = std::clamp(static_cast<int>(std::floor(map.slowest_s * fps)), 0, std::max(frames - 2, 0));
+  const double step = frames > 1 ? (path.q[frame + 1] - path.q[frame]).cwiseAbs().maxCoeff() : 0.0;
+  const Placement& p = placements[arm];
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "the %s arm (arm %zu of %zu) cannot follow its joint path within %.1fx the trajectory's duration "
+                "(it would take %.1fx): slowest between frames %d and %d (t = %.2f s), %s held back, a joint "
+                "moving %.2f rad from one frame to the next; %zu of its %d frames out of reach%s%s; placement "
+                "x %.3f m, y %.3f m, yaw %.3f rad",
+                embodiments[arm]->name.c_str(), arm + 1, paths.size(), config.time_scaling.max_slowdown,
+                map.slowdown, frame, frame + 1, frame / fps, Ur3eJointNames()[map.slowest_joint % 6], step,
+                path.unreachable.size(), frames, path.unreachable.empty() ? "" : ": frames ",
+                FrameRuns(path.unreachable).c_str(), p.x, p.y, p.yaw);
+  return Error(kUnfollowablePath, text, {.field = "deploy.time_scaling.max_slowdown"});
+}
+
+// The commands of `plan` that fail a check.
+size_t FailingCount(const Plan& plan) {
+  return plan.unreachable.size() + plan.too_fast.size() + plan.over_acceleration.size() +
+         plan.path_deviation.OffPathCommands();
+}
+
+// MakePlan at the search's best placement; when that plan leaves the wrist
+// path between frames (a branch jump the IK could not avoid there), at the
+// next ones too (workspace.fallback_placements), keeping the plan with the
+// fewest failing commands. A plan that does not leave the path keeps the
+// best placement: the replay's outcome at it is not traded for another's.
+Plan PlanAtRankedPlacements(const retarget::HandTrajectory& trajectory, const retarget::Embodiment& embodiment,
+                            const PlanConfig& config, const std::vector<Pose>& wrists) {
+  const std::vector<Placement> ranked = RankPlacements(wrists, trajectory.fps, config);
+  std::optional<Plan> best;
+  std::optional<Error> unfollowable;
+  for (size_t i = 0; i < ranked.size() && i <= static_cast<size_t>(config.workspace.fallback_placements); ++i) {
+    try {
+      Plan plan = MakePlansOnOneClock({&trajectory}, {&embodiment}, {ranked[i]}, config)[0];
+      if (!best || FailingCount(plan) < FailingCount(*best)) best = std::move(plan);
+    } catch (const Error& e) {
+      if (e.code() != kUnfollowablePath) throw;
+      if (!unfollowable) unfollowable = e;
+    }
+    if (best && best->path_deviation.off_path.empty()) break;
+  }
+  if (!best) throw *unfollowable;
+  return *best;
+}
+
 void RequireTrajectory(const retarget::HandTrajectory& t) {
   if (t.qpos.empty() || !(t.fps > 0)) {
     throw Error("bad_trajectory", "trajectory has no frames or no frame rate", {.field = "qpos"});
@@ -162,6 +267,7 @@ void CheckConfig(const WorkspaceConfig& c, const std::string& section) {
   RequireInRange(section, "search_frames", c.search_frames, 1, 1000);
   RequireInRange(section, "search_restarts", c.search_restarts, 0, 100);
   RequireInRange(section, "manipulability_floor", c.manipulability_floor, 0, 1);
+  RequireInRange(section, "fallback_placements", c.fallback_placements, 0, 100);
 }
 
 void CheckConfig(const PlanConfig& c, const std::string& section) {
@@ -175,6 +281,7 @@ void CheckConfig(const PlanConfig& c, const std::string& section) {
   RequireInRange(section, "follow_rounds", c.follow_rounds, 0, 5);
   RequireInRange(section, "follow_smoothing", c.follow_smoothing, 0, 2);
   CheckConfig(c.wrist_smoothing, section + ".wrist_smoothing");
+  CheckConfig(c.path_check, section + ".path_check");
 }
 
 Pose WristPose(const retarget::HandTrajectory& t, int frame) {
@@ -227,18 +334,8 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
   std::vector<Plan> plans(arms);
   std::vector<ArmPath> paths;
   for (size_t a = 0; a < arms; ++a) {
-    Plan& plan = plans[a];
-    plan.embodiment = embodiments[a]->name;
-    plan.rate_hz = config.rate_hz;
-    for (const char* n : Ur3eJointNames()) plan.arm_joints.push_back(n);
-    plan.hand_joints = BuildArmHandModel(*embodiments[a], Pose::Identity()).hand_joints;
-    plan.placement = placements[a];
-    plan.wrist_smoothing = smoothing[a];
-    plan.trajectory_duration = (frames - 1) / first.fps;
     paths.push_back(SolveArmPath(*trajectories[a], placements[a].world_to_base, config));
-    plan.position_error = paths[a].position_error;
-    plan.rotation_error = paths[a].rotation_error;
-    plan.unreachable = paths[a].unreachable;
+    plans[a] = StartPlan(*embodiments[a], placements[a], smoothing[a], paths[a], (frames - 1) / first.fps, config);
   }
   // One joint path over every arm's joints: the re-timing's slowest joint
   // of any arm sets the pace for all.
@@ -264,6 +361,7 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
   double margin = config.time_scaling.margin;
   for (int attempt = 0; attempt < config.time_scaling.attempts; ++attempt, margin *= 0.8) {
     const TimeMap map = RetimePath(path, vmax, amax, config.rate_hz, config.time_scaling, margin);
+    if (map.exceeded) throw UnfollowablePath(map, paths, first.fps, embodiments, placements, config);
     Leads leads;
     for (size_t a = 0; a < arms && config.lead_in; ++a) {
       const VectorXd start = path.Value(map.s.front()).segment<6>(6 * a);
@@ -283,8 +381,11 @@ std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTraj
     }
     if (within) break;
   }
-  for (Plan& plan : plans) {
-    plan.ok = plan.unreachable.empty() && plan.too_fast.empty() && plan.over_acceleration.empty();
+  for (size_t a = 0; a < arms; ++a) {
+    Plan& plan = plans[a];
+    plan.path_deviation = CheckPathDeviation(plan, paths[a].targets, first.fps, paths[a].q, config.path_check);
+    plan.ok = plan.unreachable.empty() && plan.too_fast.empty() && plan.over_acceleration.empty() &&
+              plan.path_deviation.off_path.empty();
   }
   return plans;
 }
@@ -296,12 +397,10 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
   std::vector<Pose> wrists;  // the smoothed path's, which the arm will follow (MakePlansOnOneClock)
   const retarget::HandTrajectory smoothed = SmoothWrist(trajectory, config.wrist_smoothing, nullptr);
   for (int f = 0; f < static_cast<int>(smoothed.qpos.size()); ++f) wrists.push_back(WristPose(smoothed, f));
-  Placement place = placement ? *placement : SearchPlacement(wrists, trajectory.fps, config);
-  Plan plan = MakePlansOnOneClock({&trajectory}, {&embodiment}, {place}, config)[0];
-  if (placement) {
-    plan.placement.reachable_fraction = 1.0 - static_cast<double>(plan.unreachable.size()) / wrists.size();
-    plan.placement.candidates = 1;
-  }
+  if (!placement) return PlanAtRankedPlacements(trajectory, embodiment, config, wrists);
+  Plan plan = MakePlansOnOneClock({&trajectory}, {&embodiment}, {*placement}, config)[0];
+  plan.placement.reachable_fraction = 1.0 - static_cast<double>(plan.unreachable.size()) / wrists.size();
+  plan.placement.candidates = 1;
   return plan;
 }
 

@@ -14,10 +14,18 @@
 //    -base_height), c = (mean wrist x, mean wrist y, 0). The workspace
 //    config gives the default (x, y, yaw); a grid search over yaw and
 //    offsets around it keeps the placement that reaches most frames, then
-//    needs the least slowdown away from singularities.
+//    needs the least slowdown away from singularities; when the plan there
+//    fails step 4's off_path check, the next placements of the search
+//    (workspace.fallback_placements) are planned too and the plan with the
+//    fewest failing commands is kept.
 // 2. Arm IK (arm_ik.h) for the wrist pose of every trajectory frame, warm
 //    started from the previous frame (the first from home): the joint path
 //    q(s), s the trajectory's time, a cubic spline through the frames.
+//    Where that chain jumps between two of a pose's solutions, the flange
+//    swings off the wrist path between the frames (JointSplineDeviation
+//    beyond path_check's tolerances): the chain of least motion over the
+//    poses' closed-form solutions (ArmIk::LeastMotionPath) is taken
+//    instead when it strays less.
 // 3. Time scaling (time_scaling.h): s(t) so that every joint stays within
 //    its speed and acceleration limits, never faster than the video,
 //    starting and ending at rest. The commands are at t = k / rate: a
@@ -36,7 +44,16 @@
 //    "over_acceleration", with their plan time; the arm at rest before the
 //    first command and after the last). If a command exceeds a limit, step
 //    3 runs again aiming at a smaller share of the limits (time_scaling
-//    attempts). The plan is ok when no frame or command is listed.
+//    attempts). Then the commands between the frames ("off_path",
+//    PathDeviation): the IK solved the arm only at the trajectory's
+//    frames, and where its answer jumps from one solution to another
+//    between two frames the arm swings through the jump while the frames
+//    themselves are reached; so the flange of every command of the
+//    re-timed path (forward kinematics of what the arm will receive) is
+//    compared with the wrist path interpolated at the command's trajectory
+//    time, and runs of commands beyond path_check's tolerances are listed
+//    with the frames they lie between. The plan is ok when no frame or
+//    command is listed.
 // 5. Replay (replay.cc; when the trajectory has object poses and a scene):
 //    the arm tracks the commands by a joint servo (PlanConfig servo_omega),
 //    the fingers by the hand's position actuators
@@ -81,11 +98,28 @@ struct WorkspaceConfig {
   // Manipulability (ur3e.h, 0..1) below which a placement's cost grows
   // (placement.h); 0 ignores singularities.
   double manipulability_floor = 0.05;
+  // Runner-up placements planned when the best one's plan leaves the
+  // wrist path between frames (step 4's off_path; MakePlan).
+  int fallback_placements = 3;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WorkspaceConfig, x, y, yaw, base_height, yaw_steps,
                                                 offset_range, offset_steps, search_frames,
-                                                search_restarts, manipulability_floor)
+                                                search_restarts, manipulability_floor, fallback_placements)
 void CheckConfig(const WorkspaceConfig& c, const std::string& section);
+
+// Step 4's between-frames check (PathDeviation): how far the flange of a
+// commanded joint vector may stray from the wrist path, interpolated
+// between the trajectory's frames (positions linearly, rotations by slerp)
+// at the command's trajectory time. A clean plan strays a few millimetres
+// at most (the joint spline between IK solutions against a straight line
+// between wrist poses); an IK branch jump swings the flange tens of
+// centimetres off.
+struct PathCheckConfig {
+  double position_tolerance = 0.01;  // m
+  double rotation_tolerance = 0.1;   // rad
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PathCheckConfig, position_tolerance, rotation_tolerance)
+void CheckConfig(const PathCheckConfig& c, const std::string& section);
 
 struct PlanConfig {
   double rate_hz = 50;  // command rate
@@ -119,10 +153,13 @@ struct PlanConfig {
   double follow_smoothing = 0.2;
   // Step 0 (wrist_smoothing.h): the wrist path low-passed before planning.
   WristSmoothingConfig wrist_smoothing;
+  // Step 4's check of the commands between the frames.
+  PathCheckConfig path_check;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PlanConfig, rate_hz, replay, workspace, ik, time_scaling,
                                                 home, lead_in, lead_out, approach_height, approach_speed,
-                                                servo_omega, follow_rounds, follow_smoothing, wrist_smoothing)
+                                                servo_omega, follow_rounds, follow_smoothing, wrist_smoothing,
+                                                path_check)
 void CheckConfig(const PlanConfig& c, const std::string& section);
 
 struct Placement {
@@ -143,6 +180,46 @@ struct FrameIssue {
   double value = 0;  // unreachable: position error (m); too_fast: speed (rad/s); over_acceleration: rad/s^2
   double limit = 0;  // too_fast, over_acceleration: the joint's limit; unreachable: rotation error (rad)
   int joint = -1;    // too_fast, over_acceleration: arm joint index
+};
+
+// The error of a joint path the re-timing gives up on
+// (TimeScalingConfig::max_slowdown): MakePlansOnOneClock names the arm,
+// the frames and the placement.
+inline constexpr const char* kUnfollowablePath = "unfollowable_path";
+
+// The names of step 4's checks: the plan file's lists and what `deploy
+// plan` prints.
+inline constexpr const char* kCheckUnreachable = "unreachable";
+inline constexpr const char* kCheckTooFast = "too_fast";
+inline constexpr const char* kCheckOverAcceleration = "over_acceleration";
+inline constexpr const char* kCheckOffPath = "off_path";
+
+// A run of path commands whose flange strays beyond the path check's
+// tolerance (either of them) from the wrist path; runs only apart where
+// the joint spline passes through a frame's IK answer (back on the path
+// for an instant) are one.
+struct OffPathSpan {
+  int first_command = 0, last_command = 0;  // plan commands, inclusive
+  int commands = 0;                         // of them, beyond the tolerance
+  double start_time = 0, end_time = 0;      // s, their plan times
+  int from_frame = 0, to_frame = 0;         // the trajectory frames the run lies between
+  double position_deviation = 0;            // m, the largest in the run
+  double rotation_deviation = 0;            // rad
+  // rad: the largest change of one joint of the IK's answer from one frame
+  // to the next within [from_frame, to_frame]: the branch jump, if any.
+  double joint_jump = 0;
+};
+
+// Step 4's between-frames check over the path's commands (the lead moves
+// have no wrist target).
+struct PathDeviation {
+  bool checked = false;     // false: a plan file from before the check
+  double position_max = 0;  // m, over every path command
+  double rotation_max = 0;  // rad
+  int worst_command = -1;   // the command of position_max
+  double position_tolerance = 0, rotation_tolerance = 0;  // the config's, recorded
+  std::vector<OffPathSpan> off_path;
+  int OffPathCommands() const;  // commands in the runs
 };
 
 struct ReplayReport {
@@ -188,10 +265,34 @@ struct Plan {
   double slowdown = 1;                // re-timed path duration / trajectory_duration
   std::vector<double> position_error, rotation_error;  // IK residual per trajectory frame
   std::vector<FrameIssue> unreachable, too_fast, over_acceleration;
+  PathDeviation path_deviation;  // step 4's off_path
   ReplayReport replay;
   WristSmoothingReport wrist_smoothing;  // step 0
-  bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration
+  bool ok = false;  // nothing listed in unreachable, too_fast, over_acceleration, off_path
 };
+
+// Step 2's joint path of one arm: the natural cubic spline through the
+// IK's answers `frame_q` at the trajectory's frames (knot f at f / fps).
+JointSpline JointPathThroughFrames(const std::vector<ArmQ>& frame_q, double fps);
+
+// Step 2's test of a joint path before it is re-timed: the flange's
+// largest deviation (m, rad) from the wrist path between frames along the
+// joint spline through `frame_q` (the IK's answers at `wrists`' frames, at
+// `fps`), sampled `samples` times per frame interval.
+struct SplineDeviation {
+  double position = 0, rotation = 0;
+  bool Within(const PathCheckConfig& c) const {
+    return position <= c.position_tolerance && rotation <= c.rotation_tolerance;
+  }
+};
+SplineDeviation JointSplineDeviation(const std::vector<ArmQ>& frame_q, const std::vector<Pose>& wrists, double fps,
+                                     int samples);
+
+// Step 4's between-frames check of `plan`'s path commands: `wrists` are the
+// wrist poses the arm was planned on, one per trajectory frame at `fps`,
+// in the arm's base frame; `frame_q` the IK's joints at those frames.
+PathDeviation CheckPathDeviation(const Plan& plan, const std::vector<Pose>& wrists, double fps,
+                                 const std::vector<ArmQ>& frame_q, const PathCheckConfig& config);
 
 // The floating-wrist pose of `frame` in the trajectory's world (joints
 // doasido_wrist_x..rz, rotation Rx Ry Rz). Throws Error("bad_trajectory").
@@ -209,7 +310,10 @@ Plan MakePlan(const retarget::HandTrajectory& trajectory, const retarget::Embodi
 // Steps 2-4 for arms that share one clock (deploy plan-two): each
 // trajectory at its fixed placement, one time map for all (the slowest
 // joint of any arm sets the pace), lead moves as long as the longest arm's.
-// Trajectories have the same frames and frame rate.
+// Trajectories have the same frames and frame rate. Throws
+// Error(kUnfollowablePath) naming the arm that holds the pace back, the
+// frames where, its unreachable frames and the placement, when the
+// re-timing would exceed time_scaling.max_slowdown (MakePlan too).
 std::vector<Plan> MakePlansOnOneClock(const std::vector<const retarget::HandTrajectory*>& trajectories,
                                       const std::vector<const retarget::Embodiment*>& embodiments,
                                       const std::vector<Placement>& placements, const PlanConfig& config);
@@ -273,7 +377,11 @@ FollowedPlan PlanOnFloatingWrist(const Plan& plan, const retarget::HandTrajector
 // "position_error", "rotation_error", "unreachable": [{frame, time,
 // position_error, rotation_error}], "too_fast": [{frame, time, joint, speed,
 // limit}], "over_acceleration": [{frame, time, joint, acceleration, limit}],
-// "replay": {...}, "ok"}. Version 1 files (no time map) read with
+// "path_deviation": {position_max, rotation_max, worst_command,
+// position_tolerance, rotation_tolerance, "off_path": [{first_command,
+// last_command, commands, start_time, end_time, from_frame, to_frame,
+// position_deviation, rotation_deviation, joint_jump}]} (absent in files
+// from before the check: read unchecked), "replay": {...}, "ok"}. Version 1 files (no time map) read with
 // source_times = times and slowdown 1.
 // The "format" member of a plan file.
 inline constexpr const char* kPlanFormat = "doasido_deploy_plan";

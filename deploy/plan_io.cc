@@ -45,6 +45,37 @@ std::vector<FrameIssue> ReadIssues(const Json& j, const std::string& rate_key) {
   return out;
 }
 
+Json PathDeviationJson(const PathDeviation& d) {
+  Json spans = Json::array();
+  for (const OffPathSpan& s : d.off_path) {
+    spans.push_back({{"first_command", s.first_command}, {"last_command", s.last_command}, {"commands", s.commands},
+                     {"start_time", s.start_time}, {"end_time", s.end_time}, {"from_frame", s.from_frame},
+                     {"to_frame", s.to_frame}, {"position_deviation", s.position_deviation},
+                     {"rotation_deviation", s.rotation_deviation}, {"joint_jump", s.joint_jump}});
+  }
+  return {{"position_max", d.position_max}, {"rotation_max", d.rotation_max}, {"worst_command", d.worst_command},
+          {"position_tolerance", d.position_tolerance}, {"rotation_tolerance", d.rotation_tolerance},
+          {kCheckOffPath, spans}};
+}
+
+PathDeviation PathDeviationFromJson(const Json& j) {
+  PathDeviation d{.checked = true,
+                  .position_max = j.at("position_max"),
+                  .rotation_max = j.at("rotation_max"),
+                  .worst_command = j.at("worst_command"),
+                  .position_tolerance = j.at("position_tolerance"),
+                  .rotation_tolerance = j.at("rotation_tolerance")};
+  for (const Json& s : j.at(kCheckOffPath)) {
+    d.off_path.push_back({.first_command = s.at("first_command"), .last_command = s.at("last_command"),
+                          .commands = s.at("commands"),
+                          .start_time = s.at("start_time"), .end_time = s.at("end_time"),
+                          .from_frame = s.at("from_frame"), .to_frame = s.at("to_frame"),
+                          .position_deviation = s.at("position_deviation"),
+                          .rotation_deviation = s.at("rotation_deviation"), .joint_jump = s.at("joint_jump")});
+  }
+  return d;
+}
+
 }  // namespace
 
 Json PlanToJson(const Plan& plan) {
@@ -76,9 +107,10 @@ Json PlanToJson(const Plan& plan) {
   j["hand"] = hand;
   j["position_error"] = plan.position_error;
   j["rotation_error"] = plan.rotation_error;
-  j["unreachable"] = IssuesJson(plan.unreachable, "");
-  j["too_fast"] = IssuesJson(plan.too_fast, "speed");
-  j["over_acceleration"] = IssuesJson(plan.over_acceleration, "acceleration");
+  j[kCheckUnreachable] = IssuesJson(plan.unreachable, "");
+  j[kCheckTooFast] = IssuesJson(plan.too_fast, "speed");
+  j[kCheckOverAcceleration] = IssuesJson(plan.over_acceleration, "acceleration");
+  if (plan.path_deviation.checked) j["path_deviation"] = PathDeviationJson(plan.path_deviation);
   const ReplayReport& r = plan.replay;
   j["replay"] = {{"ran", r.ran},
                  {"object_position_error_mean", r.object_position_error_mean},
@@ -173,12 +205,14 @@ void ReadChecks(const Json& j, int version, Plan& plan, std::string& field) {
   field = "position_error";
   plan.position_error = j.at("position_error").get<std::vector<double>>();
   plan.rotation_error = j.at("rotation_error").get<std::vector<double>>();
-  field = "unreachable";
-  plan.unreachable = ReadIssues(j.at("unreachable"), "");
-  field = "too_fast";
-  plan.too_fast = ReadIssues(j.at("too_fast"), "speed");
-  field = "over_acceleration";
-  if (version >= 2) plan.over_acceleration = ReadIssues(j.at("over_acceleration"), "acceleration");
+  field = kCheckUnreachable;
+  plan.unreachable = ReadIssues(j.at(kCheckUnreachable), "");
+  field = kCheckTooFast;
+  plan.too_fast = ReadIssues(j.at(kCheckTooFast), "speed");
+  field = kCheckOverAcceleration;
+  if (version >= 2) plan.over_acceleration = ReadIssues(j.at(kCheckOverAcceleration), "acceleration");
+  field = "path_deviation";  // absent in files from before the check: unchecked
+  if (j.contains("path_deviation")) plan.path_deviation = PathDeviationFromJson(j.at("path_deviation"));
 }
 
 // Older files lack the per-command series: they read empty.

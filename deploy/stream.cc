@@ -105,7 +105,9 @@ StreamResult StreamPlan(const Plan& plan, const StreamOptions& options, const st
   if (!plan.ok) {
     throw Error("plan_failed_checks",
                 "refusing to stream: the plan has " + std::to_string(plan.unreachable.size()) +
-                    " unreachable and " + std::to_string(plan.too_fast.size()) + " too-fast frames",
+                    " unreachable frames, " + std::to_string(plan.too_fast.size()) + " too-fast, " +
+                    std::to_string(plan.over_acceleration.size()) + " too-abrupt and " +
+                    std::to_string(plan.path_deviation.OffPathCommands()) + " off-path commands",
                 {.file = plan.source, .field = "ok"});
   }
   RequireEvenlySpaced(plan);

@@ -93,6 +93,33 @@ std::vector<double> BackwardPass(const std::vector<GridPoint>& grid, const Vecto
   return hi;
 }
 
+// TimeMap::exceeded: where the path is slowest (the grid step that takes
+// longest) and the joint that holds it back there (the one allowing the
+// least path speed by its speed limit, or by its acceleration limit
+// against the path's curvature).
+TimeMap Exceeded(const std::vector<GridPoint>& grid, const std::vector<double>& t, const VectorXd& vmax,
+                 const VectorXd& amax, double total, double length) {
+  TimeMap out;
+  out.exceeded = true;
+  out.duration = total;
+  out.slowdown = total / length;
+  size_t slowest = 0;
+  for (size_t i = 0; i + 1 < t.size(); ++i) {
+    if (t[i + 1] - t[i] > t[slowest + 1] - t[slowest]) slowest = i;
+  }
+  const GridPoint& g = grid[slowest];
+  out.slowest_s = g.s;
+  double worst = -1;
+  for (int j = 0; j < g.a.size(); ++j) {
+    const double need = std::max(std::abs(g.a[j]) / vmax[j], std::sqrt(std::abs(g.b[j]) / amax[j]));
+    if (need > worst) {
+      worst = need;
+      out.slowest_joint = j;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void CheckConfig(const TimeScalingConfig& c, const std::string& section) {
@@ -100,6 +127,7 @@ void CheckConfig(const TimeScalingConfig& c, const std::string& section) {
   RequireInRange(section, "max_speedup", c.max_speedup, 0.01, 100);
   RequireInRange(section, "grid_per_knot", c.grid_per_knot, 1, 64);
   RequireInRange(section, "attempts", c.attempts, 1, 20);
+  RequireInRange(section, "max_slowdown", c.max_slowdown, 1, 10000);
 }
 
 JointSpline::JointSpline(std::vector<double> knots, std::vector<VectorXd> values)
@@ -194,8 +222,9 @@ TimeMap RetimePath(const JointSpline& path, const VectorXd& max_speed, const Vec
     const double speed_sum = std::sqrt(x[i]) + std::sqrt(x[i + 1]);
     t[i + 1] = t[i] + 2 * delta / std::max(speed_sum, 1e-9);
   }
-  // s(t) at the command times: sdot = sqrt(x_i) + u_i tau within a step.
   const double total = t.back();
+  if (total > config.max_slowdown * length) return Exceeded(grid, t, vmax, amax, total, length);
+  // s(t) at the command times: sdot = sqrt(x_i) + u_i tau within a step.
   const int last = static_cast<int>(std::ceil(total * rate - 1e-9));
   size_t i = 0;
   for (int k = 0; k <= last; ++k) {

@@ -36,9 +36,16 @@ struct TimeScalingConfig {
   double max_speedup = 1.0;  // path speed cap, times the video's (1: never faster than the video)
   int grid_per_knot = 2;     // grid points per knot interval
   int attempts = 4;          // re-timings with a smaller margin when a command still exceeds a limit
+  // The longest re-timed path, times its own duration: beyond it the
+  // re-timing makes no commands (TimeMap::exceeded). A joint path that
+  // jumps between far-apart solutions (frames out of reach, where the IK
+  // keeps its least-bad answer) can need a near-zero path speed, and its
+  // commands would fill the memory (two arms placed out of reach: tens
+  // of GB); real clips need up to ~20x.
+  double max_slowdown = 100;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TimeScalingConfig, margin, max_speedup, grid_per_knot,
-                                                attempts)
+                                                attempts, max_slowdown)
 void CheckConfig(const TimeScalingConfig& c, const std::string& section);
 
 // A natural cubic spline through (knots[i], values[i]); values are vectors
@@ -65,6 +72,13 @@ struct TimeMap {
   std::vector<double> s;  // s[k] at t = k / rate; s.front() = begin, s.back() = end, non-decreasing
   double duration = 0;    // s of the re-timed path (the last command's time)
   double slowdown = 1;    // duration / (end - begin)
+  // The re-timed path would last more than config.max_slowdown times the
+  // path's: `s` is empty, duration and slowdown are what they would be,
+  // and the path is slowest at path time slowest_s, held back by joint
+  // slowest_joint (its speed or acceleration limit).
+  bool exceeded = false;
+  double slowest_s = 0;
+  int slowest_joint = -1;
 };
 
 // Re-times `path` under per-joint limits (rad/s, rad/s^2; sizes = dims) at

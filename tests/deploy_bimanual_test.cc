@@ -6,7 +6,11 @@
 // lcm-logger (an independent process) records both arms' commands at 50 Hz;
 // a two-hand carry replayed with both arms in one scene reports each arm's
 // wrist tracking and the object, as the two floating hands' replay does.
+#include <sys/resource.h>
+
 #include <chrono>
+#include <ctime>
+#include <optional>
 #include <csignal>
 #include <thread>
 
@@ -42,6 +46,15 @@ TEST(Bimanual, ArmsSixtyCentimetresApartDoNotCollide) {
   EXPECT_TRUE(plan.left.ok);
   EXPECT_TRUE(plan.right.ok);
   EXPECT_TRUE(plan.ok);
+  // Both arms stay on their wrists' paths between frames (a clean
+  // episode: the joint spline against the interpolated wrist, a few mm).
+  for (const Plan* side : {&plan.left, &plan.right}) {
+    EXPECT_TRUE(side->path_deviation.checked);
+    EXPECT_TRUE(side->path_deviation.off_path.empty());
+    EXPECT_LT(side->path_deviation.position_max, 0.005);
+  }
+  std::printf("between frames: left %.2f mm, right %.2f mm\n", 1000 * plan.left.path_deviation.position_max,
+              1000 * plan.right.path_deviation.position_max);
   // The bases are where the config puts them: base_distance apart, level.
   const Vec3 left_base = plan.left.placement.world_to_base.Inverse().t;
   const Vec3 right_base = plan.right.placement.world_to_base.Inverse().t;
@@ -227,6 +240,71 @@ TEST(Bimanual, BothArmsReplayACarryInOneSceneWithTheObject) {
   EXPECT_EQ(back.left.replay.wrist_position_error, arms.left.replay.wrist_position_error);
   EXPECT_EQ(back.right.replay.hand_contacts, arms.right.replay.hand_contacts);
   EXPECT_EQ(back.right.replay.success, arms.right.replay.success);
+}
+
+// MakeBimanualPlan under a 4 GiB address-space cap (an unbounded
+// re-timing throws bad_alloc instead of filling the machine), its CPU time.
+struct CappedRun {
+  std::optional<BimanualPlan> plan;
+  std::string code, what;
+  double cpu_seconds = 0;
+};
+CappedRun PlanCapped(const TwoHands& h, const BimanualConfig& config) {
+  rlimit before{};
+  getrlimit(RLIMIT_AS, &before);
+  rlimit capped = before;
+  capped.rlim_cur = 4ull << 30;
+  if (before.rlim_cur == RLIM_INFINITY || before.rlim_cur > capped.rlim_cur) setrlimit(RLIMIT_AS, &capped);
+  CappedRun run;
+  const std::clock_t cpu0 = std::clock();
+  try {
+    run.plan = MakeBimanualPlan(h.left, h.right, h.left_hand, h.right_hand, config);
+  } catch (const Error& e) {
+    run.code = e.code();
+    run.what = e.what();
+  } catch (const std::bad_alloc&) {
+    run.code = "bad_alloc";
+  }
+  run.cpu_seconds = double(std::clock() - cpu0) / CLOCKS_PER_SEC;
+  setrlimit(RLIMIT_AS, &before);
+  return run;
+}
+
+// The pair placed with its frame on the bases' line (workspace x = 0): the
+// hands' wrists between and around the bases, many frames out of either
+// arm's reach. The IK used to keep a random start's least-bad answer
+// there, the joint path jumped from frame to frame, and re-timing it ran
+// out of memory (tens of GB of commands). Now the path stays continuous
+// through the frames out of reach (their warm starts kept) and the plan
+// is made, failing its reach check; and a path the re-timing cannot
+// follow within max_slowdown (here made so by a bound of 1.2x) stops at
+// the bound, naming the arm, its frames and the placement.
+TEST(Bimanual, APairPlacedOutOfReachFailsFastNamingTheArmTheFramesAndThePlacement) {
+  const TwoHands& h = TwoHandEpisode();
+  BimanualConfig config;
+  config.plan.workspace.x = 0;
+  config.plan.workspace.offset_steps = 1;  // this spot only
+  const CappedRun planned = PlanCapped(h, config);
+  ASSERT_TRUE(planned.plan) << planned.code << " " << planned.what;
+  const BimanualPlan& plan = *planned.plan;
+  std::printf("x = 0: %.1f CPU s, unreachable left %zu right %zu, slowdown %.2fx\n", planned.cpu_seconds,
+              plan.left.unreachable.size(), plan.right.unreachable.size(), plan.right.slowdown);
+  EXPECT_LT(planned.cpu_seconds, 30);
+  EXPECT_FALSE(plan.ok);
+  EXPECT_GT(plan.left.unreachable.size() + plan.right.unreachable.size(), 0u);
+  EXPECT_LE(plan.right.slowdown, config.plan.time_scaling.max_slowdown);
+
+  config.plan.time_scaling.max_slowdown = 1.2;
+  const CappedRun bounded = PlanCapped(h, config);
+  std::printf("bounded at 1.2x: %.1f CPU s: %s\n", bounded.cpu_seconds, bounded.what.c_str());
+  EXPECT_EQ(bounded.code, kUnfollowablePath);
+  EXPECT_LT(bounded.cpu_seconds, 30);
+  const std::string& what = bounded.what;
+  EXPECT_TRUE(what.find("sharpa_left arm") != std::string::npos || what.find("sharpa_right arm") != std::string::npos)
+      << what;
+  EXPECT_NE(what.find("between frames"), std::string::npos) << what;
+  EXPECT_NE(what.find("frames out of reach"), std::string::npos) << what;
+  EXPECT_NE(what.find("placement x 0.000 m, y 0.000 m"), std::string::npos) << what;
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 //                              (adult hands: 7-10 cm), the largest wrist
 //                              jump between frames, frames with a hand, and
 //                              CPU seconds per second of video for detection
-//                              (the models' process included) and the fit.
+//                              (the models' process included) and the fit
+//                              (and the fit trusting every frame).
 //   hands_bench dex [frames]   retarget/human_hand_video.mp4 against the
 //                              keypoints dex-retargeting's example pipeline
 //                              made of it (a peer's output, not ground
@@ -18,9 +19,13 @@
 //                              hand-made labels in bench/hand_labels/*.json
 //                              (hands/hand_labels.h), for the models alone,
 //                              the tracker and the fit; missed hands of each,
-//                              left/right swaps of the models and the tracker.
-//   hands_bench jumps [frames] the largest wrist moves between frames on the
-//                              bundled positives and what PnP did there.
+//                              left/right swaps of the models and the tracker;
+//                              the fit with every frame trusted beside it.
+//   hands_bench jumps [frames] per side of each bundled positive, with every
+//                              frame trusted and as the stage runs (untrusted
+//                              frames, hands/hand_outliers.h): the largest
+//                              wrist move and palm turn between frames; then
+//                              the largest moves and what PnP did there.
 // [frames] limits each video to its first frames (default: all); a third
 // argument picks the hand models ([hands] models: full, lite, lite_landmark),
 // a fourth keeps a tracked hand's keypoints where its crop barely changed
@@ -45,6 +50,7 @@
 #include "core/log.h"
 #include "hands/hand_detection.h"
 #include "hands/hand_labels.h"
+#include "hands/hand_outliers.h"
 #include "hands/hand_reconstruction.h"
 #include "synth/generator.h"
 #include "testing/synthetic_hand_track.h"
@@ -108,7 +114,8 @@ struct Run {
   double detect_cpu = 0, fit_cpu = 0;
 };
 
-Run RunVideo(const std::string& path, std::int64_t frames, const Intrinsics* given = nullptr) {
+Run RunVideo(const std::string& path, std::int64_t frames, const Intrinsics* given = nullptr,
+             const HandsConfig& config = HandsConfig{}) {
   Run r;
   DecoderOptions span{.last_frame = frames > 0 ? frames - 1 : -1, .clip = path};
   const double c0 = CpuSeconds();
@@ -119,7 +126,7 @@ Run RunVideo(const std::string& path, std::int64_t frames, const Intrinsics* giv
                                                          HandsConfig{}.default_fov_deg),
                                            .assumed = true,
                                            .source = kIntrinsicsFromDefault};
-  r.result = ReconstructHands(r.detected, in, HandsConfig{});
+  r.result = ReconstructHands(r.detected, in, config);
   r.detect_cpu = c1 - c0;
   r.fit_cpu = CpuSeconds() - c1;
   return r;
@@ -161,7 +168,8 @@ void Real(std::int64_t frames) {
   std::printf("%-20s %6s %6s %8s %8s %9s %28s %28s %8s %s\n", "clip", "frames", "hand%",
               "det cpu/s", "fit cpu/s", "total/s", "right palm cm med [min,max]",
               "left palm cm med [min,max]", "jump cm",
-              "still: jitter px/f^2 models -> fit (frames); model's own palm cm");
+              "still: jitter px/f^2 models -> fit (frames); model's own palm cm; fit cpu/s "
+              "trusting every frame");
   for (const char* clip : clips) {
     const Run r = RunVideo(kData + "/videos/" + clip, frames);
     const double video_s = r.detected.frames.size() / r.detected.fps;
@@ -204,12 +212,21 @@ void Real(std::int64_t frames) {
       }
       palms[side == Side::kRight ? 0 : 1] = buf;
     }
-    std::printf("%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f\n",
-                clip, r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(),
-                r.detect_cpu / video_s, r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s,
-                palms[0].c_str(), palms[1].c_str(), jump,
-                jitter.frames ? jitter.raw / jitter.frames : 0.0,
-                jitter.frames ? jitter.fit / jitter.frames : 0.0, jitter.frames, model_palm);
+    // The fit again on the same detection with every frame trusted
+    // (hands/hand_outliers.h off): what the outlier checks cost.
+    HandsConfig trusting;
+    trusting.fit.max_untrusted_run = 0;
+    const double c0 = CpuSeconds();
+    ReconstructHands(r.detected, r.result.intrinsics, trusting);
+    const double trusting_fit = CpuSeconds() - c0;
+    std::printf(
+        "%-20s %6zu %5.0f%% %8.2f %9.3f %9.2f %28s %28s %8.2f %.2f -> %.2f (%d); %.1f; fit "
+        "trusting every frame %.3f\n",
+        clip, r.detected.frames.size(), 100.0 * with_hand / r.detected.frames.size(),
+        r.detect_cpu / video_s, r.fit_cpu / video_s, (r.detect_cpu + r.fit_cpu) / video_s,
+        palms[0].c_str(), palms[1].c_str(), jump, jitter.frames ? jitter.raw / jitter.frames : 0.0,
+        jitter.frames ? jitter.fit / jitter.frames : 0.0, jitter.frames, model_palm,
+        trusting_fit / video_s);
     std::fflush(stdout);
   }
 }
@@ -347,6 +364,7 @@ void SynthTracks() {
   model_size.size_prior = "model";
   const FitConfig fits[2] = {model_size, FitConfig{}};
   const char* fit_names[2] = {"model size", "adult prior"};
+  int untrusted = 0;  // untrusted frames (hands/hand_outliers.h), true K, model size
   for (double fx : {400.0, 500.0, 700.0}) {
     SynthError errors[5];  // [K][fit] as 2k+f; 4 = PnP only (true K, model size)
     for (int k = 0; k < 8; ++k) {
@@ -358,6 +376,7 @@ void SynthTracks() {
       for (int v = 0; v < 4; ++v) {
         for (const Track& tr : tracks) {
           const FittedTrack fit = FitTrack(tr, Ks[v / 2], h.fps, fits[v % 2]);
+          if (v == 0) untrusted += fit.untrusted_frames;
           for (size_t f = 0; f < fit.joints.size(); ++f) {
             for (int pnp = 0; pnp < (v == 0 ? 2 : 1); ++pnp) {
               if (pnp && !fit.has_pnp[f]) continue;
@@ -384,6 +403,7 @@ void SynthTracks() {
       PrintError(name, errors[v]);
     }
   }
+  std::printf("untrusted frames (true K, model size): %d\n", untrusted);
 }
 
 void Synth(int clips) {
@@ -392,19 +412,6 @@ void Synth(int clips) {
 }
 
 }  // namespace
-
-// The largest wrist moves between frames of each bundled positive, with
-// what the models and PnP did there: the 2D wrist move and the keypoint
-// box's size change, PnP's wrist depth and turn between the two frames.
-double TurnDeg(const Joints& a, const Joints& b) {
-  Eigen::Matrix<double, 3, kJoints> A, B;
-  for (int j = 0; j < kJoints; ++j) {
-    A.col(j) = a[j] - a[0];
-    B.col(j) = b[j] - b[0];
-  }
-  const Eigen::Matrix4d T = Eigen::umeyama(A, B, false);
-  return Eigen::AngleAxisd(Mat3(T.topLeftCorner<3, 3>())).angle() * 180 / M_PI;
-}
 
 double BoxSize(const HandObservation& o) {
   Eigen::Vector2d lo = o.uv[0], hi = o.uv[0];
@@ -415,46 +422,111 @@ double BoxSize(const HandObservation& o) {
   return (hi - lo).norm();
 }
 
+// One side's wrist steps between consecutive frames as hands.npz holds
+// them (across tracks too): the largest move (cm) and palm turn (degrees,
+// HandTurnDeg), steps turning over 20 degrees, valid and untrusted frames.
+struct SideSteps {
+  double move_cm = 0, turn_deg = 0;
+  int over_20 = 0, valid = 0, untrusted = 0;
+  int move_at = -1, turn_at = -1;  // the later frame of each
+};
+
+SideSteps Steps(const HandsResult& result, Side side, size_t frames) {
+  SideSteps s;
+  std::vector<const Joints*> at(frames, nullptr);
+  for (const FittedTrack& t : result.tracks) {
+    if (t.side != side) continue;
+    for (size_t f = 0; f < t.joints.size(); ++f) {
+      at[t.first_frame + f] = &t.joints[f];
+      ++s.valid;
+      s.untrusted += t.untrusted[f] ? 1 : 0;
+    }
+  }
+  for (size_t f = 1; f < frames; ++f) {
+    if (!at[f] || !at[f - 1]) continue;
+    const double move = 100 * ((*at[f])[0] - (*at[f - 1])[0]).norm();
+    const double turn = HandTurnDeg(*at[f - 1], *at[f]);
+    s.over_20 += turn > 20 ? 1 : 0;
+    if (move > s.move_cm) {
+      s.move_cm = move;
+      s.move_at = static_cast<int>(f);
+    }
+    if (turn > s.turn_deg) {
+      s.turn_deg = turn;
+      s.turn_at = static_cast<int>(f);
+    }
+  }
+  return s;
+}
+
+// The largest wrist moves inside the tracks of `result`, with what the
+// models and PnP did there: the 2D wrist move and the keypoint box's size
+// change, PnP's wrist depth and turn between the two frames.
+void PrintLargestMoves(const HandsResult& result) {
+  struct J {
+    double cm;
+    int track, frame;
+  };
+  std::vector<J> jumps;
+  for (size_t k = 0; k < result.tracks.size(); ++k) {
+    const FittedTrack& t = result.tracks[k];
+    for (size_t f = 1; f < t.joints.size(); ++f) {
+      jumps.push_back({100 * (t.joints[f][0] - t.joints[f - 1][0]).norm(), static_cast<int>(k),
+                       static_cast<int>(f)});
+    }
+  }
+  std::sort(jumps.begin(), jumps.end(), [](const J& a, const J& b) { return a.cm > b.cm; });
+  for (size_t i = 0; i < std::min<size_t>(3, jumps.size()); ++i) {
+    const FittedTrack& t = result.tracks[jumps[i].track];
+    const int f = jumps[i].frame;
+    const auto &a = t.observations[f - 1], &b = t.observations[f];
+    std::printf("    %.1f cm at %d->%d (track %d, %s, %zu frames): fit z %.1f -> %.1f cm;",
+                jumps[i].cm, t.first_frame + f - 1, t.first_frame + f, jumps[i].track,
+                SideName(t.side), t.joints.size(), 100 * t.joints[f - 1][0].z(),
+                100 * t.joints[f][0].z());
+    if (a && b) {
+      std::printf(" 2D wrist %.0f px, box %.0f -> %.0f px, score %.2f -> %.2f;",
+                  (b->uv[0] - a->uv[0]).norm(), BoxSize(*a), BoxSize(*b), a->score, b->score);
+    } else {
+      std::printf(" filled;");
+    }
+    if (t.has_pnp[f - 1] && t.has_pnp[f]) {
+      std::printf(" PnP z %.1f -> %.1f cm, turn %.0f deg", 100 * t.pnp_joints[f - 1][0].z(),
+                  100 * t.pnp_joints[f][0].z(), HandTurnDeg(t.pnp_joints[f - 1], t.pnp_joints[f]));
+    }
+    std::printf("\n");
+  }
+}
+
+// The wrist steps of each bundled positive with every frame trusted
+// (max_untrusted_run = 0, the stage before the check) and as the stage
+// runs, on one detection; then the stage's largest moves inside a track
+// with what the models and PnP did there.
 void Jumps(std::int64_t frames) {
   const char* clips[] = {"02_cups.mp4", "03_blocks.mp4", "bass_guitar.mp4", "eyeliner.avi",
                          "laptop_trackpad.mp4"};
+  std::printf(
+      "per side: valid frames (untrusted filled), largest move cm @frame, largest palm "
+      "turn deg @frame, steps over 20 deg\n");
   for (const char* clip : clips) {
-    const Run r = RunVideo(kData + "/videos/" + clip, frames);
-    struct J {
-      double cm;
-      int track, frame;
-    };
-    std::vector<J> jumps;
-    for (size_t k = 0; k < r.result.tracks.size(); ++k) {
-      const FittedTrack& t = r.result.tracks[k];
-      for (size_t f = 1; f < t.joints.size(); ++f) {
-        jumps.push_back({100 * (t.joints[f][0] - t.joints[f - 1][0]).norm(), static_cast<int>(k),
-                         static_cast<int>(f)});
-      }
-    }
-    std::sort(jumps.begin(), jumps.end(), [](const J& a, const J& b) { return a.cm > b.cm; });
+    HandsConfig trusting;
+    trusting.fit.max_untrusted_run = 0;
+    Run r = RunVideo(kData + "/videos/" + clip, frames, nullptr, trusting);
+    const HandsResult before = r.result;
+    r.result = ReconstructHands(r.detected, before.intrinsics, HandsConfig{});
     std::printf("%s: %zu tracks\n", clip, r.result.tracks.size());
-    for (size_t i = 0; i < std::min<size_t>(4, jumps.size()); ++i) {
-      const FittedTrack& t = r.result.tracks[jumps[i].track];
-      const int f = jumps[i].frame;
-      const auto &a = t.observations[f - 1], &b = t.observations[f];
-      std::printf("  %.1f cm at %d->%d (track %d, %s, %zu frames):", jumps[i].cm,
-                  t.first_frame + f - 1, t.first_frame + f, jumps[i].track, SideName(t.side),
-                  t.joints.size());
-      std::printf(" fit z %.1f -> %.1f cm;", 100 * t.joints[f - 1][0].z(),
-                  100 * t.joints[f][0].z());
-      if (a && b) {
-        std::printf(" 2D wrist %.0f px, box %.0f -> %.0f px, score %.2f -> %.2f;",
-                    (b->uv[0] - a->uv[0]).norm(), BoxSize(*a), BoxSize(*b), a->score, b->score);
-      } else {
-        std::printf(" filled;");
+    for (Side side : {Side::kRight, Side::kLeft}) {
+      for (const auto& [name, res] :
+           {std::pair<const char*, const HandsResult*>{"before", &before},
+            std::pair<const char*, const HandsResult*>{"after", &r.result}}) {
+        const SideSteps s = Steps(*res, side, r.detected.frames.size());
+        if (s.valid == 0) continue;
+        std::printf("  %-5s %-6s %3d (%2d)  move %5.1f @%3d  turn %5.1f @%3d  >20: %d\n",
+                    SideName(side), name, s.valid, s.untrusted, s.move_cm, s.move_at, s.turn_deg,
+                    s.turn_at, s.over_20);
       }
-      if (t.has_pnp[f - 1] && t.has_pnp[f]) {
-        std::printf(" PnP z %.1f -> %.1f cm, turn %.0f deg", 100 * t.pnp_joints[f - 1][0].z(),
-                    100 * t.pnp_joints[f][0].z(), TurnDeg(t.pnp_joints[f - 1], t.pnp_joints[f]));
-      }
-      std::printf("\n");
     }
+    PrintLargestMoves(r.result);
     std::fflush(stdout);
   }
 }
@@ -474,19 +546,24 @@ void Labels() {
     std::printf("no label files in %s (see hands/hand_labels.h for the format)\n", dir.c_str());
     return;
   }
-  std::printf("%-22s %6s %6s %15s %15s %15s %12s %9s\n", "video", "frames", "hands",
-              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed m/t/f", "swaps m/t");
+  std::printf("%-22s %6s %6s %15s %15s %15s %12s %9s   %s\n", "video", "frames", "hands",
+              "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed m/t/f", "swaps m/t",
+              "fit, every frame trusted: PCK.1/.2 missed");
   for (const auto& file : files) {
     const HandLabels labels = ReadHandLabels(file);
     int last = 0;
     for (const auto& f : labels.frames) last = std::max(last, f.frame);
     const Run r = RunVideo(kData + "/" + labels.video, last + 1);
     const LabelScores s = ScoreLabels(labels, r.detected, r.result);
-    std::printf("%-22s %6d %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %8d/%d/%d %7d/%d\n",
+    HandsConfig trusting;
+    trusting.fit.max_untrusted_run = 0;
+    const LabelScores all = ScoreLabels(
+        labels, r.detected, ReconstructHands(r.detected, r.result.intrinsics, trusting));
+    std::printf("%-22s %6d %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %8d/%d/%d %7d/%d   %7.3f/%.3f %d\n",
                 file.stem().c_str(), s.labelled_frames, s.fit.hands, s.models.Pck01(),
                 s.models.Pck02(), s.tracker.Pck01(), s.tracker.Pck02(), s.fit.Pck01(),
                 s.fit.Pck02(), s.models.missed, s.tracker.missed, s.fit.missed, s.models.swaps,
-                s.tracker.swaps);
+                s.tracker.swaps, all.fit.Pck01(), all.fit.Pck02(), all.fit.missed);
     std::fflush(stdout);
   }
 }

@@ -24,6 +24,7 @@ Json HandEntry(const FittedTrack& t, int track_index, size_t f,
           {"track", track_index},
           {"score", seen ? Round(seen->score, 1e-4) : 0.0},
           {"filled", static_cast<bool>(t.filled[f])},
+          {"untrusted", static_cast<bool>(t.untrusted[f])},
           {"keypoints_2d", uv},
           {"confidence", confidence},
           {"joints_camera", joints}};

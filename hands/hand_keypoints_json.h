@@ -5,13 +5,14 @@
 //    "K" [[3x3]], "intrinsics_source", "intrinsics_assumed",
 //    "joint_order": "mediapipe21",
 //    "frames": [{"frame": i, "hands": [{"side": "right" | "left",
-//        "track": n, "score": s, "filled": bool,
+//        "track": n, "score": s, "filled": bool, "untrusted": bool,
 //        "keypoints_2d": [[u, v] x 21], "confidence": [21 values],
 //        "joints_camera": [[x, y, z] x 21]}]}]}
 //
 // One entry per frame of the input, hands possibly empty. Keypoints are
 // pixels of the input as displayed (the models' keypoints; on a filled frame
-// the fitted joints' projection, with confidence 0 and score 0), joints are
+// the fitted joints' projection, with confidence 0 and score 0; an
+// untrusted frame, hands/hand_outliers.h, is filled too), joints are
 // metres in the camera frame (x right, y down, z forward) after the fit.
 // MediaPipe's joint order: 0 wrist, 1-4 thumb, 5-8 index, 9-12 middle,
 // 13-16 ring, 17-20 little finger.

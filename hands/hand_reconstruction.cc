@@ -27,8 +27,12 @@ HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& i
 Json Summarize(const DetectedFrames& detected, const HandsResult& result) {
   Json sides = Json::object();
   double max_jump = 0, reprojection = 0;
-  int fitted_frames = 0, flipped = 0;
-  for (const FittedTrack& t : result.tracks) flipped += t.flipped_poses;
+  int fitted_frames = 0, flipped = 0, mirrored = 0, untrusted = 0;
+  for (const FittedTrack& t : result.tracks) {
+    flipped += t.flipped_poses;
+    mirrored += t.mirrored_poses;
+    untrusted += t.untrusted_frames;
+  }
   for (Side side : {Side::kLeft, Side::kRight}) {
     int valid = 0, filled = 0, tracks = 0;
     std::vector<double> palms, lengths;
@@ -69,6 +73,8 @@ Json Summarize(const DetectedFrames& detected, const HandsResult& result) {
           {"side_changes", result.tracking.side_changes},
           {"sides", sides},
           {"flipped_poses", flipped},
+          {"mirrored_poses", mirrored},
+          {"untrusted_frames", untrusted},
           {"max_root_jump_m", max_jump},
           {"reprojection_rms_px", fitted_frames ? reprojection / fitted_frames : 0.0},
           {"intrinsics_source", result.intrinsics.source},

@@ -33,7 +33,9 @@ HandsResult ReconstructHands(const DetectedFrames& detected, const Intrinsics& i
 
 // Measurements of a result: frames, per side the frames with a valid hand,
 // filled frames, tracks, palm width (median over frames, metres) and hand
-// length (median over tracks' frames, metres), the size prior, the
+// length (median over tracks' frames, metres), the size prior, PnP poses
+// dropped as flips or as mirrored 3D hands, frames untrusted
+// (hands/hand_outliers.h), the
 // largest frame-to-frame wrist move per side as hands.npz holds it (across
 // tracks too; metres), the mean reprojection error
 // (pixels), seconds.

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/stage_progress.h"
+#include "hands/hand_outliers.h"
 #include "hands/hand_pnp.h"
 
 namespace doasido::hands {
@@ -138,12 +139,14 @@ int DropFlippedPoses(std::vector<std::optional<HandPose>>& poses, double max_tur
   return dropped;
 }
 
-// PnP per frame (flips dropped); frames without a pose (gaps, flips,
-// frames PnP could not place) interpolated between the nearest posed ones.
+// PnP per frame (flips dropped, and with `drop_mirrored` the poses of
+// frames whose 3D hand is mirrored, hands/hand_outliers.h); frames without
+// a pose (gaps, flips, frames PnP could not place) interpolated between the
+// nearest posed ones.
 // Returns false when no frame has a pose. `size` scales the model's
 // landmarks (and so the PnP poses' translation) to the template's size.
 bool Initialise(const Track& track, const Mat3& K, double size, double max_turn_deg,
-                FittedTrack& out, std::vector<std::optional<HandPose>>& poses) {
+                bool drop_mirrored, FittedTrack& out, std::vector<std::optional<HandPose>>& poses) {
   const size_t n = track.frames.size();
   poses.assign(n, std::nullopt);
   out.joints.assign(n, Joints{});
@@ -158,6 +161,14 @@ bool Initialise(const Track& track, const Mat3& K, double size, double max_turn_
     // Scaling the landmarks scales the pose's translation: same projection.
     for (auto& j : poses[f]->joints) j *= size;
     out.pnp_joints[f] = poses[f]->joints;
+  }
+  // A mirrored 3D hand's pose is turned over: its frame keeps its keypoints.
+  const std::vector<bool> mirrored =
+      drop_mirrored ? MirroredFrames(track) : std::vector<bool>(n, false);
+  for (size_t f = 0; f < n; ++f) {
+    if (!mirrored[f] || !poses[f]) continue;
+    poses[f].reset();
+    ++out.mirrored_poses;
   }
   out.flipped_poses = DropFlippedPoses(poses, max_turn_deg);
   std::vector<int> known;
@@ -257,7 +268,10 @@ std::vector<std::pair<int, int>> SkeletonLinks() {
   return links;
 }
 
-FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitConfig& c) {
+namespace {
+
+// One fit of the frames `track` observes (the header's problem).
+FittedTrack FitObserved(const Track& track, const Mat3& K, double fps, const FitConfig& c) {
   const auto start = std::chrono::steady_clock::now();
   FittedTrack out;
   out.side = track.side;
@@ -279,11 +293,13 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
       out.size_prior ? TemplateLinkLengths(c.hand_length_m) : model_links;
   const double size = out.size_prior ? SumOfBones(base) / SumOfBones(model_links) : 1.0;
   std::vector<std::optional<HandPose>> poses;
-  if (!Initialise(track, K, size, c.max_pnp_turn_deg, out, poses)) {
+  if (!Initialise(track, K, size, c.max_pnp_turn_deg, c.max_untrusted_run > 0, out, poses)) {
     out.joints.clear();
     return out;
   }
   const size_t n = out.joints.size();
+  out.untrusted = track.untrusted;
+  out.untrusted.resize(n, false);
   double scale = 1;
   ceres::Problem problem;
   const double sigma_px = c.reprojection_sigma * ImageSize(track);
@@ -330,6 +346,24 @@ FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitCon
   out.reprojection_rms_px = ReprojectionRms(track, out, K);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
+}
+
+}  // namespace
+
+FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitConfig& c) {
+  FittedTrack fit = FitObserved(track, K, fps, c);
+  if (fit.joints.empty()) return fit;
+  const std::vector<bool> drop = UntrustedFrames(fit.joints, c.max_wrist_speed_m_s / fps,
+                                                 c.max_wrist_turn_deg_s / fps, c.max_untrusted_run);
+  const int dropped = static_cast<int>(std::count(drop.begin(), drop.end(), true));
+  if (dropped == 0) return fit;
+  const Track kept = WithoutFrames(track, drop);
+  FittedTrack refit = kept.frames.empty() ? FittedTrack{} : FitObserved(kept, K, fps, c);
+  if (refit.joints.empty()) return fit;
+  refit.untrusted_frames = dropped;  // filled, or cut off at the track's ends
+  refit.seconds += fit.seconds;
+  refit.iterations += fit.iterations;
+  return refit;
 }
 
 }  // namespace doasido::hands

@@ -41,8 +41,10 @@
 // no reprojection or shape residual: the bones and the acceleration carry
 // them across, and they are marked filled. A PnP pose that turns more than
 // `max_pnp_turn_deg` from most poses within 5 frames is a flip (a nearly
-// flat hand's mirror pose) and is dropped: that frame keeps its
-// reprojection, loses its shape residual and starts interpolated.
+// flat hand's mirror pose) and is dropped, and so is the pose of a frame
+// whose 3D landmarks are the mirror image of the track's hand
+// (hands/hand_outliers.h): that frame keeps its reprojection, loses its
+// shape residual and starts interpolated.
 #pragma once
 
 #include <array>
@@ -60,11 +62,15 @@ using Joints = std::array<Vec3, kJoints>;
 struct FittedTrack {
   Side side = Side::kRight;
   int first_frame = 0;
-  std::vector<Joints> joints;  // per frame of the track, camera frame, metres
-  std::vector<bool> filled;    // the frame had no observation
-  std::vector<std::optional<HandObservation>> observations;  // the track's, per frame
-  std::vector<bool> has_pnp;        // the frame's PnP pose exists and was kept (before the fit)
-  int flipped_poses = 0;            // PnP poses dropped as flips (FitConfig::max_pnp_turn_deg)
+  std::vector<Joints> joints;   // per frame of the track, camera frame, metres
+  std::vector<bool> filled;     // the frame had no observation (or its observation was untrusted)
+  std::vector<bool> untrusted;  // the observation was dropped (hands/hand_outliers.h): filled too
+  // The track's, per frame (untrusted frames' dropped).
+  std::vector<std::optional<HandObservation>> observations;
+  int untrusted_frames = 0;   // frames untrusted: filled inside the track, cut off at its ends
+  std::vector<bool> has_pnp;  // the frame's PnP pose exists and was kept (before the fit)
+  int mirrored_poses = 0;     // PnP poses dropped: the 3D landmarks were mirrored (hand_outliers.h)
+  int flipped_poses = 0;      // PnP poses dropped as flips (FitConfig::max_pnp_turn_deg)
   std::vector<Joints> pnp_joints;   // PnP's joints, flips too (zero where PnP found none)
   std::vector<double> link_length;  // metres, in SkeletonLinks() order, after the fit
   bool size_prior = false;          // the adult template and prior set the size
@@ -87,8 +93,10 @@ inline constexpr double kTemplateHandLengthM = 0.18955;
 std::vector<double> TemplateLinkLengths(double hand_length_m);
 double HandLength(const std::vector<double>& link_length);
 
-// Fits `track` seen through `K` at `fps` frames per second. A track on which
-// no frame has a PnP pose returns with empty `joints`.
+// Fits `track` seen through `K` at `fps` frames per second, then, where
+// the fitted wrist shows untrusted frames (hands/hand_outliers.h, bounds
+// in FitConfig), again without their observations. A track on which no frame has
+// a PnP pose returns with empty `joints`.
 FittedTrack FitTrack(const Track& track, const Mat3& K, double fps, const FitConfig& config);
 
 }  // namespace doasido::hands

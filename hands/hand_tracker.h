@@ -41,6 +41,9 @@ struct Track {
   // One entry per frame from first_frame on; nullopt = a gap to fill. The
   // first and last entries are observed.
   std::vector<std::optional<HandObservation>> frames;
+  // Per frame: its observation was dropped as untrusted (hands/hand_outliers.h),
+  // a gap now; empty: none was.
+  std::vector<bool> untrusted;
   double side_vote = 0.5;  // weighted mean probability of a right hand
   int last_frame() const { return first_frame + static_cast<int>(frames.size()) - 1; }
   int observed() const;

@@ -27,6 +27,9 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(f, "acceleration_sigma_ms2", c.fit.acceleration_sigma_ms2, 1e-3, 1e4);
   RequireInRange(f, "max_iterations", c.fit.max_iterations, 1, 10000);
   RequireInRange(f, "max_pnp_turn_deg", c.fit.max_pnp_turn_deg, 1, 180);
+  RequireInRange(f, "max_untrusted_run", c.fit.max_untrusted_run, 0, 300);
+  RequireInRange(f, "max_wrist_speed_m_s", c.fit.max_wrist_speed_m_s, 0.1, 100);
+  RequireInRange(f, "max_wrist_turn_deg_s", c.fit.max_wrist_turn_deg_s, 10, 100000);
   RequireOneOf(f, "size_prior", c.fit.size_prior, {"adult", "model"});
   RequireInRange(f, "hand_length_m", c.fit.hand_length_m, 0.08, 0.3);
   RequireInRange(f, "hand_length_sigma", c.fit.hand_length_sigma, 0.005, 1);

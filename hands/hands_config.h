@@ -48,6 +48,17 @@ struct FitConfig {
   // nearly flat hand: measured flips of 170-175 degrees on 02_cups and
   // 03_blocks); its keypoints still count.
   double max_pnp_turn_deg = 60;
+  // After the fit, the wrist of a track is cut where it moves or turns
+  // faster than these between two frames; a piece of at most
+  // `max_untrusted_run` frames (not the longest) is untrusted: its
+  // keypoints are dropped and the fit fills it like a gap, or cuts it off
+  // at the track's ends (hands/hand_outliers.h). A hand moving objects:
+  // ~1.5 m/s and ~500 degrees/s at most (02_cups' fastest: 1.1 m/s).
+  // 0 turns this and the mirrored 3D hands' check off (every frame trusted,
+  // the stage as it was).
+  int max_untrusted_run = 5;
+  double max_wrist_speed_m_s = 3;
+  double max_wrist_turn_deg_s = 720;
   // The hand's size, the one metric cue of a single view (docs/hands.md,
   // "Size"). "adult": the skeleton is an adult template hand
   // (hands/hand_skeleton_fit.h) times one scale per track, under a
@@ -62,8 +73,9 @@ struct FitConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber, bone_sigma_m,
                                                 shape_sigma_m, acceleration_sigma_ms2,
-                                                max_iterations, max_pnp_turn_deg, size_prior,
-                                                hand_length_m, hand_length_sigma)
+                                                max_iterations, max_pnp_turn_deg, max_untrusted_run,
+                                                max_wrist_speed_m_s, max_wrist_turn_deg_s,
+                                                size_prior, hand_length_m, hand_length_sigma)
 
 // The [hands] section.
 struct HandsConfig {

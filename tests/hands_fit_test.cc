@@ -6,6 +6,7 @@
 
 #include <numeric>
 
+#include "hands/hand_outliers.h"
 #include "hands/hand_reconstruction.h"
 #include "hands/hand_tracker.h"
 #include "eval/umetrack_hand.h"
@@ -188,10 +189,14 @@ TEST(HandsFit, AFlippedPnPPoseIsDroppedAndTheWristDoesNotJump) {
   }
   const auto tracks = BuildTracks(OneHand(h), TrackerConfig{});
   ASSERT_EQ(tracks.size(), 1u);
-  FitConfig keep = ModelSize();
+  // The flip test alone: every frame trusted (HandsOutliers below test
+  // what the stage does first with a mirrored 3D hand).
+  FitConfig trusting = ModelSize();
+  trusting.max_untrusted_run = 0;
+  FitConfig keep = trusting;
   keep.max_pnp_turn_deg = 180;  // nothing dropped
   const FittedTrack kept = FitTrack(tracks[0], h.K, h.fps, keep);
-  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, ModelSize());
+  const FittedTrack fit = FitTrack(tracks[0], h.K, h.fps, trusting);
   const auto flipped = [](size_t f) { return f == 30 || f == 31; };
   std::printf(
       "flips kept: jump %.2f cm, MPJPE there %.2f cm; dropped (%d): jump %.2f cm, MPJPE there %.2f "
@@ -207,6 +212,126 @@ TEST(HandsFit, AFlippedPnPPoseIsDroppedAndTheWristDoesNotJump) {
   for (size_t f = 1; f < h.truth.size(); ++f)
     truth_jump = std::max(truth_jump, (h.truth[f][0] - h.truth[f - 1][0]).norm());
   EXPECT_LT(MaxRootJump(fit), truth_jump + 0.01);
+}
+
+// The synthetic hand of these tests with the model's 3D hand mirrored
+// (z -> -z: the landmark model's 3D hand turned over, as on 02_cups) on
+// frames [first, last], through the stage's whole fit with its true K,
+// with every frame trusted and as the stage runs.
+struct MirroredRun {
+  testing::SyntheticHand h;
+  DetectedFrames d;
+  HandsResult trusting, result;
+};
+
+MirroredRun FitMirroredRun(int first, int last, int jump_first = -1) {
+  MirroredRun m{.h = MakeSyntheticHand(DexRows(), 60, 300, 1.0, 0.002, 0.9, 13)};
+  for (int f = first; f <= last; ++f) {
+    for (auto& w : m.h.seen[f].world) w.z() = -w.z();
+  }
+  // Two frames whose keypoints lie 30 cm to the side (a find of something
+  // else, 9 m/s away and back).
+  for (int f = jump_first; f >= 0 && f <= jump_first + 1; ++f) {
+    for (auto& uv : m.h.seen[f].uv) uv.x() += 0.30 * m.h.K(0, 0) / m.h.truth[f][0].z();
+  }
+  m.d = {.frames = OneHand(m.h), .width = m.h.width, .height = m.h.height, .fps = m.h.fps};
+  const Intrinsics in{.K = m.h.K, .assumed = false, .source = kIntrinsicsFromOption};
+  HandsConfig config;
+  config.fit = ModelSize();
+  m.result = ReconstructHands(m.d, in, config);
+  config.fit.max_untrusted_run = 0;
+  m.trusting = ReconstructHands(m.d, in, config);
+  return m;
+}
+
+// The largest palm turn between consecutive frames of a fitted hand up to
+// frame `last`, degrees.
+double MaxTurn(const std::vector<Joints>& joints, size_t last = 1000) {
+  double turn = 0;
+  for (size_t f = 1; f < joints.size() && f <= last; ++f)
+    turn = std::max(turn, HandTurnDeg(joints[f - 1], joints[f]));
+  return turn;
+}
+
+double MaxTruthTurn(const std::vector<Joints>& truth) {
+  double turn = 0;
+  for (size_t f = 1; f < truth.size(); ++f)
+    turn = std::max(turn, HandTurnDeg(truth[f - 1], truth[f]));
+  return turn;
+}
+
+TEST(HandsOutliers, AMirroredRunLosesItsPosesAndStaysNearTheTruth) {
+  // Frames 25-34: the model's 3D hand mirrored. They keep their keypoints,
+  // lose their (turned over) PnP poses, and stay within 1.5 cm of the
+  // truth, the hand turning no faster than the truth. With every frame
+  // trusted the flips' majority test keeps the run's poses (most of each
+  // frame's neighbours are in the run) and the fit turns the hand over.
+  const MirroredRun m = FitMirroredRun(25, 34);
+  ASSERT_EQ(m.result.tracks.size(), 1u);
+  ASSERT_EQ(m.trusting.tracks.size(), 1u);
+  const FittedTrack& fit = m.result.tracks[0];
+  const auto mirrored = [](size_t f) { return f >= 25 && f <= 34; };
+  for (size_t f = 0; f < fit.joints.size(); ++f) {
+    EXPECT_FALSE(fit.filled[f]) << f;
+    EXPECT_EQ(fit.has_pnp[f], !mirrored(f)) << f;
+  }
+  EXPECT_EQ(fit.mirrored_poses, 10);
+  EXPECT_EQ(Summarize(m.d, m.result).at("mirrored_poses"), 10);
+  std::printf(
+      "mirrored frames' MPJPE %.2f cm trusted, %.2f cm without their poses; largest "
+      "turn %.1f / %.1f deg (truth %.1f)\n",
+      100 * Mpjpe(m.trusting.tracks[0], m.h.truth, false, mirrored),
+      100 * Mpjpe(fit, m.h.truth, false, mirrored), MaxTurn(m.trusting.tracks[0].joints),
+      MaxTurn(fit.joints), MaxTruthTurn(m.h.truth));
+  EXPECT_LT(Mpjpe(fit, m.h.truth, false, mirrored), 0.015);
+  EXPECT_LT(Mpjpe(fit, m.h.truth, false, [](size_t) { return true; }), 0.01);
+  EXPECT_GT(Mpjpe(m.trusting.tracks[0], m.h.truth, false, mirrored), 0.03);
+  EXPECT_LT(MaxTurn(fit.joints), MaxTruthTurn(m.h.truth) + 5);
+}
+
+TEST(HandsOutliers, AShortMirroredRunAndAJumpStayNearTheTruth) {
+  // Frames 20-22 mirrored, and on frames 40-41 the keypoints 30 cm aside:
+  // every frame's joints stay within 1 cm of the truth, 2 cm at the jump
+  // (the robust loss, the bones and the acceleration outvote it), and up
+  // to the jump the hand turns no faster than the truth.
+  const MirroredRun m = FitMirroredRun(20, 22, 40);
+  ASSERT_EQ(m.result.tracks.size(), 1u);
+  const FittedTrack& fit = m.result.tracks[0];
+  ASSERT_EQ(fit.joints.size(), m.h.truth.size());
+  EXPECT_EQ(fit.mirrored_poses, 3);
+  const auto jumped = [](size_t f) { return f == 40 || f == 41; };
+  std::printf("MPJPE %.2f cm, at the jump %.2f cm; largest turn up to it %.1f deg\n",
+              100 * Mpjpe(fit, m.h.truth, false, [](size_t) { return true; }),
+              100 * Mpjpe(fit, m.h.truth, false, jumped), MaxTurn(fit.joints, 39));
+  EXPECT_LT(Mpjpe(fit, m.h.truth, false, [](size_t f) { return f < 40 || f > 41; }), 0.01);
+  EXPECT_LT(Mpjpe(fit, m.h.truth, false, jumped), 0.02);
+  EXPECT_LT(MaxTurn(fit.joints, 39), MaxTruthTurn(m.h.truth) + 5);
+}
+
+TEST(HandsOutliers, UntrustedFramesAreShortPiecesBetweenImpossibleSteps) {
+  // A path moving 1 cm a frame, one frame 20 cm aside, the last three
+  // turned over: bounds 10 cm and 24 degrees a frame, runs of up to 5.
+  std::vector<Joints> path(20);
+  for (size_t f = 0; f < path.size(); ++f) {
+    for (int j = 0; j < kJoints; ++j) path[f][j] = Vec3(0.01 * f, 0.001 * j, 0.02 * (j % 3) + 0.5);
+  }
+  for (auto& j : path[7]) j.x() += 0.2;  // one frame 20 cm aside
+  const Mat3 turn = Eigen::AngleAxisd(M_PI, Vec3::UnitY()).toRotationMatrix();
+  for (size_t f = 17; f < 20; ++f) {  // the last three turned over about the wrist
+    for (auto& j : path[f]) j = turn * (j - path[f][0]) + path[f][0];
+  }
+  const std::vector<bool> untrusted = UntrustedFrames(path, 0.1, 24, 5);
+  for (size_t f = 0; f < path.size(); ++f) EXPECT_EQ(untrusted[f], f == 7 || f >= 17) << f;
+  const std::vector<bool> off = UntrustedFrames(path, 0.1, 24, 0);
+  EXPECT_EQ(std::count(off.begin(), off.end(), true), 0);
+  Track t;
+  t.first_frame = 10;
+  for (int f = 0; f < 6; ++f) t.frames.push_back(HandObservation{});
+  const Track kept = WithoutFrames(t, {true, false, true, false, false, true});
+  EXPECT_EQ(kept.first_frame, 11);
+  EXPECT_EQ(kept.frames.size(), 4u);
+  EXPECT_FALSE(kept.frames[1].has_value());
+  EXPECT_EQ(kept.untrusted, (std::vector<bool>{false, true, false, false}));
 }
 
 TEST(HandsTracker, AHandFoundTwiceMakesOneTrackThatDoesNotAlternate) {
@@ -337,6 +462,15 @@ TEST(HandsConfig, OutOfRangeValuesAreRefusedByName) {
   c = HandsConfig{};
   c.fit.max_pnp_turn_deg = 0;
   refused(c, "hands.fit.max_pnp_turn_deg");
+  c = HandsConfig{};
+  c.fit.max_untrusted_run = -1;
+  refused(c, "hands.fit.max_untrusted_run");
+  c = HandsConfig{};
+  c.fit.max_wrist_speed_m_s = 0;
+  refused(c, "hands.fit.max_wrist_speed_m_s");
+  c = HandsConfig{};
+  c.fit.max_wrist_turn_deg_s = 0;
+  refused(c, "hands.fit.max_wrist_turn_deg_s");
   c = HandsConfig{};
   c.tracker.duplicate_distance = -1;
   refused(c, "hands.tracker.duplicate_distance");

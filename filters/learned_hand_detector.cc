@@ -270,7 +270,7 @@ void LearnedHandDetector::AddDetection(const cv::Rect2d& box, const char* kind, 
 
 Json LearnedHandDetector::Measurements() const {
   const double n = static_cast<double>(samples_.size());
-  return {{"model", "mediapipe_hands_full"},
+  return {{"model", "mediapipe_hands_" + config_.models},  // the pair that ran
           {"sample_every", every_},
           {"ms_per_sample", n > 0 ? Round(total_ms_ / n, 0.1) : 0.0},
           {"model_samples", model_samples_},

@@ -66,6 +66,10 @@ TEST_F(DeferredModels, AKeptClipGetsTheSignalsTheModelsInTheDecodeGave) {
   const Json builtin = Analyze(Video("02_cups.mp4"), 0, 119, "builtin", true);
   EXPECT_EQ(deferred.at("clip").at("detection_source"), "learned");
   ASSERT_TRUE(deferred.contains(kHandsMeasurement));
+  // The default pair of models, named as they ran (the full palm detector,
+  // the lite landmark model).
+  EXPECT_EQ(deferred.at(kHandsMeasurement).at("model"),
+            std::string("mediapipe_hands_") + kModelsLiteLandmark);
   const Json& samples = deferred.at(kHandsMeasurement).at("samples");
   EXPECT_EQ(samples.size(), 20u);  // every 6th of 120 frames
   for (size_t i = 0; i < samples.size(); ++i) {

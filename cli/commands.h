@@ -7,6 +7,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
 
 #include "core/config.h"
 
@@ -25,8 +27,9 @@ void AddDbOptions(CLI::App& cmd, DbOptions& options);
 // The parsed --config file, or an empty object. Throws Error("bad_config")
 // naming the file, section.key, the value and the allowed range for a file
 // that does not parse, has an unknown section or key, a value of the wrong
-// type or out of range.
-Json LoadConfig(const DbOptions& options);
+// type or out of range. Sections besides the stages' and the report's are
+// the calling command's `other_sections` (which it checks itself).
+Json LoadConfig(const DbOptions& options, const std::vector<std::string>& other_sections = {});
 
 // The stage x state x verdict table of `doasido status`.
 void PrintStatusTable(Database& db);

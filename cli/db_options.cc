@@ -27,11 +27,13 @@ void AddDbOptions(CLI::App& cmd, DbOptions& options) {
       });
 }
 
-Json LoadConfig(const DbOptions& options) {
+Json LoadConfig(const DbOptions& options, const std::vector<std::string>& other_sections) {
   if (options.config.empty()) return Json::object();
   const Json config = LoadConfigFile(options.config);
   try {
-    stages::CheckStageConfig(config, {reports::kReportSection});
+    std::vector<std::string> sections = other_sections;
+    sections.push_back(reports::kReportSection);
+    stages::CheckStageConfig(config, sections);
     reports::ReportOptions report;
     ReadCheckedSection(config, reports::kReportSection, report);
   } catch (const Error& e) {

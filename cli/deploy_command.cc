@@ -105,16 +105,17 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   if (a.trajectory.empty()) databases.push_back(a.db.db);
   CheckPlanOut(a.out, deploy::kPlanFormat, a.force, databases);
   deploy::PlanConfig config = a.config;
-  const Json file_config = LoadConfig(a.db);
-  if (file_config.is_object() && file_config.contains("deploy")) {
-    RequireSameShape("deploy", Json(config), file_config.at("deploy"));
+  const Json file_config = LoadConfig(a.db, {deploy::kPlanConfigSection});
+  if (file_config.is_object() && file_config.contains(deploy::kPlanConfigSection)) {
+    RequireSameShape(deploy::kPlanConfigSection, Json(config),
+                     file_config.at(deploy::kPlanConfigSection));
   }
-  ReadSection(file_config, "deploy", config);
+  ReadSection(file_config, deploy::kPlanConfigSection, config);
   // Options given on the command line win over the config file.
   if (cmd.count("--rate")) config.rate_hz = a.config.rate_hz;
   if (cmd.count("--yaw-steps")) config.workspace.yaw_steps = a.config.workspace.yaw_steps;
   if (cmd.count("--offset-steps")) config.workspace.offset_steps = a.config.workspace.offset_steps;
-  deploy::CheckConfig(config, "deploy");
+  deploy::CheckConfig(config, deploy::kPlanConfigSection);
   retarget::TrajectoryFiles files;
   if (!a.trajectory.empty()) {
     // Relative to the working directory, like every path on the command line.
@@ -250,7 +251,7 @@ void AddPlanTwo(CLI::App& deploy) {
       "      --out work/two.json --base-distance 0.6\n"
       "  doasido deploy stream --plan work/two.json");
   cmd->callback([a] {
-    deploy::CheckConfig(a->config, "deploy");
+    deploy::CheckConfig(a->config, deploy::kPlanConfigSection);
     CheckPlanOut(a->out, deploy::kBimanualPlanFormat, a->force, {});
     if (a->trajectory.empty() && (a->left.empty() || a->right.empty())) {
       throw Error("bad_arguments", "give --trajectory, or --left and --right", {.field = "--trajectory"});

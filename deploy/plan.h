@@ -114,6 +114,10 @@ void CheckConfig(const WorkspaceConfig& c, const std::string& section);
 // at most (the joint spline between IK solutions against a straight line
 // between wrist poses); an IK branch jump swings the flange tens of
 // centimetres off.
+// The config file's section of PlanConfig (and its tables, e.g.
+// [deploy.path_check]), and the field prefix of its errors.
+inline constexpr const char* kPlanConfigSection = "deploy";
+
 struct PathCheckConfig {
   double position_tolerance = 0.01;  // m
   double rotation_tolerance = 0.1;   // rad

@@ -210,6 +210,45 @@ TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
   EXPECT_NE(r.out.find("unreachable  frame    10  t=  1.000 s"), std::string::npos) << r.out;
 }
 
+TEST(DeployPlan, TheConfigFilesDeploySectionIsReadAndChecked) {
+  TempDir dir;
+  // A wrist that holds still, pointing down, for 1 s.
+  Json t;
+  t["embodiment"] = "sharpa_right";
+  t["fps"] = 10;
+  t["scale"] = 1;
+  t["qpos_names"] = {"doasido_wrist_x", "doasido_wrist_y", "doasido_wrist_z",
+                     "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
+  for (int k = 0; k < 10; ++k) {
+    t["qpos"].push_back({0.0, 0.0, 0.25, M_PI, 0.0, 0.0});
+    t["valid"].push_back(true);
+    t["fingertip_error"].push_back(0.0);
+  }
+  t["object_poses"] = Json::array();
+  testing::WriteFile(dir / "trajectory.json", t.dump());
+  const auto plan_with = [&](const std::string& toml) {
+    testing::WriteFile(dir / "deploy.toml", toml);
+    return RunDoasido({"deploy", "plan", "--trajectory", (dir / "trajectory.json").string(),
+                       "--out", (dir / "plan.json").string(), "--force", "--config",
+                       (dir / "deploy.toml").string(), "--yaw-steps", "1", "--offset-steps",
+                       "1", "--no-replay"});
+  };
+  // [deploy] and its tables reach the plan: the rate and the path check's
+  // tolerance it records.
+  auto r = plan_with("[deploy]\nrate_hz = 25\n[deploy.path_check]\nposition_tolerance = 0.02\n");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const Json plan = Json::parse(testing::ReadFile(dir / "plan.json"));
+  EXPECT_DOUBLE_EQ(deploy::ReadPlanJson(dir / "plan.json").rate_hz, 25);
+  EXPECT_NE(plan.dump().find("0.02"), std::string::npos) << plan.dump().substr(0, 400);
+  // A value out of range and an unknown key are refused, naming them.
+  r = plan_with("[deploy.path_check]\nposition_tolerance = -1\n");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("position_tolerance"), std::string::npos) << r.err;
+  r = plan_with("[deploy]\nrate = 25\n");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("rate"), std::string::npos) << r.err;
+}
+
 // Two hands: `deploy plan-two` places two arms, `deploy stream` sends one
 // bimanual_command per tick (dry run here; the live stream is recorded by
 // lcm-logger in deploy_bimanual_test); bases 5 cm apart are refused with

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <functional>
 #include <thread>
 
 #include <unistd.h>
@@ -181,22 +182,28 @@ TEST(DeployStream, StopsCleanlyOnSigint) {
   EXPECT_NE(out.find("stopped after"), std::string::npos) << out;
 }
 
-TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
-  TempDir dir;
-  // A wrist that holds still, pointing down, for 1 s, then jumps 3 m up for 0.5 s.
+// A floating-wrist trajectory at 10 fps whose wrist points down 0.25 m
+// above the origin, `lift(k)` metres higher at frame k.
+Json WristTrajectory(int frames, const std::function<double(int)>& lift) {
   Json t;
   t["embodiment"] = "sharpa_right";
   t["fps"] = 10;
   t["scale"] = 1;
   t["qpos_names"] = {"doasido_wrist_x", "doasido_wrist_y", "doasido_wrist_z",
                      "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
-  for (int k = 0; k < 20; ++k) {
-    const double far = k >= 10 && k < 15 ? 3.0 : 0.0;
-    t["qpos"].push_back({0.0, 0.0, 0.25 + far, M_PI, 0.0, 0.0});
+  for (int k = 0; k < frames; ++k) {
+    t["qpos"].push_back({0.0, 0.0, 0.25 + lift(k), M_PI, 0.0, 0.0});
     t["valid"].push_back(true);
     t["fingertip_error"].push_back(0.0);
   }
   t["object_poses"] = Json::array();
+  return t;
+}
+
+TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
+  TempDir dir;
+  // A wrist that holds still for 1 s, then jumps 3 m up for 0.5 s.
+  const Json t = WristTrajectory(20, [](int k) { return k >= 10 && k < 15 ? 3.0 : 0.0; });
   testing::WriteFile(dir / "trajectory.json", t.dump());
   const auto r = RunDoasido({"deploy", "plan", "--trajectory", (dir / "trajectory.json").string(),
                              "--out", (dir / "plan.json").string(), "--rate", "10",
@@ -212,20 +219,8 @@ TEST(DeployPlan, ReportsUnreachableFramesWithTimes) {
 
 TEST(DeployPlan, TheConfigFilesDeploySectionIsReadAndChecked) {
   TempDir dir;
-  // A wrist that holds still, pointing down, for 1 s.
-  Json t;
-  t["embodiment"] = "sharpa_right";
-  t["fps"] = 10;
-  t["scale"] = 1;
-  t["qpos_names"] = {"doasido_wrist_x", "doasido_wrist_y", "doasido_wrist_z",
-                     "doasido_wrist_rx", "doasido_wrist_ry", "doasido_wrist_rz"};
-  for (int k = 0; k < 10; ++k) {
-    t["qpos"].push_back({0.0, 0.0, 0.25, M_PI, 0.0, 0.0});
-    t["valid"].push_back(true);
-    t["fingertip_error"].push_back(0.0);
-  }
-  t["object_poses"] = Json::array();
-  testing::WriteFile(dir / "trajectory.json", t.dump());
+  // A wrist that holds still for 1 s.
+  testing::WriteFile(dir / "trajectory.json", WristTrajectory(10, [](int) { return 0.0; }).dump());
   const auto plan_with = [&](const std::string& toml) {
     testing::WriteFile(dir / "deploy.toml", toml);
     return RunDoasido({"deploy", "plan", "--trajectory", (dir / "trajectory.json").string(),
@@ -237,9 +232,10 @@ TEST(DeployPlan, TheConfigFilesDeploySectionIsReadAndChecked) {
   // tolerance it records.
   auto r = plan_with("[deploy]\nrate_hz = 25\n[deploy.path_check]\nposition_tolerance = 0.02\n");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  const Json plan = Json::parse(testing::ReadFile(dir / "plan.json"));
-  EXPECT_DOUBLE_EQ(deploy::ReadPlanJson(dir / "plan.json").rate_hz, 25);
-  EXPECT_NE(plan.dump().find("0.02"), std::string::npos) << plan.dump().substr(0, 400);
+  const deploy::Plan plan = deploy::ReadPlanJson(dir / "plan.json");
+  EXPECT_DOUBLE_EQ(plan.rate_hz, 25);
+  EXPECT_TRUE(plan.path_deviation.checked);
+  EXPECT_DOUBLE_EQ(plan.path_deviation.position_tolerance, 0.02);
   // A value out of range and an unknown key are refused, naming them.
   r = plan_with("[deploy.path_check]\nposition_tolerance = -1\n");
   EXPECT_NE(r.exit_code, 0);

@@ -43,4 +43,28 @@ std::int64_t PathId(const std::string& digits) {
   return id;
 }
 
+DecisionRequest ReadDecision(const Json& body) {
+  DecisionRequest d;
+  d.clip = RequireId(body, "clip_id");
+  d.stage = body.at("stage").get<std::string>();
+  const std::string decision = body.at("decision").get<std::string>();
+  d.reviewer = body.value("reviewer", std::string());
+  const std::string code = body.value("reason_code", std::string());
+  const std::string text = body.value("reason_text", std::string());
+  if (decision != "accept" && decision != "reject") {
+    throw Error("bad_request", "must be accept or reject", {.field = "decision"});
+  }
+  if (d.reviewer.empty() || d.reviewer.size() > 64) {
+    throw Error("bad_request", "a reviewer name (1-64 characters) is required",
+                {.field = "reviewer"});
+  }
+  d.accept = decision == "accept";
+  if (!d.accept && code.empty()) {
+    throw Error("bad_request", "a rejection needs a reason code", {.field = "reason_code"});
+  }
+  d.reason = code;
+  if (!text.empty()) d.reason += (d.reason.empty() ? "" : ": ") + text.substr(0, 500);
+  return d;
+}
+
 }  // namespace doasido::review

@@ -24,4 +24,21 @@ std::int64_t RequireId(const Json& body, const char* key);
 // The id in a URL's (\d+) group; Error("no_such_id") past kMaxId.
 std::int64_t PathId(const std::string& digits);
 
+// A person's accept or reject, as the review page (a flagged run) and the
+// verify page (a trajectory) post it.
+struct DecisionRequest {
+  std::int64_t clip = 0;
+  std::string stage;
+  std::string reviewer;  // 1-64 characters
+  bool accept = false;
+  // reason_code, then ": " and the first 500 characters of reason_text;
+  // a rejection always has a code.
+  std::string reason;
+};
+
+// body's clip_id, stage, decision ("accept" or "reject"), reviewer,
+// reason_code and reason_text, checked; Error("bad_request") naming the
+// field otherwise.
+DecisionRequest ReadDecision(const Json& body);
+
 }  // namespace doasido::review

@@ -322,25 +322,9 @@ struct ReviewServer::Impl {
 
   // A person's decision on a flagged run (POST /api/decision).
   void Decide(Database& d, const Json& body, httplib::Response& res) {
-    const ClipId clip = RequireId(body, "clip_id");
-    const std::string stage = body.at("stage").get<std::string>();
-    const std::string decision = body.at("decision").get<std::string>();
-    const std::string reviewer = body.value("reviewer", std::string());
-    const std::string code = body.value("reason_code", std::string());
-    const std::string text = body.value("reason_text", std::string());
-    if (decision != "accept" && decision != "reject") {
-      return SendError(res, 400, "decision must be accept or reject");
-    }
-    if (reviewer.empty() || reviewer.size() > 64) {
-      return SendError(res, 400, "a reviewer name (1-64 characters) is required");
-    }
-    if (decision == "reject" && code.empty()) {
-      return SendError(res, 400, "a rejection needs a reason code");
-    }
-    std::string reason = code;
-    if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
-    if (reason.empty()) reason = "accepted on review";
-    d.RecordReview(clip, stage, reviewer, decision == "accept", reason);
+    DecisionRequest r = ReadDecision(body);
+    if (r.reason.empty()) r.reason = "accepted on review";
+    d.RecordReview(r.clip, r.stage, r.reviewer, r.accept, r.reason);
     SendJson(res, 200, {{"ok", true}, {"remaining", d.CountFlagged()}});
   }
 };

@@ -123,26 +123,12 @@ void ServeThree(httplib::Response& res) {
 // A person's accept or reject of a clip's trajectory (POST /api/verify/decision).
 void RecordDecision(Database& d, const httplib::Request& req, httplib::Response& res) {
   const Json body = ParseRequestBody(req.body);
-  const ClipId clip = RequireId(body, "clip_id");
-  const std::string stage = body.at("stage").get<std::string>();
-  const std::string decision = body.at("decision").get<std::string>();
-  const std::string reviewer = body.value("reviewer", std::string());
-  const std::string code = body.value("reason_code", std::string());
-  const std::string text = body.value("reason_text", std::string());
-  const auto bad = [&](const std::string& message) {
-    res.status = 400;
-    res.set_content(Json({{"error", message}}).dump(), "application/json");
-  };
-  if (!retarget::IsTrajectoryStage(stage)) {
-    return bad("stage must be a trajectory stage");
+  const DecisionRequest r = ReadDecision(body);
+  if (!retarget::IsTrajectoryStage(r.stage)) {
+    throw Error("bad_request", "must be a trajectory stage", {.field = "stage"});
   }
-  if (decision != "accept" && decision != "reject") return bad("decision must be accept or reject");
-  if (reviewer.empty() || reviewer.size() > 64) {
-    return bad("a reviewer name (1-64 characters) is required");
-  }
-  if (decision == "reject" && code.empty()) return bad("a rejection needs a reason");
-  std::string reason = code;
-  if (!text.empty()) reason += (reason.empty() ? "" : ": ") + text.substr(0, 500);
+  const ClipId clip = r.clip;
+  const std::string& stage = r.stage;
   // The decision is for the trajectory file as it is now; a page that
   // says which one it showed (trajectory_sha256) is refused when the
   // trajectory changed since.
@@ -162,7 +148,7 @@ void RecordDecision(Database& d, const httplib::Request& req, httplib::Response&
                     "application/json");
     return;
   }
-  d.RecordVerification(clip, stage, reviewer, decision == "accept", reason, sha);
+  d.RecordVerification(clip, stage, r.reviewer, r.accept, r.reason, sha);
   res.set_content(Json({{"ok", true},
                         {"remaining", d.ListTrajectoriesToVerify(TrajectoryStages()).size()}}).dump(),
                   "application/json");

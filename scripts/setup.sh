@@ -25,6 +25,10 @@ PACKAGES=(
   nodejs
   slurm-wlm munge
   clang libclang-rt-14-dev
+  # Videos of the labelled real footage (bench/real_footage_labels.tsv):
+  # opencv-doc's sample videos (96 MB download, the only large one) and
+  # imageio's two test videos; zlib reads opencv-doc's gzipped ones.
+  opencv-doc python3-imageio zlib1g-dev
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js

@@ -1,7 +1,5 @@
 #include "filters/hand_models.h"
 
-#include <time.h>
-
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -9,6 +7,7 @@
 #include <sstream>
 #include <utility>
 
+#include "core/clock.h"
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "filters/xnnpack_graph.h"
@@ -19,13 +18,6 @@ namespace {
 
 constexpr const char* kPackedAssets = "hands_solution_packed_assets.data";
 constexpr const char* kPackedLoader = "hands_solution_packed_assets_loader.js";
-
-// CPU time of this thread: what the models cost, whatever else the machine runs.
-double ThreadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 // Output index of the tensor called `name` (the models name them Identity,
 // Identity_1, ...).

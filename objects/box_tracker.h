@@ -1,0 +1,88 @@
+// Objectron's two stages on a sequence of frames, tracked as MediaPipe's
+// graph does (objectron_cpu.pbtxt, box_landmark_cpu.pbtxt): the 2D detector
+// (objects/box_detector.h) finds boxes of the configured categories; each
+// new box gets a track whose category, and so box-landmark model, never
+// changes; the landmark model looks at a square crop of the box enlarged
+// 1.5 times, and in the next frame at the same crop made from this frame's
+// keypoints (their extent, turned so that the box's up is the crop's up).
+// A track ends where the presence drops below its threshold. The detector
+// runs while nothing is tracked, on the frame a track is lost, and every
+// detect_every-th frame otherwise (BoxKeypointsConfig); a detection where a
+// track already is is that track.
+//
+// Contract: Track() takes frames in order and returns the objects of each,
+// keypoints in pixels of the frame passed in times `scale` (0 at the
+// top-left corner of the top-left pixel); Reset() forgets the tracks.
+// Throws Error("object_detector_unavailable") at construction when the
+// models cannot load, Error("object_detector_failed") when a run fails.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "objects/box_detector.h"
+#include "objects/box_keypoints.h"
+#include "objects/box_keypoints_config.h"
+#include "objects/objectron_models.h"
+
+namespace doasido::objects {
+
+// A square crop of the frame, turned: where a box-landmark model looks.
+struct BoxCrop {
+  double cx = 0, cy = 0;  // centre, pixels
+  double side = 0;        // pixels
+  double rotation = 0;    // radians, clockwise on screen; the crop's up is the box's up
+};
+
+// The crop of a box of `w` x `h` pixels about (cx, cy): enlarged `scale`
+// times and squared on its long side (RectTransformationCalculator's
+// scale_x = scale_y = scale, square_long).
+BoxCrop CropFromBox(double cx, double cy, double w, double h, double rotation, double scale);
+// The next frame's crop from this frame's keypoints: their extent on screen,
+// turned by the angle that makes the box's projected up axis (bottom-face
+// centre to top-face centre) point up; unturned when that axis is shorter
+// than a tenth of the extent (a box seen from above).
+BoxCrop CropFromKeypoints(const std::array<Eigen::Vector2d, kBoxKeypoints>& keypoints, double scale);
+// The affine map from the crop's 224 x 224 pixels (continuous, 0 at the
+// corner) to the frame's.
+cv::Matx23d CropToFrame(const BoxCrop& crop);
+// The landmark model's input for `crop` of an RGB frame of 8-bit pixels:
+// 224 x 224 x 3 floats in [0, 1], bilinear, the frame's border replicated
+// (box_landmark_cpu.pbtxt's BORDER_REPLICATE).
+void LandmarkInput(const cv::Mat& rgb, const BoxCrop& crop, std::vector<float>* out);
+
+class BoxTracker {
+ public:
+  BoxTracker(BoxKeypointsConfig config, std::string clip);
+  std::vector<ObjectObservation> Track(const cv::Mat& bgr, int frame, double scale = 1.0);
+  void Reset();
+  const ObjectronModels& models() const { return *models_; }
+
+ private:
+  struct Tracked {
+    int id = 0;
+    std::string category;
+    BoxCrop next;
+    cv::Rect2d extent;  // of the keypoints, pixels of the (shrunk) frame
+  };
+  // Runs `category`'s model on `crop`; false when the box is not present.
+  bool Landmarks(const cv::Mat& rgb, const std::string& category, const BoxCrop& crop,
+                 ObjectObservation* seen);
+  void DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
+                 std::vector<ObjectObservation>* found);
+
+  BoxKeypointsConfig config_;
+  std::string clip_;
+  std::unique_ptr<ObjectronModels> models_;
+  std::vector<Tracked> tracks_;
+  int next_id_ = 0;
+  int since_detection_ = 0;
+  std::vector<float> input_;
+};
+
+}  // namespace doasido::objects

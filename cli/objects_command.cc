@@ -29,8 +29,26 @@ struct ObjectsOptions {
   std::vector<std::string> inputs;
   std::string out;
   bool overlay = false;
+  std::vector<std::string> seeds;  // FRAME:X,Y,W,H[:CATEGORY]
   BoxKeypointsConfig config;
 };
+
+// "FRAME:X,Y,W,H[:CATEGORY]" (pixels of the input as displayed).
+SeedBox ParseSeed(const std::string& text) {
+  SeedBox seed;
+  char category[32] = "cup";
+  long long frame = 0;
+  double x = 0, y = 0, w = 0, h = 0;
+  const int n = std::sscanf(text.c_str(), "%lld:%lf,%lf,%lf,%lf:%31s", &frame, &x, &y, &w, &h, category);
+  if (n < 5 || frame < 0 || w <= 0 || h <= 0) {
+    throw Error("bad_arguments", "a seed is FRAME:X,Y,W,H[:CATEGORY] with W, H > 0, not " + text,
+                {.field = "--seed"});
+  }
+  seed.frame = frame;
+  seed.category = category;
+  seed.box = cv::Rect2d(x, y, w, h);
+  return seed;
+}
 
 // Overlays of videos are drawn at most this large on their longer side.
 constexpr int kOverlaySide = 1280;
@@ -57,14 +75,17 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, BoxTracker& tracker)
   const bool image = cv::haveImageReader(input.string());
   cv::Mat still;
   DetectedObjects detected;
+  std::vector<SeedBox> seeds;
+  for (const std::string& text : o.seeds) seeds.push_back(ParseSeed(text));
   if (image) {
     still = cv::imread(input.string(), cv::IMREAD_COLOR);
     if (still.empty()) throw Error("image_unreadable", "cannot decode the image", {.file = input.string()});
-    detected = ObjectsInImage(still, tracker);
+    detected = ObjectsInImage(still, tracker, seeds);
   } else {
     Progress progress(stem, 0);
     detected = ObjectsInVideo(input, DecoderOptions{.clip = stem}, o.config.max_side, tracker,
-                              [&](std::int64_t done) { progress.Set(static_cast<std::uint64_t>(done)); });
+                              [&](std::int64_t done) { progress.Set(static_cast<std::uint64_t>(done)); },
+                              seeds);
   }
   Json objects = ObjectsJson(detected);
   // The one place the 3D lifting plugs in (issue 52's geometry half: EPnP on
@@ -143,6 +164,9 @@ void AddObjectsCommand(CLI::App& app) {
                   "While objects are tracked, the detector looks for others every this many frames")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  cmd->add_option("--seed", o->seeds,
+                  "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given): an object the detector may\n"
+                  "miss, boxed by hand on one frame (pixels of the input); tracked from there");
   cmd->add_flag("--overlay", o->overlay,
                 "Also draw the boxes: <stem>.overlay.mp4 for a video, <stem>.overlay.png for an image");
   cmd->footer(
@@ -152,10 +176,13 @@ void AddObjectsCommand(CLI::App& app) {
       "4 front-top-left, 5-8 the same on the right), pixels of the input as displayed; score is\n"
       "the box-landmark model's presence (a box is kept at >= 0.99). 2D only for now: the 3D\n"
       "fields (center_camera, rotation_camera, size_m, scale_assumed) come with the lifting.\n"
-      "The models are the npm package @mediapipe/objectron (scripts/setup.sh installs it).\n\n"
+      "The models are the npm package @mediapipe/objectron (scripts/setup.sh installs it).\n"
+      "The 2D detector does not find every object of its categories (02_cups' red plastic cups:\n"
+      "no cup score above 0.2): --seed starts a track where a person boxed the object.\n\n"
       "Example:\n"
       "  doasido objects clips/cups.mp4 photos/mug.jpg --out work/objects --overlay\n"
-      "  # work/objects/cups.json, cups.overlay.mp4, mug.json, mug.overlay.png");
+      "  # work/objects/cups.json, cups.overlay.mp4, mug.json, mug.overlay.png\n"
+      "  doasido objects clips/cups.mp4 --seed 0:570,290,170,255 --out work/objects");
   cmd->callback([o] { RunObjects(*o); });
 }
 

@@ -75,6 +75,7 @@ BoxTracker::BoxTracker(BoxKeypointsConfig config, std::string clip)
 
 void BoxTracker::Reset() {
   tracks_.clear();
+  seeds_.clear();
   since_detection_ = 0;
 }
 
@@ -104,21 +105,37 @@ void BoxTracker::DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* 
       DecodeDetections(out, models_->labels(), config_.categories, config_.min_detection_score,
                        config_.nms_iou, config_.max_objects);
   for (const DetectedBox& b : boxes) {
-    if (static_cast<int>(kept->size()) >= config_.max_objects) break;
     const cv::Rect2d box(b.box.x * rgb.cols, b.box.y * rgb.rows, b.box.width * rgb.cols,
                          b.box.height * rgb.rows);
-    bool known = false;
-    for (const Tracked& t : *kept) known |= BoxIoU(t.extent, box) > config_.same_object_iou;
-    if (known) continue;
-    const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
-                                     box.height, 0.0, config_.crop_scale);
-    ObjectObservation seen{.frame = frame};
-    if (!Landmarks(rgb, b.category, crop, &seen)) continue;
-    seen.track = next_id_++;
-    kept->push_back({seen.track, b.category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
-                     Extent(seen.keypoints_2d)});
-    found->push_back(seen);
+    StartTrack(rgb, frame, b.category, box, kept, found);
   }
+}
+
+void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& category,
+                            const cv::Rect2d& box, std::vector<Tracked>* kept,
+                            std::vector<ObjectObservation>* found) {
+  if (static_cast<int>(kept->size()) >= config_.max_objects) return;
+  for (const Tracked& t : *kept) {
+    if (BoxIoU(t.extent, box) > config_.same_object_iou) return;
+  }
+  const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
+                                   box.height, 0.0, config_.crop_scale);
+  ObjectObservation seen{.frame = frame};
+  if (!Landmarks(rgb, category, crop, &seen)) return;
+  seen.track = next_id_++;
+  kept->push_back({seen.track, category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
+                   Extent(seen.keypoints_2d)});
+  found->push_back(seen);
+}
+
+void BoxTracker::Seed(const std::string& category, const cv::Rect2d& box) {
+  CategoryNamed(category);
+  if (std::find(config_.categories.begin(), config_.categories.end(), category) ==
+      config_.categories.end()) {
+    throw Error("bad_arguments", "a seed of category " + category + ", whose model is not loaded",
+                {.clip = clip_, .field = "categories"});
+  }
+  seeds_.emplace_back(category, box);
 }
 
 std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, double scale) {
@@ -152,6 +169,13 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
     kept.push_back({t.id, t.category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale), extent});
     found.push_back(seen);
   }
+  const double to_input = scale / shrink;
+  for (const auto& [category, box] : seeds_) {
+    StartTrack(rgb, frame, category,
+               cv::Rect2d(box.x / to_input, box.y / to_input, box.width / to_input, box.height / to_input),
+               &kept, &found);
+  }
+  seeds_.clear();
   const bool due = kept.empty() || lost || since_detection_ + 1 >= config_.detect_every;
   if (due && static_cast<int>(kept.size()) < config_.max_objects) {
     since_detection_ = 0;
@@ -160,7 +184,6 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
     ++since_detection_;
   }
   tracks_ = std::move(kept);
-  const double to_input = scale / shrink;
   for (ObjectObservation& o : found) {
     for (Eigen::Vector2d& p : o.keypoints_2d) p *= to_input;
   }

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,10 +57,23 @@ cv::Matx23d CropToFrame(const BoxCrop& crop);
 // (box_landmark_cpu.pbtxt's BORDER_REPLICATE).
 void LandmarkInput(const cv::Mat& rgb, const BoxCrop& crop, std::vector<float>* out);
 
+// An object shown by hand on one frame (BoxTracker::Seed).
+struct SeedBox {
+  std::int64_t frame = 0;        // the file's frame index (0 for an image)
+  std::string category = "cup";
+  cv::Rect2d box;                // pixels of the input as displayed
+};
+
 class BoxTracker {
  public:
   BoxTracker(BoxKeypointsConfig config, std::string clip);
   std::vector<ObjectObservation> Track(const cv::Mat& bgr, int frame, double scale = 1.0);
+  // An object shown by hand (or by another detector): `box` holds one
+  // object of `category`, in the pixels Track() reports (the frame's times
+  // its scale). The next Track() starts a track there as a detection would
+  // (the box enlarged, the box-landmark model, its presence threshold);
+  // for objects the 2D detector misses, such as 02_cups' red plastic cups.
+  void Seed(const std::string& category, const cv::Rect2d& box);
   void Reset();
   const ObjectronModels& models() const { return *models_; }
 
@@ -75,11 +89,16 @@ class BoxTracker {
                  ObjectObservation* seen);
   void DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
                  std::vector<ObjectObservation>* found);
+  // Starts a track of `category` at `box` (pixels of `rgb`) unless a kept
+  // track is there already or the model sees no box.
+  void StartTrack(const cv::Mat& rgb, int frame, const std::string& category, const cv::Rect2d& box,
+                  std::vector<Tracked>* kept, std::vector<ObjectObservation>* found);
 
   BoxKeypointsConfig config_;
   std::string clip_;
   std::unique_ptr<ObjectronModels> models_;
   std::vector<Tracked> tracks_;
+  std::vector<std::pair<std::string, cv::Rect2d>> seeds_;  // for the next Track()
   int next_id_ = 0;
   int since_detection_ = 0;
   std::vector<float> input_;

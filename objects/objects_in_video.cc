@@ -30,7 +30,8 @@ struct ModelClock {
 
 DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOptions span,
                                int max_side, BoxTracker& tracker,
-                               const std::function<void(std::int64_t)>& progress) {
+                               const std::function<void(std::int64_t)>& progress,
+                               const std::vector<SeedBox>& seeds) {
   const auto start = std::chrono::steady_clock::now();
   const ModelClock clock(tracker.models());
   span.analysis_size = max_side;
@@ -44,6 +45,9 @@ DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOption
   while (decoder.Next(&frame)) {
     if (out.frames.empty()) out.first_frame = frame.index;
     const double scale = static_cast<double>(out.width) / frame.bgr.cols;
+    for (const SeedBox& seed : seeds) {
+      if (seed.frame == frame.index) tracker.Seed(seed.category, seed.box);
+    }
     out.frames.push_back(tracker.Track(frame.bgr, static_cast<int>(frame.index), scale));
     if (progress) progress(static_cast<std::int64_t>(out.frames.size()));
   }
@@ -52,11 +56,15 @@ DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOption
   return out;
 }
 
-DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker) {
+DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker,
+                               const std::vector<SeedBox>& seeds) {
   const auto start = std::chrono::steady_clock::now();
   const ModelClock clock(tracker.models());
   DetectedObjects out{.width = bgr.cols, .height = bgr.rows};
   tracker.Reset();
+  for (const SeedBox& seed : seeds) {
+    if (seed.frame == 0) tracker.Seed(seed.category, seed.box);
+  }
   out.frames.push_back(tracker.Track(bgr, 0));
   clock.Into(&out);
   out.seconds = Since(start);

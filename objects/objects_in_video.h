@@ -27,12 +27,15 @@ struct DetectedObjects {
 // Every frame of `span` (DecoderOptions) of `video`, decoded at most
 // max_side pixels on the longer side (the tracker's config). An
 // observation's `frame` is the file's frame index. `progress` (may be
-// empty) gets the number of frames done. Throws the decoder's errors.
+// empty) gets the number of frames done; `seeds` start tracks on their
+// frames (BoxTracker::Seed). Throws the decoder's errors.
 DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOptions span,
                                int max_side, BoxTracker& tracker,
-                               const std::function<void(std::int64_t)>& progress = {});
+                               const std::function<void(std::int64_t)>& progress = {},
+                               const std::vector<SeedBox>& seeds = {});
 
 // One still image (BGR) as frame 0; the tracker is reset first.
-DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker);
+DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker,
+                               const std::vector<SeedBox>& seeds = {});
 
 }  // namespace doasido::objects

@@ -12,6 +12,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/config.h"
 #include "core/error.h"
 #include "eval/mug_mesh.h"
 #include "objects/box_detector.h"
@@ -252,6 +253,155 @@ TEST(ObjectronModels, NativeEqualsWebAssemblyOnRealFrames) {
   EXPECT_LT(worst_logit, 1e-2);
   EXPECT_LT(worst_keypoint, 0.05);
   EXPECT_LT(worst_presence, 1e-3);
+}
+
+// The centre of the box's top (corners 3 4 7 8) or bottom (1 2 5 6) face.
+Eigen::Vector2d FaceCentre(const ObjectObservation& o, bool top) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (int k = 1; k < kBoxKeypoints; ++k) {
+    if ((((k - 1) & 2) != 0) == top) sum += o.keypoints_2d[k] / 4;
+  }
+  return sum;
+}
+
+Eigen::Vector2d Point(const Json& xy) { return {xy.at(0).get<double>(), xy.at(1).get<double>()}; }
+
+// 02_cups, frames 0-89: the detector misses the red plastic cups (no track
+// starts without a seed); seeded with the two table cups as a person boxed
+// them on frame 0 (from the hand-made labels of bench/object_labels/), the
+// cup model tracks them, and its keypoints land on the labelled cups: each
+// labelled frame (0, 10, ..., 80, checked by eye: every cup in view) with a
+// track, the centre and the top and bottom faces' centres against the
+// labelled centre and upper and lower rims.
+TEST(BoxTracker, TracksTheSeededRedCupsOf02CupsOntoTheHandMadeLabels) {
+  std::string why;
+  if (!ModelsOr(&why)) GTEST_SKIP() << why;
+  const Json labels = Json::parse(testing::ReadFile(testing::SourceDir() / "bench/object_labels/02_cups.json"));
+  BoxKeypointsConfig config;
+  config.categories = {"cup"};
+  BoxTracker tracker(config, "02_cups");
+  const fs::path video = testing::SharedData() / "videos/02_cups.mp4";
+  const DecoderOptions span{.last_frame = 89};
+  const DetectedObjects unseeded = ObjectsInVideo(video, span, config.max_side, tracker);
+  int unseeded_frames = 0;
+  for (const auto& f : unseeded.frames) unseeded_frames += !f.empty();
+  std::vector<SeedBox> seeds;
+  for (const Json& cup : labels.at("frames").at(0).at("cups")) {
+    const Eigen::Vector2d up = Point(cup.at("upper")), low = Point(cup.at("lower"));
+    const double h = low.y() - up.y();  // a person's box: the cup's height, 0.8 of it wide
+    seeds.push_back({.frame = 0, .category = "cup",
+                     .box = cv::Rect2d(up.x() - 0.4 * h, up.y() - 0.05 * h, 0.8 * h, 1.1 * h)});
+  }
+  const DetectedObjects seeded = ObjectsInVideo(video, span, config.max_side, tracker, {}, seeds);
+  int seeded_frames = 0;
+  for (const auto& f : seeded.frames) seeded_frames += !f.empty();
+  double centre = 0, top = 0, bottom = 0, height = 0;
+  int n = 0;
+  for (const Json& frame : labels.at("frames")) {
+    const int f = frame.at("frame");
+    if (f > 89) continue;
+    for (const ObjectObservation& o : seeded.frames.at(f)) {
+      const Json* best = nullptr;
+      for (const Json& cup : frame.at("cups")) {
+        if (!best || (Point(cup.at("centre")) - o.keypoints_2d[0]).norm() <
+                         (Point(best->at("centre")) - o.keypoints_2d[0]).norm()) {
+          best = &cup;
+        }
+      }
+      ASSERT_NE(best, nullptr);
+      centre += (Point(best->at("centre")) - o.keypoints_2d[0]).norm();
+      top += (Point(best->at("upper")) - FaceCentre(o, true)).norm();
+      bottom += (Point(best->at("lower")) - FaceCentre(o, false)).norm();
+      height += (Point(best->at("upper")) - Point(best->at("lower"))).norm();
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 0);
+  std::printf("02_cups 0-89: %d frames with a cup unseeded, %d seeded; %d labelled cups matched: "
+              "mean error centre %.1f px, top face %.1f px, bottom face %.1f px (cups %.0f px tall)\n",
+              unseeded_frames, seeded_frames, n, centre / n, top / n, bottom / n, height / n);
+  EXPECT_EQ(unseeded_frames, 0);  // the detector's miss, stated: no "Coffee cup" or "Mug" box
+  EXPECT_GE(seeded_frames, 70);   // measured: 79 (one cup to frame 78; the other lost at 12)
+  EXPECT_GE(n, 8);
+  EXPECT_LT(centre / n, 0.1 * height / n);  // measured 10.6 px of 213
+  EXPECT_LT(top / n, 0.15 * height / n);
+}
+
+// Renders of the built-in mug (eval/mug_mesh.h) standing on the table,
+// seen from four sides: the true box (the mesh's bounds, handle included)
+// projected; the model's keypoints against it: the centre, and the corners
+// under the best of the box's 8 relabellings that keep its up axis (the
+// model cannot tell a mug's front from its back).
+TEST(BoxTracker, FindsTheRenderedMugAndStatesItsKeypointError) {
+  std::string why;
+  if (!ModelsOr(&why)) GTEST_SKIP() << why;
+  const TriMesh mug = retarget::MakeMug();
+  const Eigen::Vector3d lo = mug.Min(), hi = mug.Max();
+  synth::World world;
+  world.style = synth::RandomStyle(3);
+  BoxKeypointsConfig config;
+  config.categories = {"cup"};
+  BoxTracker tracker(config, "mug");
+  int found = 0, detected = 0;
+  double centre = 0, corners = 0, size = 0;
+  for (int view = 0; view < 4; ++view) {
+    synth::FrameState st;
+    st.camera = {640, 480, 560, 560, 319.5, 239.5};
+    const double a = view * M_PI / 2 + 0.4;
+    st.camera_from_world = synth::LookAt(Vec3(0.3 * std::sin(a), -0.3 * std::cos(a), 0.22), Vec3(0, 0, 0.045));
+    st.object_pose = Pose::Identity();
+    const synth::RenderedFrame r = synth::RenderFrame(world, mug, st);
+    std::array<Eigen::Vector2d, kBoxKeypoints> truth;
+    const auto project = [&](const Eigen::Vector3d& p) {
+      return Eigen::Vector2d(st.camera.Project(st.camera_from_world * (st.object_pose * p)) +
+                             Eigen::Vector2d(0.5, 0.5));  // to pixel-corner coordinates
+    };
+    truth[0] = project((lo + hi) / 2);
+    for (int k = 1; k < kBoxKeypoints; ++k) {
+      const int b = k - 1;  // (x, up, front) bits; the mug's up is its +z
+      truth[k] = project({b & 4 ? hi.x() : lo.x(), b & 1 ? hi.y() : lo.y(), b & 2 ? hi.z() : lo.z()});
+    }
+    tracker.Reset();
+    std::vector<ObjectObservation> seen = tracker.Track(r.bgr, 0);
+    detected += !seen.empty();
+    if (seen.empty()) {  // the detector missed it: seed the true box's extent, as a person would
+      double x1 = 1e9, y1 = 1e9, x2 = -1e9, y2 = -1e9;
+      for (const Eigen::Vector2d& p : truth) {
+        x1 = std::min(x1, p.x()), y1 = std::min(y1, p.y()), x2 = std::max(x2, p.x()), y2 = std::max(y2, p.y());
+      }
+      tracker.Reset();
+      tracker.Seed("cup", cv::Rect2d(x1, y1, x2 - x1, y2 - y1));
+      seen = tracker.Track(r.bgr, 0);
+    }
+    if (seen.empty()) continue;
+    ++found;
+    const ObjectObservation& o = seen.front();
+    double best = 1e18;
+    for (int flip = 0; flip < 8; ++flip) {  // x and front mirrored, x and front swapped
+      double sum = 0;
+      for (int k = 1; k < kBoxKeypoints; ++k) {
+        int b = k - 1, x = (b >> 2) & 1, up = (b >> 1) & 1, front = b & 1;
+        if (flip & 1) x ^= 1;
+        if (flip & 2) front ^= 1;
+        if (flip & 4) std::swap(x, front);
+        sum += (o.keypoints_2d[(x << 2 | up << 1 | front) + 1] - truth[k]).norm();
+      }
+      best = std::min(best, sum / 8);
+    }
+    const double diagonal = (truth[1] - truth[8]).norm();
+    centre += (o.keypoints_2d[0] - truth[0]).norm() / diagonal;
+    corners += best / diagonal;
+    size += diagonal;
+  }
+  std::printf("rendered mug, 4 views: %d found (%d by the detector); mean error over the box's "
+              "projected diagonal (%.0f px): centre %.3f, corners %.3f\n",
+              found, detected, found ? size / found : 0.0, found ? centre / found : 0.0,
+              found ? corners / found : 0.0);
+  // Measured: 4 of 4 found (2 by the detector), centre 0.149, corners 0.260
+  // of the diagonal: the models were trained on real photos, not renders.
+  ASSERT_GE(found, 3);
+  EXPECT_LT(centre / found, 0.25);
+  EXPECT_LT(corners / found, 0.4);
 }
 
 }  // namespace

@@ -3,8 +3,6 @@
 #include <fstream>
 #include <map>
 #include <mutex>
-#include <regex>
-#include <sstream>
 #include <utility>
 
 #include "core/clock.h"
@@ -126,18 +124,12 @@ std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& 
                                                    const std::string& models) {
   const std::string palm = PalmModelFile(models);
   const std::filesystem::path loader = hands_dir / kPackedLoader;
-  std::ifstream in(loader);
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string s = text.str();
-  std::smatch m;
-  const std::regex range("/" + std::regex_replace(palm, std::regex("\\."), "\\.") +
-                         R"re(", "start": (\d+), "end": (\d+))re");
-  if (!std::regex_search(s, m, range)) {
+  const auto range = PackedFileRange(loader, palm);
+  if (!range) {
     throw Error("hand_detector_unavailable",
                 palm + " is not listed in the @mediapipe/hands loader", {.file = loader.string()});
   }
-  return {std::stoull(m[1].str()), std::stoull(m[2].str())};
+  return *range;
 }
 
 bool HandModelFilesAvailable(std::string* why, const std::string& models) {

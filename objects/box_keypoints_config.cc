@@ -15,6 +15,7 @@ void CheckConfig(const BoxKeypointsConfig& c, const std::string& section) {
   for (const std::string& name : c.categories) RequireOneOf(section, "categories", name, names);
   RequireInRange(section, "max_objects", c.max_objects, 1, 20);
   RequireInRange(section, "detect_every", c.detect_every, 1, 1000);
+  RequireInRange(section, "idle_detect_every", c.idle_detect_every, 1, 1000);
   RequireInRange(section, "min_detection_score", c.min_detection_score, 0, 1);
   RequireInRange(section, "nms_iou", c.nms_iou, 0, 1);
   RequireInRange(section, "same_object_iou", c.same_object_iou, 0, 1);

@@ -18,10 +18,13 @@ struct BoxKeypointsConfig {
   std::vector<std::string> categories = {"cup", "sneakers", "chair", "camera"};
   int max_objects = 5;  // tracks at once (objectron.py's max_num_objects)
   // MediaPipe runs the detector whenever fewer than max_objects are tracked,
-  // i.e. on nearly every frame. Here it runs on every frame while nothing is
-  // tracked, on the frame a track is lost, and otherwise every
-  // detect_every-th frame (1: every frame).
+  // i.e. on nearly every frame (1 and 1 here). Here it runs on the frame a
+  // track is lost, every idle_detect_every-th frame while nothing is tracked
+  // (an object that comes into view is found that many frames late at
+  // most), and every detect_every-th frame otherwise. The detector is ~23 ms
+  // a run, the box-landmark model ~11 (docs/benchmarks.md).
   int detect_every = 10;
+  int idle_detect_every = 5;
   double min_detection_score = 0.5;  // sigmoid class score of a detection
   double nms_iou = 0.5;              // non-maximum suppression, intersection over union
   // A detection whose box overlaps a tracked object's by more than this
@@ -35,7 +38,7 @@ struct BoxKeypointsConfig {
   int max_side = 640;  // frames are decoded at most this large for the models
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
-                                                detect_every, min_detection_score, nms_iou,
+                                                detect_every, idle_detect_every, min_detection_score, nms_iou,
                                                 same_object_iou, min_presence, crop_scale, max_side)
 
 // Valid ranges; throws Error("bad_config") naming section.key.

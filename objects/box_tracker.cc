@@ -76,7 +76,7 @@ BoxTracker::BoxTracker(BoxKeypointsConfig config, std::string clip)
 void BoxTracker::Reset() {
   tracks_.clear();
   seeds_.clear();
-  since_detection_ = 0;
+  since_detection_ = -1;
 }
 
 bool BoxTracker::Landmarks(const cv::Mat& rgb, const std::string& category, const BoxCrop& crop,
@@ -176,7 +176,8 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
                &kept, &found);
   }
   seeds_.clear();
-  const bool due = kept.empty() || lost || since_detection_ + 1 >= config_.detect_every;
+  const int every = kept.empty() ? config_.idle_detect_every : config_.detect_every;
+  const bool due = lost || since_detection_ < 0 || since_detection_ + 1 >= every;
   if (due && static_cast<int>(kept.size()) < config_.max_objects) {
     since_detection_ = 0;
     DetectNew(rgb, frame, &kept, &found);

@@ -6,9 +6,9 @@
 // 1.5 times, and in the next frame at the same crop made from this frame's
 // keypoints (their extent, turned so that the box's up is the crop's up).
 // A track ends where the presence drops below its threshold. The detector
-// runs while nothing is tracked, on the frame a track is lost, and every
-// detect_every-th frame otherwise (BoxKeypointsConfig); a detection where a
-// track already is is that track.
+// runs on the frame a track is lost, every idle_detect_every-th frame while
+// nothing is tracked and every detect_every-th frame otherwise
+// (BoxKeypointsConfig); a detection where a track already is is that track.
 //
 // Contract: Track() takes frames in order and returns the objects of each,
 // keypoints in pixels of the frame passed in times `scale` (0 at the
@@ -100,7 +100,7 @@ class BoxTracker {
   std::vector<Tracked> tracks_;
   std::vector<std::pair<std::string, cv::Rect2d>> seeds_;  // for the next Track()
   int next_id_ = 0;
-  int since_detection_ = 0;
+  int since_detection_ = -1;  // frames since the detector ran; -1: not yet (it runs first)
   std::vector<float> input_;
 };
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include "core/clock.h"
@@ -90,19 +89,13 @@ fs::path ObjectronDir() { return NpmDir() / "node_modules" / "@mediapipe/objectr
 
 std::pair<std::size_t, std::size_t> PackedAssetRange(const fs::path& dir, const std::string& name) {
   const fs::path loader = dir / kPackedLoader;
-  std::ifstream in(loader);
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string s = text.str();
-  std::smatch m;
-  const std::regex range("/" + std::regex_replace(name, std::regex("\\."), "\\.") +
-                         R"re(", "start": (\d+), "end": (\d+))re");
-  if (!std::regex_search(s, m, range)) {
+  const auto range = filters::PackedFileRange(loader, name);
+  if (!range) {
     throw Error(kObjectDetectorUnavailable,
                 name + " is not listed in the @mediapipe/objectron loader" + kInstall,
                 {.file = loader.string()});
   }
-  return {std::stoull(m[1].str()), std::stoull(m[2].str())};
+  return *range;
 }
 
 bool ObjectronModelFilesAvailable(std::string* why) {

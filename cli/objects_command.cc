@@ -69,14 +69,13 @@ void WriteVideoOverlay(const fs::path& video, const Json& objects, const fs::pat
   writer.Finish();
 }
 
-void RunOne(const fs::path& input, const ObjectsOptions& o, BoxTracker& tracker) {
+void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<SeedBox>& seeds,
+            BoxTracker& tracker) {
   if (!fs::is_regular_file(input)) throw Error("input_missing", "no such file", {.file = input.string()});
   const std::string stem = input.stem().string();
   const bool image = cv::haveImageReader(input.string());
   cv::Mat still;
   DetectedObjects detected;
-  std::vector<SeedBox> seeds;
-  for (const std::string& text : o.seeds) seeds.push_back(ParseSeed(text));
   if (image) {
     still = cv::imread(input.string(), cv::IMREAD_COLOR);
     if (still.empty()) throw Error("image_unreadable", "cannot decode the image", {.file = input.string()});
@@ -128,12 +127,14 @@ void RunObjects(const ObjectsOptions& o) {
                   {.file = input});
     }
   }
+  std::vector<SeedBox> seeds;  // a bad one is refused before any work
+  for (const std::string& text : o.seeds) seeds.push_back(ParseSeed(text));
   fs::create_directories(o.out);
   BoxTracker tracker(o.config, "");
   int failed = 0;
   for (const std::string& input : o.inputs) {
     try {
-      RunOne(input, o, tracker);
+      RunOne(input, o, seeds, tracker);
     } catch (const Error& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       ++failed;

@@ -51,6 +51,8 @@ void AddReviewCommand(CLI::App& app);
 void AddHandCommand(CLI::App& app);
 // doasido hands: the hands stage on files (cli/hands_command.cc).
 void AddHandsCommand(CLI::App& app);
+// doasido objects: the objects' 2D box keypoints on files (cli/objects_command.cc).
+void AddObjectsCommand(CLI::App& app);
 void AddDeployCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 // shard, merge and slurm (cli/shard_command.cc).

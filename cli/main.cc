@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
                          AddQueueCommand, AddWorkerCommand, AddRunCommand,
                          AddRethresholdCommand, AddSynthCommand, AddRetargetCommand,
                          AddReportCommand, AddReviewCommand, AddHandCommand, AddHandsCommand,
+                         AddObjectsCommand,
                          AddDeployCommand, AddDatasetCommand,
                          AddShardCommands};
   for (auto add : commands) add(app);

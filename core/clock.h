@@ -8,4 +8,8 @@ namespace doasido {
 // Seconds since the epoch (CLOCK_REALTIME).
 double Now();
 
+// CPU milliseconds this thread has used (CLOCK_THREAD_CPUTIME_ID): what a
+// model run costs, whatever else the machine runs.
+double ThreadCpuMs();
+
 }  // namespace doasido

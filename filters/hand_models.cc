@@ -1,14 +1,11 @@
 #include "filters/hand_models.h"
 
-#include <time.h>
-
 #include <fstream>
 #include <map>
 #include <mutex>
-#include <regex>
-#include <sstream>
 #include <utility>
 
+#include "core/clock.h"
 #include "core/data_dirs.h"
 #include "core/error.h"
 #include "filters/xnnpack_graph.h"
@@ -19,13 +16,6 @@ namespace {
 
 constexpr const char* kPackedAssets = "hands_solution_packed_assets.data";
 constexpr const char* kPackedLoader = "hands_solution_packed_assets_loader.js";
-
-// CPU time of this thread: what the models cost, whatever else the machine runs.
-double ThreadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 // Output index of the tensor called `name` (the models name them Identity,
 // Identity_1, ...).
@@ -134,18 +124,12 @@ std::pair<std::size_t, std::size_t> PalmModelRange(const std::filesystem::path& 
                                                    const std::string& models) {
   const std::string palm = PalmModelFile(models);
   const std::filesystem::path loader = hands_dir / kPackedLoader;
-  std::ifstream in(loader);
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string s = text.str();
-  std::smatch m;
-  const std::regex range("/" + std::regex_replace(palm, std::regex("\\."), "\\.") +
-                         R"re(", "start": (\d+), "end": (\d+))re");
-  if (!std::regex_search(s, m, range)) {
+  const auto range = PackedFileRange(loader, palm);
+  if (!range) {
     throw Error("hand_detector_unavailable",
                 palm + " is not listed in the @mediapipe/hands loader", {.file = loader.string()});
   }
-  return {std::stoull(m[1].str()), std::stoull(m[2].str())};
+  return *range;
 }
 
 bool HandModelFilesAvailable(std::string* why, const std::string& models) {

@@ -2,6 +2,8 @@
 
 #include <cstring>
 #include <fstream>
+#include <regex>
+#include <sstream>
 #include <set>
 
 #include "core/error.h"
@@ -294,6 +296,19 @@ TfliteModel ReadTfliteModel(const std::filesystem::path& file, std::size_t begin
                 {.file = file.string()});
   }
   return ReadTfliteModel(bytes.data() + begin, end - begin, file.string());
+}
+
+std::optional<std::pair<std::size_t, std::size_t>> PackedFileRange(const std::filesystem::path& loader,
+                                                                   const std::string& name) {
+  std::ifstream in(loader);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string s = text.str();
+  std::smatch m;
+  const std::regex range("/" + std::regex_replace(name, std::regex("\\."), "\\.") +
+                         R"re(", "start": (\d+), "end": (\d+))re");
+  if (!std::regex_search(s, m, range)) return std::nullopt;
+  return std::pair<std::size_t, std::size_t>{std::stoull(m[1].str()), std::stoull(m[2].str())};
 }
 
 }  // namespace doasido::filters

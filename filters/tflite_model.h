@@ -14,7 +14,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace doasido::filters {
@@ -80,6 +82,12 @@ TfliteModel ReadTfliteModel(const std::uint8_t* data, std::size_t size, const st
 // Reads bytes [begin, end) of `file` (end 0 = to the end of the file).
 TfliteModel ReadTfliteModel(const std::filesystem::path& file, std::size_t begin = 0,
                             std::size_t end = 0);
+
+// The byte range [begin, end) of the file `name` packed in a MediaPipe
+// solution's assets, as its loader script `loader` lists it
+// ("/.../name", "start": B, "end": E); nothing when it is not listed.
+std::optional<std::pair<std::size_t, std::size_t>> PackedFileRange(const std::filesystem::path& loader,
+                                                                   const std::string& name);
 
 // IEEE half to float.
 float HalfToFloat(std::uint16_t h);

@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <set>
 
 #include "core/error.h"
 
@@ -228,13 +229,28 @@ void XnnpackGraph::Build() {
   std::map<int, std::size_t> output_index;
   for (std::size_t i = 0; i < m.outputs.size(); ++i) output_index[m.outputs[i]] = i;
   outputs_.resize(m.outputs.size());
+  // A RESHAPE of a concatenation's result into a graph output only renames
+  // its elements (row-major, as the SSD detector's box encodings): the
+  // concatenation writes that graph output itself and the RESHAPE is dropped.
+  std::map<int, int> reshaped;  // concatenation output -> graph output
+  std::set<const TfliteOperator*> dropped;
+  for (const TfliteOperator& r : m.operators) {
+    if (r.op != TfliteOp::kReshape || !output_index.count(r.outputs[0])) continue;
+    for (const TfliteOperator& c : m.operators) {
+      if (c.op == TfliteOp::kConcatenation && c.outputs[0] == r.inputs.at(0)) {
+        reshaped[c.outputs[0]] = r.outputs[0];
+        dropped.insert(&r);
+      }
+    }
+  }
   for (const TfliteOperator& o : m.operators) {
     if (o.op != TfliteOp::kConcatenation) continue;
-    if (!output_index.count(o.outputs[0])) {
+    const int written = reshaped.count(o.outputs[0]) ? reshaped[o.outputs[0]] : o.outputs[0];
+    if (!output_index.count(written)) {
       throw Error("bad_model", "a CONCATENATION that is not a graph output", {.file = m.path});
     }
     auto concat = std::make_unique<Concat>();
-    concat->output = o.outputs[0];
+    concat->output = written;
     const std::vector<int>& shape = m.tensors[o.outputs[0]].shape;
     const int axis = o.axis < 0 ? o.axis + static_cast<int>(shape.size()) : o.axis;
     for (int d = 0; d < axis; ++d) concat->outer *= static_cast<std::size_t>(shape[d]);
@@ -252,7 +268,7 @@ void XnnpackGraph::Build() {
     if (!concatenated) builder.External(m.outputs[i], XNN_VALUE_FLAG_EXTERNAL_OUTPUT);
   }
   for (const TfliteOperator& o : m.operators) {
-    if (o.op != TfliteOp::kConcatenation) builder.Add(o);
+    if (o.op != TfliteOp::kConcatenation && !dropped.count(&o)) builder.Add(o);
   }
   if (xnn_create_runtime_v2(subgraph, nullptr, 0, &runtime_) != xnn_status_success) {
     throw Error("bad_model", "XNNPACK cannot build a runtime for the model", {.file = m.path});

@@ -7,7 +7,8 @@
 // XNNPACK snapshot (2022) needs: MEAN over height and width becomes global
 // average pooling, and CONCATENATION (which it lacks) is done here after
 // the run; it is allowed only where its result is a graph output, as in the
-// palm detector's two heads.
+// palm detector's two heads, or is reshaped into one (a RESHAPE only
+// renames elements: the Objectron detector's box encodings).
 //
 // Contract: the constructor throws Error("bad_model") naming the model file
 // and the operator when the graph cannot be built; Run() throws

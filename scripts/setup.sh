@@ -37,11 +37,12 @@ PACKAGES=(
 # cmake/Dependencies.cmake), and hyparquet, the independent Parquet reader
 # the tests read those files back with; MediaPipe Hands' models and the
 # TFLite WebAssembly runtime that runs them for the learned hand detector
-# (filters/hand_landmarker.h; tfjs-core at the version tfjs-tflite asks for).
+# (filters/hand_landmarker.h; tfjs-core at the version tfjs-tflite asks for);
+# MediaPipe Objectron's models for the objects stage (objects/objectron_models.h).
 # Nothing is fetched at build or run time.
 NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1 hyparquet@1.31.5
   @mediapipe/hands@0.4.1675469240 @tensorflow/tfjs-tflite@0.0.1-alpha.10
-  @tensorflow/tfjs-core@4.9.0 @tensorflow/tfjs-backend-cpu@4.9.0)
+  @tensorflow/tfjs-core@4.9.0 @tensorflow/tfjs-backend-cpu@4.9.0 @mediapipe/objectron@0.4.1675468480)
 install_npm() {
   local dir=${DOASIDO_NPM_DIR:-$HOME/.cache/doasido/npm}
   local todo=()

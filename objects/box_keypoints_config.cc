@@ -1,0 +1,27 @@
+#include "objects/box_keypoints_config.h"
+
+#include "core/config_check.h"
+#include "objects/objectron_models.h"
+
+namespace doasido::objects {
+
+void CheckConfig(const BoxKeypointsConfig& c, const std::string& section) {
+  std::vector<std::string> names;
+  for (const ObjectCategory& category : ObjectCategories()) names.push_back(category.name);
+  if (c.categories.empty()) {
+    throw Error("bad_config", section + ".categories must name at least one category",
+                {.field = section + ".categories"});
+  }
+  for (const std::string& name : c.categories) RequireOneOf(section, "categories", name, names);
+  RequireInRange(section, "max_objects", c.max_objects, 1, 20);
+  RequireInRange(section, "detect_every", c.detect_every, 1, 1000);
+  RequireInRange(section, "idle_detect_every", c.idle_detect_every, 1, 1000);
+  RequireInRange(section, "min_detection_score", c.min_detection_score, 0, 1);
+  RequireInRange(section, "nms_iou", c.nms_iou, 0, 1);
+  RequireInRange(section, "same_object_iou", c.same_object_iou, 0, 1);
+  RequireInRange(section, "min_presence", c.min_presence, 0, 1);
+  RequireInRange(section, "crop_scale", c.crop_scale, 1, 4);
+  RequireInRange(section, "max_side", c.max_side, 128, 4096);
+}
+
+}  // namespace doasido::objects

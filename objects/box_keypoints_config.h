@@ -1,0 +1,47 @@
+// How the objects stage finds the 2D box keypoints (objects/box_tracker.h):
+// which Objectron categories run, how often the 2D detector runs, and the
+// thresholds of MediaPipe's Objectron graph (objectron_cpu.pbtxt,
+// object_detection_oid_v4_cpu.pbtxt, box_landmark_cpu.pbtxt in
+// google/mediapipe's modules/objectron), its published defaults.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+
+namespace doasido::objects {
+
+struct BoxKeypointsConfig {
+  // Box-landmark models to run, by category (objects/objectron_models.h):
+  // a detection of another category's labels is ignored.
+  std::vector<std::string> categories = {"cup", "sneakers", "chair", "camera"};
+  int max_objects = 5;  // tracks at once (objectron.py's max_num_objects)
+  // MediaPipe runs the detector whenever fewer than max_objects are tracked,
+  // i.e. on nearly every frame (1 and 1 here). Here it runs on the frame a
+  // track is lost, every idle_detect_every-th frame while nothing is tracked
+  // (an object that comes into view is found that many frames late at
+  // most), and every detect_every-th frame otherwise. The detector is ~23 ms
+  // a run, the box-landmark model ~11 (docs/benchmarks.md).
+  int detect_every = 10;
+  int idle_detect_every = 5;
+  double min_detection_score = 0.5;  // sigmoid class score of a detection
+  double nms_iou = 0.5;              // non-maximum suppression, intersection over union
+  // A detection whose box overlaps a tracked object's by more than this
+  // (IoU) is that object (the graph's association threshold).
+  double same_object_iou = 0.2;
+  // Presence below this ends a track (box_landmark_cpu.pbtxt's threshold).
+  double min_presence = 0.99;
+  // The landmark crop: the box (detected, or the last keypoints' extent)
+  // enlarged this much and squared on its long side.
+  double crop_scale = 1.5;
+  int max_side = 640;  // frames are decoded at most this large for the models
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
+                                                detect_every, idle_detect_every, min_detection_score, nms_iou,
+                                                same_object_iou, min_presence, crop_scale, max_side)
+
+// Valid ranges; throws Error("bad_config") naming section.key.
+void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);
+
+}  // namespace doasido::objects

@@ -1,0 +1,194 @@
+#include "objects/box_tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace doasido::objects {
+
+namespace {
+
+// Corners 1-8 whose index - 1 has bit 1 set are on the top face.
+bool TopCorner(int k) { return ((k - 1) & 2) != 0; }
+
+// Two tracks whose keypoint extents overlap this much are one object.
+constexpr double kSameTrackIou = 0.5;
+// A box's up axis shorter than this fraction of its extent gives no angle.
+constexpr double kMinUpAxis = 0.1;
+
+cv::Rect2d Extent(const std::array<Eigen::Vector2d, kBoxKeypoints>& p) {
+  double x1 = INFINITY, y1 = INFINITY, x2 = -INFINITY, y2 = -INFINITY;
+  for (const Eigen::Vector2d& q : p) {
+    x1 = std::min(x1, q.x());
+    y1 = std::min(y1, q.y());
+    x2 = std::max(x2, q.x());
+    y2 = std::max(y2, q.y());
+  }
+  return {cv::Point2d(x1, y1), cv::Point2d(x2, y2)};
+}
+
+}  // namespace
+
+BoxCrop CropFromBox(double cx, double cy, double w, double h, double rotation, double scale) {
+  return {.cx = cx, .cy = cy, .side = std::max(w, h) * scale, .rotation = rotation};
+}
+
+BoxCrop CropFromKeypoints(const std::array<Eigen::Vector2d, kBoxKeypoints>& keypoints,
+                          double scale) {
+  Eigen::Vector2d top = Eigen::Vector2d::Zero(), bottom = Eigen::Vector2d::Zero();
+  for (int k = 1; k < kBoxKeypoints; ++k) (TopCorner(k) ? top : bottom) += keypoints[k] / 4.0;
+  const Eigen::Vector2d up = top - bottom;
+  const cv::Rect2d e = Extent(keypoints);
+  const double rotation =
+      up.norm() >= kMinUpAxis * std::max(e.width, e.height) ? std::atan2(up.x(), -up.y()) : 0.0;
+  return CropFromBox(e.x + e.width / 2, e.y + e.height / 2, e.width, e.height, rotation, scale);
+}
+
+cv::Matx23d CropToFrame(const BoxCrop& crop) {
+  const double c = std::cos(crop.rotation), s = std::sin(crop.rotation);
+  const double k = crop.side / kBoxInputSize;
+  return {k * c, -k * s, crop.cx - crop.side / 2 * (c - s),
+          k * s, k * c,  crop.cy - crop.side / 2 * (s + c)};
+}
+
+void LandmarkInput(const cv::Mat& rgb, const BoxCrop& crop, std::vector<float>* out) {
+  // warpAffine works on pixel indices (centres at integers); the map is on
+  // continuous coordinates (centres at +0.5).
+  const cv::Matx23d m = CropToFrame(crop);
+  const cv::Matx23d idx(m(0, 0), m(0, 1), m(0, 2) + 0.5 * (m(0, 0) + m(0, 1)) - 0.5,
+                        m(1, 0), m(1, 1), m(1, 2) + 0.5 * (m(1, 0) + m(1, 1)) - 0.5);
+  cv::Mat patch;
+  cv::warpAffine(rgb, patch, cv::Mat(idx), cv::Size(kBoxInputSize, kBoxInputSize),
+                 cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+  out->resize(static_cast<std::size_t>(kBoxInputSize) * kBoxInputSize * 3);
+  cv::Mat as_float(kBoxInputSize, kBoxInputSize, CV_32FC3, out->data());
+  patch.convertTo(as_float, CV_32FC3, 1.0 / 255.0);
+}
+
+BoxTracker::BoxTracker(BoxKeypointsConfig config, std::string clip)
+    : config_(std::move(config)), clip_(std::move(clip)),
+      models_(std::make_unique<ObjectronModels>(config_.categories, clip_)) {}
+
+void BoxTracker::Reset() {
+  tracks_.clear();
+  seeds_.clear();
+  since_detection_ = -1;
+}
+
+bool BoxTracker::Landmarks(const cv::Mat& rgb, const std::string& category, const BoxCrop& crop,
+                           ObjectObservation* seen) {
+  LandmarkInput(rgb, crop, &input_);
+  BoxLandmarkOutput out;
+  models_->Landmarks(category, input_.data(), &out);
+  if (!(out.presence >= config_.min_presence)) return false;
+  const cv::Matx23d m = CropToFrame(crop);
+  for (int k = 0; k < kBoxKeypoints; ++k) {
+    const double u = out.keypoints[2 * k], v = out.keypoints[2 * k + 1];
+    seen->keypoints_2d[k] = {m(0, 0) * u + m(0, 1) * v + m(0, 2), m(1, 0) * u + m(1, 1) * v + m(1, 2)};
+  }
+  seen->category = category;
+  seen->score = out.presence;
+  return true;
+}
+
+void BoxTracker::DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
+                           std::vector<ObjectObservation>* found) {
+  std::vector<float> input;
+  DetectorInput(rgb, &input);
+  DetectorOutput out;
+  models_->Detect(input.data(), &out);
+  const std::vector<DetectedBox> boxes =
+      DecodeDetections(out, models_->labels(), config_.categories, config_.min_detection_score,
+                       config_.nms_iou, config_.max_objects);
+  for (const DetectedBox& b : boxes) {
+    const cv::Rect2d box(b.box.x * rgb.cols, b.box.y * rgb.rows, b.box.width * rgb.cols,
+                         b.box.height * rgb.rows);
+    StartTrack(rgb, frame, b.category, box, kept, found);
+  }
+}
+
+void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& category,
+                            const cv::Rect2d& box, std::vector<Tracked>* kept,
+                            std::vector<ObjectObservation>* found) {
+  if (static_cast<int>(kept->size()) >= config_.max_objects) return;
+  for (const Tracked& t : *kept) {
+    if (BoxIoU(t.extent, box) > config_.same_object_iou) return;
+  }
+  const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
+                                   box.height, 0.0, config_.crop_scale);
+  ObjectObservation seen{.frame = frame};
+  if (!Landmarks(rgb, category, crop, &seen)) return;
+  seen.track = next_id_++;
+  kept->push_back({seen.track, category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
+                   Extent(seen.keypoints_2d)});
+  found->push_back(seen);
+}
+
+void BoxTracker::Seed(const std::string& category, const cv::Rect2d& box) {
+  CategoryNamed(category);
+  if (std::find(config_.categories.begin(), config_.categories.end(), category) ==
+      config_.categories.end()) {
+    throw Error("bad_arguments", "a seed of category " + category + ", whose model is not loaded",
+                {.clip = clip_, .field = "categories"});
+  }
+  seeds_.emplace_back(category, box);
+}
+
+std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, double scale) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) {
+    throw Error(kObjectDetectorFailed, "the object models need a BGR frame of 8-bit pixels",
+                {.clip = clip_});
+  }
+  const double shrink =
+      std::min(1.0, static_cast<double>(config_.max_side) / std::max(bgr.cols, bgr.rows));
+  cv::Mat rgb;
+  if (shrink < 1.0) {
+    cv::Mat small;
+    cv::resize(bgr, small, {}, shrink, shrink, cv::INTER_AREA);
+    cv::cvtColor(small, rgb, cv::COLOR_BGR2RGB);
+  } else {
+    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  }
+  std::vector<ObjectObservation> found;
+  std::vector<Tracked> kept;
+  bool lost = false;
+  for (const Tracked& t : tracks_) {
+    ObjectObservation seen{.frame = frame, .track = t.id};
+    if (!Landmarks(rgb, t.category, t.next, &seen)) {
+      lost = true;
+      continue;
+    }
+    const cv::Rect2d extent = Extent(seen.keypoints_2d);
+    bool duplicate = false;  // two tracks drifted onto one object: the older stays
+    for (const Tracked& k : kept) duplicate |= BoxIoU(k.extent, extent) > kSameTrackIou;
+    if (duplicate) continue;
+    kept.push_back({t.id, t.category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale), extent});
+    found.push_back(seen);
+  }
+  const double to_input = scale / shrink;
+  for (const auto& [category, box] : seeds_) {
+    StartTrack(rgb, frame, category,
+               cv::Rect2d(box.x / to_input, box.y / to_input, box.width / to_input, box.height / to_input),
+               &kept, &found);
+  }
+  seeds_.clear();
+  const int every = kept.empty() ? config_.idle_detect_every : config_.detect_every;
+  const bool due = lost || since_detection_ < 0 || since_detection_ + 1 >= every;
+  if (due && static_cast<int>(kept.size()) < config_.max_objects) {
+    since_detection_ = 0;
+    DetectNew(rgb, frame, &kept, &found);
+  } else {
+    ++since_detection_;
+  }
+  tracks_ = std::move(kept);
+  for (ObjectObservation& o : found) {
+    for (Eigen::Vector2d& p : o.keypoints_2d) p *= to_input;
+  }
+  return found;
+}
+
+}  // namespace doasido::objects

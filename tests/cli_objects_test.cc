@@ -1,0 +1,67 @@
+// `doasido objects` on files: 02_cups' first frames as a short clip and one
+// of them as an image, the middle cup seeded where the hand-made labels put
+// it: one JSON per input in the documented schema, the cup's centre on the
+// labelled one, an overlay read back by OpenCV; a bad seed refused by name.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "core/config.h"
+#include "objects/objectron_models.h"
+#include "test_util.h"
+#include "video/mp4_writer.h"
+
+namespace doasido {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RunDoasido;
+
+TEST(CliObjects, WritesTheSeededCupsKeypointsForAClipAndAnImage) {
+  std::string why;
+  if (!objects::ObjectronModelFilesAvailable(&why)) GTEST_SKIP() << why;
+  testing::TempDir tmp;
+  cv::VideoCapture in((testing::SharedData() / "videos/02_cups.mp4").string());
+  Mp4Writer out(tmp / "cups.mp4", 1280, 720, 30);
+  cv::Mat frame;
+  for (int i = 0; i < 8 && in.read(frame); ++i) {
+    out.Write(frame);
+    if (i == 0) cv::imwrite((tmp / "still.png").string(), frame);
+  }
+  out.Finish();
+  // bench/object_labels/02_cups.json, frame 0: the middle cup's rims at
+  // (656, 307) and (654, 523), its centre (655, 415).
+  const testing::CommandResult r =
+      RunDoasido({"objects", (tmp / "cups.mp4").string(), (tmp / "still.png").string(), "--out",
+                  (tmp / "out").string(), "--categories", "cup", "--seed", "0:570,290,170,255",
+                  "--overlay"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const auto& [stem, frames] : {std::pair{"cups", 8}, std::pair{"still", 1}}) {
+    const Json j = Json::parse(testing::ReadFile(tmp / "out" / (std::string(stem) + ".json")));
+    EXPECT_EQ(j.at("width"), 1280);
+    EXPECT_EQ(j.at("height"), 720);
+    ASSERT_EQ(j.at("frames").size(), static_cast<size_t>(frames)) << stem;
+    const Json& first = j.at("frames").at(0);
+    EXPECT_EQ(first.at("frame"), 0);
+    ASSERT_EQ(first.at("objects").size(), 1u) << stem;
+    const Json& cup = first.at("objects").at(0);
+    EXPECT_EQ(cup.at("category"), "cup");
+    EXPECT_GE(cup.at("score").get<double>(), 0.99);
+    ASSERT_EQ(cup.at("keypoints_2d").size(), 9u);
+    EXPECT_NEAR(cup.at("keypoints_2d").at(0).at(0).get<double>(), 655, 25) << stem;
+    EXPECT_NEAR(cup.at("keypoints_2d").at(0).at(1).get<double>(), 415, 25) << stem;
+  }
+  const cv::Mat overlay = cv::imread((tmp / "out/still.overlay.png").string());
+  EXPECT_EQ(overlay.cols, 1280);
+  EXPECT_GT(cv::VideoCapture((tmp / "out/cups.overlay.mp4").string()).get(cv::CAP_PROP_FRAME_COUNT), 0);
+
+  const testing::CommandResult bad = RunDoasido(
+      {"objects", (tmp / "still.png").string(), "--out", (tmp / "bad").string(), "--seed", "0:1,2,3"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--seed"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(tmp / "bad/still.json"));
+}
+
+}  // namespace
+}  // namespace doasido

@@ -52,10 +52,10 @@ double MedianOf(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// The track's proportions, geometric mean 1: per axis the median of its
-// frames' lifted extents (the thin-slab frames only when every frame is
-// one); a round object's diameter is the mean of its two widths, or a slab's
-// wider one (seen from the side, the one width it shows).
+// The track's box proportions, geometric mean 1: per axis the median of
+// its frames' lifted extents (the thin-slab frames only when every frame is
+// one). A round object's thin slab, seen from the side, shows its diameter
+// as its wider width: both widths are taken as that one.
 Vec3 TrackShape(const std::vector<LiftedBox>& lifts, bool symmetric) {
   bool any_sound = false;
   for (const LiftedBox& l : lifts) any_sound |= !l.degenerate;
@@ -63,12 +63,20 @@ Vec3 TrackShape(const std::vector<LiftedBox>& lifts, bool symmetric) {
   for (const LiftedBox& l : lifts) {
     if (any_sound && l.degenerate) continue;
     Vec3 s = l.size;
-    if (symmetric) s.x() = s.z() = l.degenerate ? std::max(s.x(), s.z()) : (s.x() + s.z()) / 2;
+    if (symmetric && l.degenerate) s.x() = s.z() = std::max(s.x(), s.z());
     for (int k = 0; k < 3; ++k) logs[k].push_back(std::log(s[k]));
   }
   Vec3 shape;
   for (int k = 0; k < 3; ++k) shape[k] = std::exp(MedianOf(logs[k]));
   return shape / CharacteristicSize(shape);
+}
+
+// The object's own proportions in the box's units: a round object's
+// diameter is the mean of the box's two widths (a handle widens one).
+Vec3 ObjectShape(const Vec3& box, bool symmetric) {
+  if (!symmetric) return box;
+  const double diameter = (box.x() + box.z()) / 2;
+  return {diameter, box.y(), diameter};
 }
 
 // Poses interpolated across a gap: the centre linearly, the rotation by slerp.
@@ -129,7 +137,10 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
   if (lifted.empty()) return out;
   std::vector<LiftedBox> lifts;
   for (const Lifted& l : lifted) lifts.push_back(l.lift);
+  // The box the keypoints show is fitted; the object (a cylinder for round
+  // ones) is what the size and the mesh describe.
   const Vec3 shape = TrackShape(lifts, out.symmetric);
+  const Vec3 object_shape = ObjectShape(shape, out.symmetric);
   for (Lifted& l : lifted) {
     out.frames[l.frame].degenerate = l.lift.degenerate;
     const bool side_view = out.symmetric && l.lift.degenerate;
@@ -145,12 +156,12 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
     units.push_back(lifted[i].unit);
     CollectContacts(hands, K, lifted[i], static_cast<int>(i), contacts, out.contact_frames);
   }
-  const double prior_scale = CharacteristicSize(prior.size_m);
+  const double prior_scale = CharacteristicSize(prior.size_m) / CharacteristicSize(object_shape);
   double scale = prior_scale;
   out.scale_source = kScaleFromPrior;
   if (out.contact_frames >= config.min_contact_frames) {
     const ContactScale fit = FitContactScale(
-        units, shape, out.symmetric, contacts, prior_scale,
+        units, object_shape, out.symmetric, contacts, prior_scale,
         {.fingertip_offset_m = config.fingertip_offset_m, .robust_m = config.contact_robust_m});
     out.contact_residual_m = fit.residual_median_m;
     if (fit.residual_median_m <= config.max_contact_residual_m) {
@@ -159,7 +170,7 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
     }
   }
   out.scale_assumed = out.scale_source == kScaleFromPrior;
-  out.size_m = shape * scale;
+  out.size_m = object_shape * scale;
   // Runs of frames without a gap over max_gap_frames, each fitted once.
   size_t begin = 0;
   while (begin < lifted.size()) {
@@ -184,7 +195,7 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
       }
     }
     const std::vector<Pose> poses =
-        FitTrackPoses(frames, out.size_m, K, hands.fps > 0 ? hands.fps : 30.0, config.fit);
+        FitTrackPoses(frames, shape * scale, K, hands.fps > 0 ? hands.fps : 30.0, config.fit);
     for (int k = 0; k <= last - first; ++k) {
       ObjectFrame& f = out.frames[first + k];
       f.posed = true;

@@ -171,9 +171,10 @@ TEST(ObjectsStage, ACylinderHeldByTheHandGetsItsSizeAndPoseFromTheFingertips) {
   EXPECT_EQ(result.measurements[stages::kMeasureScaleSource], kScaleFromHand);
   EXPECT_FALSE(result.measurements[stages::kMeasureScaleAssumed].get<bool>());
   // Measured: see docs/objects.md "Measured"; the bounds hold them with margin.
-  std::printf("cylinder: size %.4f, centre p90 %.4f m, axis p90 %.3f deg, contact frames %d\n",
+  std::printf("cylinder: size %.4f, centre p90 %.4f m, axis p90 %.3f deg, contact frames %d, %.3f s\n",
               e.size_rel, e.centre_p90_m, e.axis_p90_deg,
-              result.measurements[stages::kMeasureContactFrames].get<int>());
+              result.measurements[stages::kMeasureContactFrames].get<int>(),
+              result.measurements["seconds"].get<double>());
   EXPECT_LT(e.size_rel, 0.05);
   EXPECT_LT(e.centre_p90_m, 0.01);
   EXPECT_LT(e.axis_p90_deg, 1.0);
@@ -187,10 +188,11 @@ TEST(ObjectsStage, TheMugGoesThroughTheBundleStageIntoRecon) {
   std::printf("mug: size %.4f, centre p90 %.4f m, axis p90 %.3f deg, scale %s\n", e.size_rel,
               e.centre_p90_m, e.axis_p90_deg,
               result.measurements[stages::kMeasureScaleSource].get<std::string>().c_str());
-  // Measured 2.0 cm and 4.1 degrees: the handle widens the box on one side,
-  // and the square cylinder box turns to fit its corners.
-  EXPECT_LT(e.centre_p90_m, 0.03);
-  EXPECT_LT(e.axis_p90_deg, 6.0);
+  // Measured 1.7 cm and 0.09 degrees: the handle widens the box on one
+  // side, so the cylinder (the mean width across) is wider than the body the
+  // fingertips touch, and its size, hence its depth, comes out 2.6 % off.
+  EXPECT_LT(e.centre_p90_m, 0.025);
+  EXPECT_LT(e.axis_p90_deg, 1.0);
 
   const StageResult bundle = stages::BundleStage().Run(Context(root, "bundle"));
   EXPECT_EQ(bundle.measurements["source"], recon::kBundleFromHands);
@@ -211,7 +213,8 @@ TEST(ObjectsStage, TheMugGoesThroughTheBundleStageIntoRecon) {
     const double want = (scene.box[t].t - scene.wrist[t]).norm();
     error.push_back(std::abs(got - want));
   }
-  EXPECT_LT(P90(error), 0.03);  // measured 2.0 cm, the centre's error above
+  std::printf("mug through recon: wrist to object centre, error p90 %.4f m\n", P90(error));
+  EXPECT_LT(P90(error), 0.025);  // the centre's error above
 }
 
 TEST(ObjectsStage, NoKnownObjectLeavesTheClipHandOnly) {

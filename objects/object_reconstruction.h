@@ -2,9 +2,10 @@
 //   1. observations grouped by track (one category each; presence under
 //      min_score dropped; unknown categories and short tracks left out);
 //   2. each frame lifted up to scale (objects/box_lifting.h); the track's
-//      proportions are the median of its frames' (a round object's two
-//      widths one diameter); frames whose box is a thin slab are marked
-//      degenerate (for a round object its axis still counts: SideViewPose);
+//      box proportions are the median of its frames' (a round object's
+//      cylinder takes the mean of the box's two widths as its diameter);
+//      frames whose box is a thin slab are marked degenerate (for a round
+//      object its axis still counts: SideViewPose);
 //   3. every frame's pose for the track's proportions, up to scale;
 //   4. the scale (objects/object_scale.h): from the fingertips of the hands
 //      stage's metric hands that project inside the box on at least

@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 #include "core/error.h"
+#include "objects/ceres_geometry.h"
 
 namespace doasido::objects {
 namespace {
@@ -25,16 +24,6 @@ Mat3 NearestRotation(const Mat3& A) {
   Mat3 D = Mat3::Identity();
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
   return svd.matrixU() * D * svd.matrixV().transpose();
-}
-
-template <typename T>
-void ProjectPoint(const T* aa, const T* t, const Vec3& x, const Mat3& K, T* uv) {
-  const T p[3] = {T(x.x()), T(x.y()), T(x.z())};
-  T q[3];
-  ceres::AngleAxisRotatePoint(aa, p, q);
-  for (int k = 0; k < 3; ++k) q[k] += t[k];
-  uv[0] = T(K(0, 0)) * q[0] / q[2] + T(K(0, 1)) * q[1] / q[2] + T(K(0, 2));
-  uv[1] = T(K(1, 1)) * q[1] / q[2] + T(K(1, 2));
 }
 
 // A keypoint of a box whose extents are exp(a), exp(b), exp(-a-b) (the
@@ -57,44 +46,6 @@ struct FreeBoxResidual {
   Vec2 uv;
   Mat3 K;
 };
-
-// A known point of the box frame against its keypoint.
-struct FixedPointResidual {
-  template <typename T>
-  bool operator()(const T* aa, const T* t, T* r) const {
-    T uv_hat[2];
-    ProjectPoint(aa, t, x, K, uv_hat);
-    r[0] = uv_hat[0] - T(uv.x());
-    r[1] = uv_hat[1] - T(uv.y());
-    return true;
-  }
-  Vec3 x;
-  Vec2 uv;
-  Mat3 K;
-};
-
-Vec3 AngleAxis(const Mat3& R) {
-  Vec3 aa;
-  ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(R.data()), aa.data());
-  return aa;
-}
-
-Mat3 FromAngleAxis(const Vec3& aa) {
-  Mat3 R;
-  ceres::AngleAxisToRotationMatrix(aa.data(), ceres::ColumnMajorAdapter3x3(R.data()));
-  return R;
-}
-
-void Solve(ceres::Problem& problem) {
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 100;
-  options.function_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-16;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-}
 
 double RmsPx(const BoxKeypoints& keypoints, const Pose& pose, const Vec3& size, const Mat3& K) {
   const BoxKeypoints projected = ProjectBox(pose, size, K);
@@ -147,7 +98,7 @@ LiftedBox LiftBox(const BoxKeypoints& keypoints, const Mat3& K, double degenerat
   // Start the refinement from the affine box's nearest rotation and extents.
   Mat3 unit_axes = axes;
   for (int j = 0; j < 3; ++j) unit_axes.col(j) /= half[j];
-  Vec3 aa = AngleAxis(NearestRotation(unit_axes));
+  Vec3 aa = AngleAxisOf(NearestRotation(unit_axes));
   const double g = std::cbrt(8 * half.prod());
   Vec3 t = c0 / g;
   const Vec3 log_size = (2 * half / g).array().log();
@@ -158,9 +109,9 @@ LiftedBox LiftBox(const BoxKeypoints& keypoints, const Mat3& K, double degenerat
                                  new FreeBoxResidual(i, keypoints[i], K)),
                              nullptr, aa.data(), t.data(), ls);
   }
-  Solve(problem);
+  SolveToConvergence(problem);
   LiftedBox out;
-  out.R = FromAngleAxis(aa);
+  out.R = RotationOf(aa);
   out.t = t;
   out.size = Vec3(std::exp(ls[0]), std::exp(ls[1]), std::exp(-ls[0] - ls[1]));
   out.rms_px = RmsPx(keypoints, {Quat(out.R), out.t}, out.size, K);
@@ -176,13 +127,11 @@ Vec2 BottomFaceCentre(const BoxKeypoints& k) { return (k[1] + k[2] + k[5] + k[6]
 
 Pose PoseForShape(const BoxKeypoints& keypoints, const Mat3& K, const Vec3& size, const Pose& start,
                   bool axis_only) {
-  Vec3 aa = AngleAxis(start.R());
+  Vec3 aa = AngleAxisOf(start.R());
   Vec3 t = start.t;
   ceres::Problem problem;
   auto add = [&](const Vec3& x, const Vec2& uv) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedPointResidual, 2, 3, 3>(
-                                 new FixedPointResidual{x, uv, K}),
-                             nullptr, aa.data(), t.data());
+    problem.AddResidualBlock(PointResidual::Create(x, uv, K), nullptr, aa.data(), t.data());
   };
   if (axis_only) {
     add(Vec3::Zero(), keypoints[0]);
@@ -191,8 +140,8 @@ Pose PoseForShape(const BoxKeypoints& keypoints, const Mat3& K, const Vec3& size
   } else {
     for (int i = 0; i < kBoxKeypoints; ++i) add(BoxCorner(i).cwiseProduct(size) / 2, keypoints[i]);
   }
-  Solve(problem);
-  return {Quat(FromAngleAxis(aa)), t};
+  SolveToConvergence(problem);
+  return {Quat(RotationOf(aa)), t};
 }
 
 Pose SideViewPose(const BoxKeypoints& keypoints, const Mat3& K, double height) {

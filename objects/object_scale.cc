@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <ceres/ceres.h>
+#include "objects/ceres_geometry.h"
 
 namespace doasido::objects {
 namespace {
@@ -98,13 +98,7 @@ ContactScale FitContactScale(const std::vector<UnitPose>& poses, const Vec3& sha
                                  p.R, p.t, c.fingertip, shape, cylinder, config.fingertip_offset_m}),
                              new ceres::CauchyLoss(config.robust_m), &log_scale);
   }
-  ceres::Solver::Options options;
-  options.max_num_iterations = 100;
-  options.function_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-16;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  SolveToConvergence(problem);
   ContactScale out;
   out.scale = std::exp(log_scale);
   std::vector<double> residuals;

@@ -2,28 +2,10 @@
 
 #include <algorithm>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
+#include "objects/ceres_geometry.h"
 
 namespace doasido::objects {
 namespace {
-
-struct KeypointResidual {
-  template <typename T>
-  bool operator()(const T* aa, const T* t, T* r) const {
-    const T p[3] = {T(x.x()), T(x.y()), T(x.z())};
-    T q[3];
-    ceres::AngleAxisRotatePoint(aa, p, q);
-    for (int k = 0; k < 3; ++k) q[k] += t[k];
-    r[0] = (T(K(0, 0)) * q[0] / q[2] + T(K(0, 1)) * q[1] / q[2] + T(K(0, 2)) - T(uv.x())) / T(sigma);
-    r[1] = (T(K(1, 1)) * q[1] / q[2] + T(K(1, 2)) - T(uv.y())) / T(sigma);
-    return true;
-  }
-  Vec3 x;
-  Vec2 uv;
-  Mat3 K;
-  double sigma;
-};
 
 struct AccelerationResidual {
   template <typename T>
@@ -62,12 +44,6 @@ struct AngularAccelerationResidual {
   double weight;
 };
 
-Vec3 AngleAxisOf(const Mat3& R) {
-  Vec3 aa;
-  ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(R.data()), aa.data());
-  return aa;
-}
-
 // The keypoints' image size: their bounding box's diagonal, pixels.
 double ImageSize(const BoxKeypoints& k) {
   Vec2 lo = k[0], hi = k[0];
@@ -96,8 +72,7 @@ std::vector<Pose> FitTrackPoses(const std::vector<TrackFrame>& frames, const Vec
     const BoxKeypoints& kp = *frames[k].keypoints;
     const double sigma = config.reprojection_sigma * ImageSize(kp);
     auto add = [&](const Vec3& x, const Vec2& uv) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KeypointResidual, 2, 3, 3>(
-                                   new KeypointResidual{x, uv, K, sigma}),
+      problem.AddResidualBlock(PointResidual::Create(x, uv, K, sigma),
                                new ceres::HuberLoss(config.huber), aa[k].data(), t[k].data());
     };
     if (frames[k].axis_only) {
@@ -126,9 +101,7 @@ std::vector<Pose> FitTrackPoses(const std::vector<TrackFrame>& frames, const Vec
   ceres::Solve(options, &problem, &summary);
   std::vector<Pose> out(n);
   for (int k = 0; k < n; ++k) {
-    Mat3 R;
-    ceres::AngleAxisToRotationMatrix(aa[k].data(), ceres::ColumnMajorAdapter3x3(R.data()));
-    out[k] = {Quat(R), t[k]};
+    out[k] = {Quat(RotationOf(aa[k])), t[k]};
   }
   return out;
 }

@@ -23,6 +23,14 @@ namespace doasido::objects {
 
 using BoxKeypoints = std::array<Vec2, kBoxKeypoints>;
 
+// Corner i (0 = the centre) of the box with half-extents 1, in its own frame
+// (objects/box_keypoints.h: i-1 in binary is (right, top, front)).
+inline Vec3 BoxCorner(int i) {
+  if (i == 0) return Vec3::Zero();
+  const int b = i - 1;
+  return {(b & 4) ? 1.0 : -1.0, (b & 2) ? 1.0 : -1.0, (b & 1) ? 1.0 : -1.0};
+}
+
 struct LiftedBox {
   Mat3 R = Mat3::Identity();  // box frame -> camera
   Vec3 t = Vec3::Zero();      // the box centre, camera frame, in units of size's geometric mean

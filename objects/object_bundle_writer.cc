@@ -79,7 +79,7 @@ void WriteText(const std::filesystem::path& path, const std::string& text) {
 
 }  // namespace
 
-Json ObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame) {
+Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame) {
   Json tracks = Json::array();
   for (const ObjectTrack& t : result.tracks) tracks.push_back(TrackSummary(t));
   const int T = result.tracks.empty() ? 0 : static_cast<int>(result.tracks[0].frames.size());
@@ -124,7 +124,7 @@ void WriteObjectBundle(const ObjectsResult& result, const recon::ClipBundle& han
                        const std::filesystem::path& dir, int cylinder_segments) {
   std::filesystem::create_directories(dir);
   if (result.chosen >= 0) recon::WriteBundle(ObjectBundle(result, hands, cylinder_segments), dir);
-  WriteText(dir / kObjectsFile, ObjectsJson(result, hands.K.empty() ? Mat3::Identity() : hands.KAt(0),
+  WriteText(dir / kObjectsFile, LiftedObjectsJson(result, hands.K.empty() ? Mat3::Identity() : hands.KAt(0),
                                             first_frame)
                                     .dump() +
                                     "\n");

@@ -11,7 +11,7 @@
 //                      track's first pose hold it, frames after its last
 //                      (and between runs) hold the last one: objects.json
 //                      says which frames were seen, filled or held
-//   objects.json       ObjectsJson below
+//   objects.json       LiftedObjectsJson below
 // With no track (no known object) only objects.json is written.
 #pragma once
 
@@ -35,7 +35,7 @@ namespace doasido::objects {
 //       "center_camera" [x, y, z], "rotation_camera" [[3x3]], "size_m",
 //       "scale_assumed", "observed", "filled", "degenerate"}]}]}
 // A frame lists each track posed or observed on it.
-Json ObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame);
+Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame);
 
 // The bundle of the chosen track (requires result.chosen >= 0); `hands`
 // gives the size, frame count, fps and K.

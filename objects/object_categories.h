@@ -13,7 +13,7 @@
 namespace doasido::objects {
 
 inline constexpr const char* kCategoryCup = "cup";  // coffee cups and mugs (one model)
-inline constexpr const char* kCategoryShoe = "shoe";
+inline constexpr const char* kCategorySneakers = "sneakers";
 inline constexpr const char* kCategoryChair = "chair";
 inline constexpr const char* kCategoryCamera = "camera";
 

@@ -3,7 +3,7 @@
 // #52's first part) fills DetectObjects. Until it is connected, the stage
 // reads what `doasido objects` (or any tool) wrote: with [objects]
 // observations_dir set, the file <observations_dir>/<video stem>.json, in
-// the objects.json format (objects/object_bundle_writer.h ObjectsJson; only
+// the objects.json format (objects/object_bundle_writer.h LiftedObjectsJson; only
 // "first_frame" (optional, default 0) and per frame "frame" and per object
 // "category", "score", "track" and "keypoints_2d" are read). Its frames are
 // the video's file frames counted from its first_frame.

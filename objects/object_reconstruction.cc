@@ -84,9 +84,17 @@ Pose Interpolate(const Pose& a, const Pose& b, double s) {
   return {a.q.slerp(s, b.q), (1 - s) * a.t + s * b.t};
 }
 
+// The keypoints in K's pixels: the record's origin is the top-left pixel's
+// corner (objects/box_keypoints.h), K's pixel centres are integers.
+BoxKeypoints InKPixels(const ObjectObservation& o) {
+  BoxKeypoints k = o.keypoints_2d;
+  for (Vec2& p : k) p -= Vec2(0.5, 0.5);
+  return k;
+}
+
 struct Lifted {
   int frame;
-  const ObjectObservation* observation;
+  BoxKeypoints keypoints;  // K's pixels
   LiftedBox lift;
   UnitPose unit;
 };
@@ -94,7 +102,7 @@ struct Lifted {
 // Fingertips of either hand that project inside the frame's box.
 void CollectContacts(const recon::ClipBundle& hands, const Mat3& K, const Lifted& l, int index,
                      std::vector<FingertipContact>& contacts, int& frames_with_contact) {
-  const std::vector<Vec2> hull = CornerHull(l.observation->keypoints_2d);
+  const std::vector<Vec2> hull = CornerHull(l.keypoints);
   bool any = false;
   for (const auto* side : {&hands.hand_left, &hands.hand_right}) {
     if (!side->has_value()) continue;
@@ -129,7 +137,8 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
     f.score = o->score;
     f.keypoints = o->keypoints_2d;
     try {
-      lifted.push_back({o->frame, o, LiftBox(o->keypoints_2d, K, config.degenerate_ratio), {}});
+      const BoxKeypoints k = InKPixels(*o);
+      lifted.push_back({o->frame, k, LiftBox(k, K, config.degenerate_ratio), {}});
     } catch (const Error&) {
       // No box in front of the camera: the frame is filled like a gap.
     }
@@ -144,9 +153,9 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
   for (Lifted& l : lifted) {
     out.frames[l.frame].degenerate = l.lift.degenerate;
     const bool side_view = out.symmetric && l.lift.degenerate;
-    const Pose start = side_view ? SideViewPose(l.observation->keypoints_2d, K, shape.y())
+    const Pose start = side_view ? SideViewPose(l.keypoints, K, shape.y())
                                  : Pose{Quat(l.lift.R), l.lift.t};
-    const Pose p = PoseForShape(l.observation->keypoints_2d, K, shape, start, side_view);
+    const Pose p = PoseForShape(l.keypoints, K, shape, start, side_view);
     l.unit = {p.R(), p.t};
   }
   // The scale.
@@ -183,7 +192,7 @@ ObjectTrack LiftTrack(const std::vector<const ObjectObservation*>& obs, const Ca
     for (size_t i = begin; i < end; ++i) {
       const Lifted& l = lifted[i];
       TrackFrame& f = frames[l.frame - first];
-      f.keypoints = l.observation->keypoints_2d;
+      f.keypoints = l.keypoints;
       f.axis_only = out.symmetric && l.lift.degenerate;
       f.start = {Quat(l.unit.R), l.unit.t * scale};
       if (i > begin) {  // interpolate the gap before it

@@ -37,7 +37,7 @@ struct ObjectFrame {
   bool filled = false;       // posed by the fit across a gap
   bool degenerate = false;   // the frame's lifted box is a thin slab
   float score = 0;
-  BoxKeypoints keypoints{};  // when observed
+  BoxKeypoints keypoints{};  // when observed, as the record gives them
 };
 
 struct ObjectTrack {

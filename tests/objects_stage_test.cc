@@ -93,7 +93,10 @@ Scene MakeScene(const TriMesh& mesh, synth::GraspType grasp) {
     right.joints.push_back(joints);
     s.wrist.push_back(joints.row(0).transpose());
     Json keypoints = Json::array();
-    for (const Vec2& p : ProjectBox(s.box.back(), s.box_size, K())) keypoints.push_back({p.x(), p.y()});
+    // The record's pixels start at the top-left pixel's corner, K's at its centre.
+    for (const Vec2& p : ProjectBox(s.box.back(), s.box_size, K())) {
+      keypoints.push_back({p.x() + 0.5, p.y() + 0.5});
+    }
     frames.push_back({{"frame", t},
                       {"objects", {{{"category", kCategoryCup}, {"score", 0.99}, {"track", 0},
                                     {"keypoints_2d", keypoints}}}}});

@@ -180,6 +180,7 @@ StageResult BundleStage::Run(const ClipContext& context) {
   result.measurements["source"] =
       server && resolved.source == kBundleFromCommand ? std::string("server") : resolved.source;
   result.measurements["hands_source"] = resolved.hands_source;
+  result.measurements["object_source"] = resolved.object_source;
   result.measurements["producers"] = bundle.producers;
   result.measurements["bundle"] = resolved.dir.string();
   result.measurements["frames"] = bundle.frames;

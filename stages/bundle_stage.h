@@ -35,8 +35,12 @@
 //     (<artifacts>/<clip>/hands/) is the clip's bundle. A list or command
 //     bundle without hands gets the hands stage's hands
 //     (stages/clip_inputs.h LoadClipBundle, which every later stage uses).
+//     The hands stage's bundle gets the objects stage's object (mesh and
+//     metric poses) when that stage found one; a list or command bundle
+//     keeps its own object, or none.
 // Measurements: source ("list", "command" or "hands"), hands_source
-// ("bundle", "hands" or "none"), producers, seconds, frames, parts found.
+// ("bundle", "hands" or "none"), object_source ("bundle", "objects" or
+// "none"), producers, seconds, frames, parts found.
 #pragma once
 
 #include <memory>

@@ -52,6 +52,32 @@ Json HandsMeta(const std::filesystem::path& dir) {
   }
 }
 
+bool HasObject(const ClipBundle& b) { return b.object_mesh.has_value() || !b.object_poses.empty(); }
+
+// The objects stage's object part added to the hands stage's bundle, when
+// that stage wrote one.
+void AddObjectsStageObject(const ClipContext& context, const std::string& clip, ResolvedBundle& out) {
+  const std::filesystem::path dir = SiblingArtifactDir(context, kObjectsStageFolder);
+  if (!std::filesystem::is_regular_file(dir / "meta.json")) return;
+  const ClipBundle objects = ReadClipBundle(dir, clip);
+  if (!HasObject(objects)) return;
+  if (objects.frames != out.bundle.frames) {
+    throw Error(kBadBundle,
+                "the objects stage has " + std::to_string(objects.frames) + " frames, the hands " +
+                    std::to_string(out.bundle.frames) + "; they must cover the same span",
+                {.clip = clip, .file = (dir / "meta.json").string(), .field = "frames"});
+  }
+  out.bundle.object_mesh = objects.object_mesh;
+  out.bundle.object_poses = objects.object_poses;
+  for (const char* part : {"object_mesh", "object_poses"}) {
+    if (objects.present.count(part)) out.bundle.present.insert(part);
+  }
+  for (const auto& [key, value] : objects.producers.items()) {
+    if (key != "K") out.bundle.producers[key] = value;
+  }
+  out.object_source = kObjectsStageFolder;
+}
+
 }  // namespace
 
 ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem::path& model_output) {
@@ -77,8 +103,11 @@ ResolvedBundle LoadClipBundle(const ClipContext& context, const std::filesystem:
   if (out.source == kBundleFromHands) {
     out.hands_source = HasHands(out.bundle) ? kBundleFromHands : "none";
     out.hands_meta = HandsMeta(hands_dir);
+    out.object_source = "none";
+    AddObjectsStageObject(context, clip, out);
     return out;
   }
+  out.object_source = HasObject(out.bundle) ? "bundle" : "none";
   out.hands_source = HasHands(out.bundle) ? "bundle" : "none";
   if (HasHands(out.bundle) || !hands_found) return out;
   const ClipBundle hands = ReadClipBundle(hands_dir, clip);

@@ -37,7 +37,10 @@ std::string ClipName(const ClipContext& context);
 //   - where that bundle has no hand (neither hand_left nor hand_right), the
 //     hands stage's hands fill them in (same frame count required; the
 //     hands stage's K is used when the bundle has none);
-//   - with neither, the hands stage's bundle is the clip's bundle.
+//   - with neither, the hands stage's bundle is the clip's bundle, and the
+//     objects stage's object part (<artifacts>/<clip>/objects/: mesh and
+//     metric poses) is added to it when that stage found an object (same
+//     frame count required);
 // Errors are ReadClipBundle's (permanent, clip named); Error("no_bundle")
 // (permanent) when there is no bundle at all.
 struct ResolvedBundle {
@@ -45,6 +48,7 @@ struct ResolvedBundle {
   std::filesystem::path dir;       // the bundle read (the hands folder for kBundleFromHands)
   std::string source;              // kBundleFromList, kBundleFromCommand or kBundleFromHands
   std::string hands_source;        // "bundle", kBundleFromHands, or "none"
+  std::string object_source;       // "bundle", kObjectsStageFolder, or "none"
   Json hands_meta = Json::object();  // the hands stage's meta.json when its hands are used
 };
 // `model_output`, given by the bundle stage itself, is the folder its model

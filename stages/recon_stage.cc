@@ -85,7 +85,9 @@ StageResult ReconStage::Run(const ClipContext& context) {
   StageResult result;
   result.measurements["bundle"] = dir.string();
   result.measurements[kMeasurePoseSource] = pose_source;
-  if (!bundle.object_mesh || poses.empty() || bundle.mask_object.empty()) {
+  // Metric poses (the objects stage's) need no object mask: no alignment.
+  if (!bundle.object_mesh || poses.empty() ||
+      (bundle.mask_object.empty() && !ObjectPosesAreMetric(bundle))) {
     result.verdict = Verdict::kReject;
     result.reason = kReasonNoObject;
     return result;

@@ -12,6 +12,7 @@
 #include "stages/hands_stage.h"
 #include "stages/kinematic_stage.h"
 #include "stages/noop_stage.h"
+#include "stages/objects_stage.h"
 #include "stages/probe_stage.h"
 #include "stages/recon_stage.h"
 #include "stages/stage_timeouts.h"
@@ -108,6 +109,13 @@ const std::vector<StageEntry>& StageTable() {
           {{kReasonNoHands, "no hands found"}},
           // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
           // and suites run the default list on hundreds of synthetic clips.
+          false, kHour),
+      Entry<ObjectsStage, objects::ObjectsConfig>(
+          objects::kObjectsStageName,
+          "lifts the category models' box keypoints (cups, shoes, chairs, cameras) to a metric "
+          "6D pose per frame, sized by the touching hand or a category prior: the object part "
+          "of a clip bundle",
+          {{kReasonNoKnownObject, "no object of a known category (hand-only)"}},
           false, kHour),
       Entry<BundleStage, BundleStageConfig>(
           recon::kBundleStageName,

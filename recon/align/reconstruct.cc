@@ -178,12 +178,40 @@ Json ReconstructionInfo(const ReconOutput& out, const ReconStageConfig& config, 
                          {"frames", frames}}}};
 }
 
+// The alignment of poses that are already metric: every posed frame kept
+// with scale 1.
+HandObjectAlignment MetricAlignment(const std::vector<Pose>& poses,
+                                    const std::vector<bool>& pose_valid, int T) {
+  HandObjectAlignment a;
+  a.frames.assign(T, FrameAlignment{});
+  a.scale.assign(T, kNaN);
+  a.fill.assign(T, kFillNone);
+  a.poses.assign(T, Pose::Identity());
+  for (int t = 0; t < T && static_cast<size_t>(t) < poses.size(); ++t) {
+    if (static_cast<size_t>(t) < pose_valid.size() && !pose_valid[t]) {
+      a.frames[t].skipped = kSkipNoPose;
+      continue;
+    }
+    a.frames[t].aligned = true;
+    a.frames[t].k = a.frames[t].scale = a.scale[t] = 1;
+    a.fill[t] = kFillMetric;
+    a.poses[t] = poses[t];
+    ++a.aligned_frames;
+  }
+  return a;
+}
+
 }  // namespace
+
+bool ObjectPosesAreMetric(const ClipBundle& b) {
+  return b.producers.is_object() && b.producers.contains(kObjectScaleProducer);
+}
 
 ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
                         const std::vector<bool>& pose_valid, const ReconStageConfig& config) {
   ReconOutput out;
-  out.alignment = AlignHandObject(b, poses, pose_valid, config.alignment);
+  out.alignment = ObjectPosesAreMetric(b) ? MetricAlignment(poses, pose_valid, b.frames)
+                                          : AlignHandObject(b, poses, pose_valid, config.alignment);
   out.gravity = EstimateGravity(b, config.gravity);
   const Mat3 R = UpToZ(out.gravity.up);
   out.camera_to_world = R;

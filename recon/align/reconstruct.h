@@ -40,6 +40,16 @@ inline constexpr const char* kMeasureRightFrames = "right_frames";    // frames 
 inline constexpr const char* kMeasureLeftFrames = "left_frames";
 inline constexpr const char* kMeasureWristJumpMax = "wrist_jump_max_m";  // largest frame-to-frame step
 inline constexpr const char* kMeasureBundleSource = "bundle_source";  // bundle_location.h kBundleFrom*
+// A bundle whose producers name this key (the objects stage's: "hand_contact"
+// or "category_prior", where the object's scale came from) has object poses
+// that are already metric in the camera frame, not in a point map's units:
+// Reconstruct takes them as they are (every posed frame "aligned" with
+// scale 1, fill kFillMetric) instead of the seed's depth-based alignment,
+// which needs depth and hand meshes such a bundle does not have.
+inline constexpr const char* kObjectScaleProducer = "object_scale";
+inline constexpr const char* kFillMetric = "metric";
+bool ObjectPosesAreMetric(const ClipBundle& bundle);
+
 // How far below the hands' lowest joint a hand-only clip's floor lies, m
 // (recon and retarget_kinematic's bundle fallback agree on it).
 inline constexpr double kHandOnlyFloorMargin = 0.05;

@@ -20,6 +20,12 @@ inline constexpr const char* kBundleStageName = "bundle";
 // readers below the hands library must know it).
 inline constexpr const char* kHandsStageFolder = "hands";
 
+// The `objects` stage's name and artifact folder, <artifacts>/<clip>/objects/:
+// the object part of a clip bundle (meta.json, K.npz, object/mesh.obj,
+// object/poses.npz) lifted from the category models' box keypoints
+// (stages/objects_stage.h; objects/objects_config.h takes its name from here).
+inline constexpr const char* kObjectsStageFolder = "objects";
+
 // No bundle named, none written by a command and no hands found (permanent).
 inline constexpr const char* kErrorNoBundle = kNoBundle;
 

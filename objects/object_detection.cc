@@ -1,0 +1,80 @@
+#include "objects/object_detection.h"
+
+#include "core/error.h"
+#include "core/file_text.h"
+
+namespace doasido::objects {
+namespace {
+
+constexpr const char* kBadObservations = "bad_observations";
+
+ObjectObservation ReadObject(const Json& o, int frame, const std::string& file,
+                             const std::string& where) {
+  auto fail = [&](const std::string& field, const std::string& what) -> Error {
+    return Error(kBadObservations, where + ": " + what, {.file = file, .field = field});
+  };
+  if (!o.is_object()) throw fail("objects", "not an object");
+  ObjectObservation out;
+  out.frame = frame;
+  if (!o.contains("category") || !o["category"].is_string()) throw fail("category", "missing or not a string");
+  out.category = o["category"].get<std::string>();
+  if (!o.contains("score") || !o["score"].is_number()) throw fail("score", "missing or not a number");
+  out.score = o["score"].get<float>();
+  if (!o.contains("track") || !o["track"].is_number_integer()) throw fail("track", "missing or not an integer");
+  out.track = o["track"].get<int>();
+  const Json& k = o.contains("keypoints_2d") ? o["keypoints_2d"] : Json();
+  if (!k.is_array() || k.size() != kBoxKeypoints) throw fail("keypoints_2d", "must be 9 [x, y] pairs");
+  for (int i = 0; i < kBoxKeypoints; ++i) {
+    if (!k[i].is_array() || k[i].size() != 2 || !k[i][0].is_number() || !k[i][1].is_number()) {
+      throw fail("keypoints_2d", "keypoint " + std::to_string(i) + " is not [x, y]");
+    }
+    out.keypoints_2d[i] = {k[i][0].get<double>(), k[i][1].get<double>()};
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<ObjectObservation> ObservationsFromJson(const Json& json, const FrameSpan& span,
+                                                    const std::string& file) {
+  if (!json.is_object() || !json.contains("frames") || !json["frames"].is_array()) {
+    throw Error(kBadObservations, "no \"frames\" array", {.file = file, .field = "frames"});
+  }
+  const int first = json.value("first_frame", 0);
+  std::vector<ObjectObservation> out;
+  for (const Json& f : json["frames"]) {
+    if (!f.is_object() || !f.contains("frame") || !f["frame"].is_number_integer()) {
+      throw Error(kBadObservations, "a frame without an integer \"frame\"", {.file = file, .field = "frame"});
+    }
+    const int frame = first + f["frame"].get<int>() - span.first_frame;
+    if (frame < 0 || frame >= span.frames) continue;
+    if (!f.contains("objects")) continue;
+    if (!f["objects"].is_array()) {
+      throw Error(kBadObservations, "\"objects\" is not an array", {.file = file, .field = "objects"});
+    }
+    for (const Json& o : f["objects"]) {
+      if (o.is_object() && o.contains("keypoints_2d") && o["keypoints_2d"].is_null()) continue;  // not seen
+      out.push_back(ReadObject(o, frame, file, "frame " + std::to_string(f["frame"].get<int>())));
+    }
+  }
+  return out;
+}
+
+std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
+                                             const ObjectsConfig& config) {
+  if (config.observations_dir.empty()) return {};
+  const auto file = std::filesystem::path(config.observations_dir) / (video.stem().string() + ".json");
+  if (!std::filesystem::is_regular_file(file)) {
+    throw Error(kErrorObservationsMissing, "no observations for video " + video.string(),
+                {.file = file.string(), .field = "objects.observations_dir"});
+  }
+  Json json;
+  try {
+    json = Json::parse(ReadFileOrThrow(file, "io", "cannot read"));
+  } catch (const Json::exception& e) {
+    throw Error(kBadObservations, e.what(), {.file = file.string()});
+  }
+  return ObservationsFromJson(json, span, file.string());
+}
+
+}  // namespace doasido::objects

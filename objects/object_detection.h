@@ -1,0 +1,42 @@
+// The seam between the objects stage and the category models: the model
+// half (the 2D detector and the box-landmark models run in process, issue
+// #52's first part) fills DetectObjects. Until it is connected, the stage
+// reads what `doasido objects` (or any tool) wrote: with [objects]
+// observations_dir set, the file <observations_dir>/<video stem>.json, in
+// the objects.json format (objects/object_bundle_writer.h LiftedObjectsJson; only
+// "first_frame" (optional, default 0) and per frame "frame" and per object
+// "category", "score", "track" and "keypoints_2d" are read). Its frames are
+// the video's file frames counted from its first_frame.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "core/config.h"
+#include "objects/box_keypoints.h"
+#include "objects/objects_config.h"
+
+namespace doasido::objects {
+
+// observations_dir is set but holds no file for the video (not permanent:
+// the file can be made).
+inline constexpr const char* kErrorObservationsMissing = "object_observations_missing";
+
+// The clip's span in file frames: [first_frame, first_frame + frames).
+struct FrameSpan {
+  int first_frame = 0;
+  int frames = 0;
+};
+
+// The observations of the span, frame 0 = span.first_frame (frames outside
+// the span left out). Empty when nothing produces observations (no
+// observations_dir). Errors name the clip's video, the file and the field.
+std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
+                                             const ObjectsConfig& config);
+
+// The observations in `json` (the format above) within `span`. Throws
+// Error("bad_observations") naming the file and the field.
+std::vector<ObjectObservation> ObservationsFromJson(const Json& json, const FrameSpan& span,
+                                                    const std::string& file);
+
+}  // namespace doasido::objects

@@ -2,6 +2,8 @@
 
 #include "core/error.h"
 #include "core/file_text.h"
+#include "objects/box_tracker.h"
+#include "objects/objects_in_video.h"
 
 namespace doasido::objects {
 namespace {
@@ -60,9 +62,31 @@ std::vector<ObjectObservation> ObservationsFromJson(const Json& json, const Fram
   return out;
 }
 
+namespace {
+
+// The category models on every frame of the span; frames counted from its start.
+std::vector<ObjectObservation> RunModels(const std::filesystem::path& video, const FrameSpan& span,
+                                         const BoxKeypointsConfig& config) {
+  BoxTracker tracker(config, video.stem().string());
+  DecoderOptions options{.clip = video.stem().string()};
+  options.first_frame = span.first_frame;
+  options.last_frame = span.first_frame + span.frames - 1;
+  const DetectedObjects detected = ObjectsInVideo(video, options, config.max_side, tracker);
+  std::vector<ObjectObservation> out;
+  for (const auto& frame : detected.frames) {
+    for (ObjectObservation o : frame) {
+      o.frame -= span.first_frame;
+      if (o.frame >= 0 && o.frame < span.frames) out.push_back(std::move(o));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
                                              const ObjectsConfig& config) {
-  if (config.observations_dir.empty()) return {};
+  if (config.observations_dir.empty()) return RunModels(video, span, config.models);
   const auto file = std::filesystem::path(config.observations_dir) / (video.stem().string() + ".json");
   if (!std::filesystem::is_regular_file(file)) {
     throw Error(kErrorObservationsMissing, "no observations for video " + video.string(),

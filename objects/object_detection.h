@@ -1,8 +1,8 @@
-// The seam between the objects stage and the category models: the model
-// half (the 2D detector and the box-landmark models run in process, issue
-// #52's first part) fills DetectObjects. Until it is connected, the stage
-// reads what `doasido objects` (or any tool) wrote: with [objects]
-// observations_dir set, the file <observations_dir>/<video stem>.json, in
+// Where the objects stage gets its box keypoints: by default the category
+// models run in process on the clip's span (objects/objects_in_video.h,
+// [objects.models]); with [objects] observations_dir set, the stage reads
+// what `doasido objects` (or any tool) wrote there instead:
+// the file <observations_dir>/<video stem>.json, in
 // the objects.json format (objects/object_bundle_writer.h LiftedObjectsJson; only
 // "first_frame" (optional, default 0) and per frame "frame" and per object
 // "category", "score", "track" and "keypoints_2d" are read). Its frames are
@@ -29,8 +29,8 @@ struct FrameSpan {
 };
 
 // The observations of the span, frame 0 = span.first_frame (frames outside
-// the span left out). Empty when nothing produces observations (no
-// observations_dir). Errors name the clip's video, the file and the field.
+// the span left out): the models' keypoints, or the observations file's.
+// Errors name the clip's video, the file and the field.
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
                                              const ObjectsConfig& config);
 

@@ -1,6 +1,7 @@
 #include "objects/objects_config.h"
 
 #include "core/config_check.h"
+#include "objects/box_keypoints_config.h"
 
 namespace doasido::objects {
 
@@ -20,6 +21,7 @@ void CheckConfig(const ObjectsConfig& c, const std::string& section) {
   RequireInRange(f, "acceleration_sigma_ms2", c.fit.acceleration_sigma_ms2, 1e-3, 1e4);
   RequireInRange(f, "angular_acceleration_sigma", c.fit.angular_acceleration_sigma, 1e-3, 1e6);
   RequireInRange(f, "max_iterations", c.fit.max_iterations, 1, 10000);
+  CheckConfig(c.models, section + ".models");
 }
 
 }  // namespace doasido::objects

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/config.h"
+#include "objects/box_keypoints_config.h"
 #include "recon/bundle/bundle_location.h"
 
 namespace doasido::objects {
@@ -34,10 +35,12 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObjectFitConfig, reprojection_si
 
 // The [objects] section.
 struct ObjectsConfig {
-  // The seam the model half fills (objects/object_detection.h): until the
-  // models run in process, a folder of `<video stem>.json` files in the
-  // `doasido objects` format is read; empty: no observations.
+  // Where the box keypoints come from (objects/object_detection.h): empty
+  // runs the category models in process ([objects.models]); a folder reads
+  // `<video stem>.json` files in the `doasido objects` format instead (a
+  // user's own detector, or keypoints corrected by hand).
   std::string observations_dir;
+  BoxKeypointsConfig models;  // [objects.models]: the detector, trackers and thresholds
   double min_score = 0.5;      // box-landmark presence below this is no observation
   int min_track_frames = 5;    // shorter tracks are dropped
   int max_gap_frames = 10;     // longer runs without the object split the fitted track
@@ -53,7 +56,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObjectsConfig, observations_dir,
                                                 min_track_frames, max_gap_frames, degenerate_ratio,
                                                 min_contact_frames, fingertip_offset_m,
                                                 contact_robust_m, max_contact_residual_m,
-                                                cylinder_segments, fit)
+                                                cylinder_segments, fit, models)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const ObjectsConfig& c, const std::string& section);

@@ -47,18 +47,19 @@ fs::path MarkerOf(const fs::path& temp) {
   return temp.parent_path() / (temp.filename().string() + kMarkerSuffix);
 }
 
-// True when `marker` is a regular file holding exactly `text` (a person's
-// file of that name holds something else, or is bigger).
-bool HoldsExactly(const fs::path& marker, const std::string& text) {
+// True when `marker` is a regular file holding exactly `text` or, with
+// `prefix`, the start of it (a marker whose writer was killed while writing
+// it; its temporary was never made). A person's file of that name holds
+// something else, or more.
+bool Holds(const fs::path& marker, const std::string& text, bool prefix) {
   std::error_code ec;
-  if (!fs::is_regular_file(fs::symlink_status(marker, ec)) ||
-      fs::file_size(marker, ec) != text.size() || ec) {
-    return false;
-  }
+  if (!fs::is_regular_file(fs::symlink_status(marker, ec))) return false;
+  const std::uintmax_t size = fs::file_size(marker, ec);
+  if (ec || size > text.size() || (!prefix && size != text.size())) return false;
   std::ifstream f(marker, std::ios::binary);
-  std::string got(text.size(), '\0');
+  std::string got(size, '\0');
   f.read(got.data(), static_cast<std::streamsize>(got.size()));
-  return f.gcount() == static_cast<std::streamsize>(text.size()) && got == text;
+  return f.gcount() == static_cast<std::streamsize>(size) && text.compare(0, size, got) == 0;
 }
 
 // The writer of a temporary named `leaf` (with or without its marker
@@ -133,10 +134,9 @@ std::vector<fs::path> RemoveAbandonedTemporaries(const fs::path& folder) {
     if (is_marker) leaf.resize(leaf.size() - suffix.size());
     const fs::path temp = path.parent_path() / leaf;
     const std::optional<long> writer = TempWriter(leaf);
-    if (!writer || ProcessAlive(*writer) || !HoldsExactly(MarkerOf(temp), MarkerText(temp))) {
-      continue;
-    }
+    if (!writer || ProcessAlive(*writer)) continue;
     if (is_marker && fs::exists(fs::symlink_status(temp, ec))) continue;  // removed with it
+    if (!Holds(MarkerOf(temp), MarkerText(temp), /*prefix=*/is_marker)) continue;
     std::error_code rm;
     if (!is_marker) fs::remove_all(temp, rm);
     if (!rm) fs::remove(MarkerOf(temp), rm);

@@ -131,6 +131,7 @@ void WriteShardFolder(Database& db, const Database::ShardSpec& spec) {
   const fs::path folder = spec.path.parent_path();
   const fs::path temp = TempSibling(folder);
   try {
+    fs::create_directories(folder.parent_path());
     MarkTemporary(temp);
     fs::create_directories(temp);
     db.WriteShardDatabase(spec, temp / kShardDbName);

@@ -10,6 +10,7 @@
 //  - error text is bounded in bytes, the whole log named;
 //  - a merged shard hands its clips back and refuses further runs;
 //  - worker options are range-checked before anything runs.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -430,7 +431,13 @@ TEST(MergePlacement, ReadersNeverSeeRowsWithoutTheirFolders) {
                                 (dir / "datasets").string(), "--select", "all",
                                 "--no-thumbnails"});
   EXPECT_EQ(testing::WaitFor(merge), 0) << ReadFile(dir / "merge.log");
-  EXPECT_EQ(plan.exit_code, 0) << plan.err;
+  // The plan found the merged run's trajectory (whether the synthetic
+  // trajectory passes the arm's checks is another matter: exit 0 or
+  // plan_failed_checks, with the plan written either way).
+  EXPECT_THAT(plan.err, ::testing::HasSubstr("planning retarget_kinematic run"));
+  EXPECT_THAT(plan.err, ::testing::Not(::testing::HasSubstr("no_trajectory")));
+  EXPECT_TRUE(plan.exit_code == 0 || plan.err.find("plan_failed_checks") != std::string::npos)
+      << plan.err;
   EXPECT_TRUE(fs::exists(dir / "plan.json"));
   ASSERT_EQ(made.exit_code, 0) << made.err;
   const dataset::Manifest m = dataset::ReadManifest(dir / "datasets/default/v1");

@@ -4,7 +4,6 @@
 // clips a change sends on are judged by the later stages, a person's verdict
 // is kept, and a later `doasido run` with the same config has nothing to redo.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -18,6 +17,7 @@ namespace doasido {
 namespace {
 
 using testing::RunDoasido;
+using testing::DeadPid;
 using testing::TempDir;
 
 TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
@@ -107,15 +107,6 @@ TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
   const auto again = RunDoasido({"run", "--db", db_path, "--config", (dir / "strict.toml").string()});
   EXPECT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(db.DoneEventCounts(), done_after);
-}
-
-// The id of a process that has ended (and been reaped).
-long DeadPid() {
-  const pid_t pid = fork();
-  if (pid == 0) _exit(0);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return pid;
 }
 
 // A filtered pool whose activity runs are queued again; `copies` databases

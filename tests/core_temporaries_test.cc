@@ -3,7 +3,6 @@
 // same shape, or a name whose "pid" cannot be one, is left alone and stops
 // nothing.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -17,17 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::ReadFile;
+using testing::DeadPid;
 using testing::TempDir;
 using testing::WriteFile;
-
-// The id of a process that has ended (and been reaped).
-long DeadPid() {
-  const pid_t pid = fork();
-  if (pid == 0) _exit(0);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return pid;
-}
 
 TEST(Temporaries, APersonsFilesOfTheShapeSurviveAWriter) {
   TempDir dir;

@@ -46,8 +46,8 @@ void CopyTree(const fs::path& from, const fs::path& to, const std::string& clip)
   fs::create_directories(to.parent_path(), ec);
   fs::copy(from, to, fs::copy_options::recursive, ec);
   if (ec) {
-    throw Error("io", "cannot copy into the version: " + ec.message(),
-                {.clip = clip, .file = from.string()});
+    throw Error("io", "cannot copy " + from.string() + " into the version: " + ec.message(),
+                {.clip = clip, .file = to.string()});
   }
 }
 

@@ -117,11 +117,15 @@ void RunPlan(const PlanArgs& a, const CLI::App& cmd) {
   if (cmd.count("--offset-steps")) config.workspace.offset_steps = a.config.workspace.offset_steps;
   deploy::CheckConfig(config, deploy::kPlanConfigSection);
   retarget::TrajectoryFiles files;
+  // Held while the run's files are read: a merge never places them halfway
+  // under this plan (Database::LockForReading).
+  std::optional<Database::ArtifactLock> reading;
   if (!a.trajectory.empty()) {
     // Relative to the working directory, like every path on the command line.
     files = retarget::FilesBeside(std::filesystem::absolute(a.trajectory));
   } else {
     Database db(a.db.db, Database::OpenMode::kExisting);
+    reading.emplace(db.LockForReading());
     std::string why;
     auto found = review::FindTrajectoryFiles(db, a.clip, &why);
     if (!found) {

@@ -47,6 +47,11 @@ inline constexpr const char* kBadBundle = "bad_bundle";
 inline constexpr const char* kBadTrack = "bad_track";
 inline constexpr const char* kBundleServerRefused = "bundle_server_refused";
 
+// A database that cannot be written (a read-only mount or file): it is
+// opened read-only for the commands that only look, and every write is
+// refused with this code, naming the file (db/database.h).
+inline constexpr const char* kReadOnly = "read_only";
+
 // The one table of what a retry cannot fix: the same input gives the same
 // error, so the worker fails such a run at its first attempt. The code
 // alone decides; codes not listed are transient (a retry may succeed: a
@@ -63,7 +68,7 @@ inline bool IsPermanentError(std::string_view code) {
         std::string_view(kGeoBlocked), std::string_view(kBadIntrinsics),
         std::string_view(kNoBundle), std::string_view(kBadBundle), std::string_view(kBadTrack),
         std::string_view(kBundleServerRefused), std::string_view(kMeasurementsTooLarge),
-        std::string_view(kStageTimeout)}) {
+        std::string_view(kStageTimeout), std::string_view(kReadOnly)}) {
     if (code == permanent) return true;
   }
   return false;

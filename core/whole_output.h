@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,9 @@ namespace doasido {
 
 enum class OutputKind { kFile, kFolder };
 
-// Runs `write(temp)` and puts `temp` in place of `out`. For a folder output
-// `temp` exists (empty) when `write` is called; for a file it does not.
+// Runs `write(temp)`, flushes what it wrote to disk (fsync, every file of
+// a folder) and puts `temp` in place of `out`. For a folder output `temp`
+// exists (empty) when `write` is called; for a file it does not.
 // Temporaries that killed commands left beside `out` (their process is
 // gone) are removed first and, when `removed` is given, named there. On an
 // exception the temporary is removed, `out` is untouched and the exception
@@ -33,9 +35,22 @@ void WriteFileWhole(const std::filesystem::path& out, const std::string& bytes);
 
 // A fresh name for a temporary sibling of `out` (not created).
 std::filesystem::path TempSibling(const std::filesystem::path& out);
-// Removes the temporaries in `folder` (of any output) whose process is
-// gone; returns them.
+// A temporary is ours only with its marker: a file beside it,
+// `<temporary>.doasido-temporary`, holding "doasido temporary" and the
+// temporary's name. MarkTemporary writes it (Error("io") when it cannot)
+// before the temporary is made; UnmarkTemporary removes it once the
+// temporary is renamed into place or removed.
+void MarkTemporary(const std::filesystem::path& temp);
+void UnmarkTemporary(const std::filesystem::path& temp);
+// Removes the temporaries in `folder` (of any output) that carry their
+// marker and whose writing process is gone (and markers left without their
+// temporary); returns the temporaries removed. A name of the same shape
+// without the marker, or with a pid that cannot be one, is a person's file
+// and is left alone.
 std::vector<std::filesystem::path> RemoveAbandonedTemporaries(const std::filesystem::path& folder);
+// The process id written as `digits` (1..pid_t's maximum); nullopt for
+// anything else, never an exception.
+std::optional<long> ParsePid(const std::string& digits);
 
 // True when a process with this id runs on this machine (the temporaries'
 // and the merge journal's owner test).

@@ -1,5 +1,8 @@
 #include "dataset/robomimic_export.h"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <map>
 #include <vector>
 
@@ -22,7 +25,15 @@ class Handle {
       : id_(id), close_(close) {
     if (id_ < 0) throw Error("io", "HDF5 cannot create " + what, {.file = file.string()});
   }
-  ~Handle() { close_(id_); }
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  // Closes now; false when HDF5 says it could not.
+  bool Close() {
+    const herr_t status = close_(id_);
+    id_ = -1;
+    return status >= 0;
+  }
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
   hid_t get() const { return id_; }
@@ -49,16 +60,20 @@ struct Writer {
     Handle set(H5Dcreate2(parent, name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
                           H5P_DEFAULT),
                H5Dclose, "dataset " + name, file);
-    if (H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0) {
-      throw Error("io", "HDF5 cannot write dataset " + name, {.file = file.string()});
-    }
+    Check(H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()),
+          "dataset " + name);
   }
   void Attr(hid_t parent, const std::string& name, std::int64_t value) const {
     Handle space(H5Screate(H5S_SCALAR), H5Sclose, "space", file);
     Handle attr(H5Acreate2(parent, name.c_str(), H5T_NATIVE_INT64, space.get(), H5P_DEFAULT,
                            H5P_DEFAULT),
                 H5Aclose, "attribute " + name, file);
-    H5Awrite(attr.get(), H5T_NATIVE_INT64, &value);
+    Check(H5Awrite(attr.get(), H5T_NATIVE_INT64, &value), "attribute " + name);
+  }
+  // Every HDF5 call's result is checked: a failed one is an io error
+  // naming the file and what was being written, never a half file.
+  void Check(herr_t status, const std::string& what) const {
+    if (status < 0) throw Error("io", "HDF5 cannot write " + what, {.file = file.string()});
   }
   // Fixed-length strings: what h5py reads back as bytes objects, robomimic's format.
   void Strings(hid_t parent, const std::string& name, const std::vector<std::string>& values,
@@ -66,7 +81,7 @@ struct Writer {
     size_t width = 1;
     for (const std::string& v : values) width = std::max(width, v.size());
     Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "string type", file);
-    H5Tset_size(type.get(), width);
+    Check(H5Tset_size(type.get(), width), "string type of " + name);
     std::vector<char> packed(width * std::max<size_t>(values.size(), 1), '\0');
     for (size_t i = 0; i < values.size(); ++i) values[i].copy(packed.data() + i * width, width);
     const hsize_t n = values.size();
@@ -76,12 +91,15 @@ struct Writer {
       Handle attr(H5Acreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT,
                              H5P_DEFAULT),
                   H5Aclose, "attribute " + name, file);
-      H5Awrite(attr.get(), type.get(), packed.data());
+      Check(H5Awrite(attr.get(), type.get(), packed.data()), "attribute " + name);
     } else {
       Handle set(H5Dcreate2(parent, name.c_str(), type.get(), space.get(), H5P_DEFAULT,
                             H5P_DEFAULT, H5P_DEFAULT),
                  H5Dclose, "dataset " + name, file);
-      if (n) H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, packed.data());
+      if (n) {
+        Check(H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, packed.data()),
+              "dataset " + name);
+      }
     }
   }
 };
@@ -151,6 +169,22 @@ void WriteDemo(const Writer& w, hid_t data, const Episode& e, const retarget::Ha
   }
 }
 
+// Writes `bytes` to `path`, every write and the close checked (a full
+// disk is an io error naming the file and the cause).
+void WriteBytes(const fs::path& path, const std::vector<char>& bytes) {
+  std::error_code ec;
+  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  const bool written = f != nullptr && std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  const int saved = errno;
+  const bool closed = f != nullptr && std::fclose(f) == 0;
+  if (!written || !closed) {
+    throw Error("io", std::string("cannot write the HDF5 file: ") +
+                          std::strerror(written ? errno : saved),
+                {.file = path.string()});
+  }
+}
+
 }  // namespace
 
 ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_file) {
@@ -173,10 +207,16 @@ ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_f
                   {.clip = e.external_id, .file = path.string(), .field = mixed.field});
     }
   }
-  std::error_code ec;
-  if (out_file.has_parent_path()) fs::create_directories(out_file.parent_path(), ec);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become our Error, not stderr noise
-  Handle file(H5Fcreate(out_file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+  // The file is built in memory (HDF5's core driver) and written out by us:
+  // HDF5 reports a full disk at neither flush nor close (both return
+  // success over a file it could not write), so its own disk writes could
+  // leave a truncated file that looks finished. Our write checks every byte.
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties", out_file);
+  if (H5Pset_fapl_core(fapl.get(), 1 << 20, /*backing_store=*/0) < 0) {
+    throw Error("io", "HDF5 cannot use its in-memory driver", {.file = out_file.string()});
+  }
+  Handle file(H5Fcreate(out_file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
               "the file", out_file);
   const Writer w{out_file};
   Handle data = w.Group(file.get(), "data");
@@ -204,8 +244,17 @@ ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_f
   w.Strings(data.get(), "env_args", {env_args.dump()}, true);
   Handle mask = w.Group(file.get(), "mask");
   for (const auto& [split, demos] : masks) w.Strings(mask.get(), split, demos, false);
-  H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
-  summary.bytes = static_cast<std::int64_t>(fs::file_size(out_file, ec));
+  mask.Close();
+  data.Close();
+  w.Check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "the file");
+  const ssize_t size = H5Fget_file_image(file.get(), nullptr, 0);
+  std::vector<char> image(size > 0 ? static_cast<size_t>(size) : 0);
+  if (size <= 0 || H5Fget_file_image(file.get(), image.data(), image.size()) != size) {
+    throw Error("io", "HDF5 cannot give the file's bytes", {.file = out_file.string()});
+  }
+  if (!file.Close()) throw Error("io", "HDF5 cannot close the file", {.file = out_file.string()});
+  WriteBytes(out_file, image);
+  summary.bytes = static_cast<std::int64_t>(image.size());
   return summary;
 }
 

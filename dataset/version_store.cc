@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <random>
 #include <regex>
 
@@ -13,6 +14,8 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/test_pause.h"
+#include "core/whole_output.h"
 #include "core/tool_version.h"
 #include "dataset/episode_selection.h"
 #include "dataset/settled_runs.h"
@@ -27,26 +30,12 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::regex kVersionName("v([1-9][0-9]*)");
-const std::regex kTempName("\\.v[0-9]+\\.tmp-([0-9]+)-[0-9a-f]+");
 
 void CheckName(const std::string& name) {
   static const std::regex ok("[A-Za-z0-9_-][A-Za-z0-9_.-]*");
   if (!std::regex_match(name, ok)) {
     throw Error("bad_option", "'" + name + "' is not a dataset name (letters, digits, _ . -)",
                 {.field = "--name"});
-  }
-}
-
-// Removes temporary version folders whose writer process is gone.
-void RemoveAbandoned(const fs::path& dataset_dir) {
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dataset_dir, ec)) {
-    std::smatch m;
-    const std::string leaf = entry.path().filename().string();
-    if (!std::regex_match(leaf, m, kTempName)) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(m[1]));
-    if (kill(pid, 0) == 0 || errno != ESRCH) continue;
-    fs::remove_all(entry.path(), ec);
   }
 }
 
@@ -57,8 +46,8 @@ void CopyTree(const fs::path& from, const fs::path& to, const std::string& clip)
   fs::create_directories(to.parent_path(), ec);
   fs::copy(from, to, fs::copy_options::recursive, ec);
   if (ec) {
-    throw Error("io", "cannot copy into the version: " + ec.message(),
-                {.clip = clip, .file = from.string()});
+    throw Error("io", "cannot copy " + from.string() + " into the version: " + ec.message(),
+                {.clip = clip, .file = to.string()});
   }
 }
 
@@ -113,13 +102,6 @@ void WriteEpisode(Database& db, Episode& e, const fs::path& episode_dir) {
                 {.clip = clip, .file = (trajectory_dir / kTrajectoryFile).string(),
                  .field = err.site().field});
   }
-}
-
-std::string TempSuffix() {
-  std::random_device rd;
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%d-%08x", static_cast<int>(getpid()), rd());
-  return buf;
 }
 
 }  // namespace
@@ -232,6 +214,7 @@ void WriteVersionFiles(Database& db, const CreateOptions& options, const fs::pat
     }
     e.index = static_cast<std::int64_t>(written.size());
     WriteEpisode(db, e, temp / kEpisodesFolder / e.id);
+    TestPause(kPauseVersionEpisode);
     written.push_back(std::move(e));
     if (progress) progress(static_cast<int>(i + 1), static_cast<int>(m.episodes.size()));
   }
@@ -247,6 +230,40 @@ void WriteVersionFiles(Database& db, const CreateOptions& options, const fs::pat
   WriteManifest(m, temp);
 }
 
+// Throws Error(kRunsChanged) naming the first selected episode whose
+// recorded run of a stage is no longer the one selected (queued again,
+// running, or finished again since): the version would mix what it
+// selected with what it copied.
+void RefuseChangedRuns(Database& db, const std::vector<Episode>& selected) {
+  std::map<std::pair<ClipId, std::string>, Database::ReportRun> now;
+  for (Database::ReportRun& r : db.ReportRuns()) {
+    const std::pair<ClipId, std::string> key{r.clip_id, r.stage};
+    now.emplace(key, std::move(r));
+  }
+  for (const Episode& e : selected) {
+    for (const StageProvenance& s : e.stages) {
+      const auto it = now.find({e.clip_id, s.stage});
+      std::string what;
+      if (it == now.end()) {
+        what = "is no longer recorded";
+      } else if (it->second.state != "done") {
+        what = "is " + it->second.state + " now (queued again)";
+      } else if (s.finished_at && it->second.finished_at != s.finished_at) {
+        what = "finished again";
+      } else {
+        continue;
+      }
+      const std::string clip = e.external_id.empty() ? std::to_string(e.clip_id) : e.external_id;
+      throw Error(kRunsChanged,
+                  "the runs changed while the version was written: clip " + clip + "'s " +
+                      s.stage + " run " + what +
+                      "; nothing was published, run `doasido dataset create` again once the "
+                      "workers are done",
+                  {.clip = clip, .file = db.path().string(), .field = s.stage});
+    }
+  }
+}
+
 // Moves the finished `temp` into place as `final_dir`, never over another
 // run's version.
 void PublishVersion(const fs::path& temp, const fs::path& final_dir, const std::string& version) {
@@ -254,6 +271,7 @@ void PublishVersion(const fs::path& temp, const fs::path& final_dir, const std::
   const int err = errno;
   std::error_code ec;
   fs::remove_all(temp, ec);
+  UnmarkTemporary(temp);
   if (err == EEXIST || err == ENOTEMPTY) {
     throw Error("version_exists", "another run created " + version + " first; run again",
                 {.file = final_dir.string()});
@@ -267,6 +285,8 @@ void PublishVersion(const fs::path& temp, const fs::path& final_dir, const std::
 Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& options,
                        const std::function<void(int, int)>& progress) {
   CheckName(options.name);
+  // Rows and folders of before a merge or of after it, never between.
+  const Database::ArtifactLock reading = db.LockForReading();
   const std::vector<UnsettledClip> unsettled = CheckSettled(db, options);
   EpisodeSelection selection = SelectEpisodes(db, options.selection);
   if (selection.episodes.empty() && !options.allow_empty) {
@@ -279,7 +299,9 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
   std::error_code ec;
   fs::create_directories(dataset_dir, ec);
   if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = dataset_dir.string()});
-  RemoveAbandoned(dataset_dir);
+  for (const fs::path& p : RemoveAbandonedTemporaries(dataset_dir)) {
+    std::fprintf(stderr, "removed %s (left by a killed `dataset create`)\n", p.c_str());
+  }
 
   Manifest m;
   m.name = options.name;
@@ -298,16 +320,26 @@ Manifest CreateVersion(Database& db, const fs::path& root, const CreateOptions& 
   m.episodes = std::move(selection.episodes);
   AssignSplits(m.episodes, options.splits, options.seed);
 
-  const fs::path temp = dataset_dir / ("." + m.version + ".tmp-" + TempSuffix());
-  fs::create_directories(temp / kEpisodesFolder, ec);
-  if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
+  const fs::path temp = TempSibling(dataset_dir / m.version);
+  MarkTemporary(temp);
+  const std::vector<Episode> selected = m.episodes;
   try {
-    WriteVersionFiles(db, options, temp, m, progress);
+    fs::create_directories(temp / kEpisodesFolder, ec);
+    if (ec) throw Error("io", "cannot create: " + ec.message(), {.file = temp.string()});
+    try {
+      WriteVersionFiles(db, options, temp, m, progress);
+    } catch (const Error&) {
+      RefuseChangedRuns(db, selected);  // a copy that failed because a run moved on
+      throw;
+    }
+    RefuseChangedRuns(db, selected);
   } catch (...) {
     fs::remove_all(temp, ec);
+    UnmarkTemporary(temp);
     throw;
   }
   PublishVersion(temp, dataset_dir / m.version, m.version);
+  UnmarkTemporary(temp);
   return m;
 }
 

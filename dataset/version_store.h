@@ -16,6 +16,10 @@
 namespace doasido::dataset {
 
 inline constexpr const char* kDefaultDatasetName = "default";
+// A run a version selected changed (queued again, finished again) while the
+// version was being written: nothing is published; a retry once the
+// workers are done succeeds.
+inline constexpr const char* kRunsChanged = "runs_changed";
 
 struct CreateOptions {
   std::string name = kDefaultDatasetName;  // [A-Za-z0-9_.-]+, not starting with '.'
@@ -58,7 +62,12 @@ std::filesystem::path FindVersion(const std::filesystem::path& root, const std::
 // episode. Temporary folders that killed runs left behind are removed
 // first. Throws Error("empty_version") when no clip is selected (unless
 // allowed), Error("version_exists") when another process created the same
-// version first, Error("io") naming a file it cannot copy or write.
+// version first, Error(kRunsChanged) naming the clip and stage whose run
+// changed while it copied (checked again before the rename, so a version
+// never holds files of runs other than those it records), Error("io")
+// naming a file it cannot copy or write. Holds the artifact root's reading
+// lock throughout (Database::LockForReading): a merge is never seen half
+// placed.
 Manifest CreateVersion(Database& db, const std::filesystem::path& root, const CreateOptions& options,
                        const std::function<void(int, int)>& progress = {});
 

@@ -7,6 +7,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/test_pause.h"
 #include "core/whole_output.h"
 #include "db/database.h"
 #include "db/statement.h"
@@ -65,7 +66,9 @@ std::vector<fs::path> Database::RemoveAbandonedStaging() {
   for (fs::directory_iterator it(artifact_root_, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string leaf = it->path().filename().string();
     std::smatch m;
-    if (!std::regex_match(leaf, m, name) || ProcessAlive(std::stol(m[1]))) continue;
+    if (!std::regex_match(leaf, m, name)) continue;
+    const std::optional<long> pid = ParsePid(m[1].str());
+    if (!pid || ProcessAlive(*pid)) continue;  // not a staging name of ours, or still merging
     if (journal && journal->find("\"" + leaf + "\"") != std::string::npos) continue;
     std::error_code rm;
     fs::remove_all(it->path(), rm);
@@ -93,6 +96,7 @@ std::int64_t Database::FinishPlacement(bool own) {
   const fs::path staging = artifact_root_ / j["staging"].get<std::string>();
   std::int64_t n = 0;
   for (const Json& p : j.value("place", Json::array())) {
+    TestPause(kPauseMergePlacement);
     Place(staging, artifact_root_, p[0].get<ClipId>(), p[1].get<std::string>());
     ++n;
   }

@@ -2,10 +2,15 @@
 
 #include <sqlite3.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <set>
 #include <thread>
+
+#include "core/error_codes.h"
 
 #include "db/schema.h"
 #include "db/statement.h"
@@ -52,6 +57,34 @@ RunState ParseRunState(std::string_view text) {
   throw Error("database", "unknown stage-run state '" + std::string(text) + "'");
 }
 
+namespace {
+
+// `path` as the path of an SQLite URI (RFC 3986: %, ? and # escaped).
+std::string UriPath(const std::filesystem::path& path) {
+  std::string out;
+  for (const char c : path.string()) {
+    if (c == '%' || c == '?' || c == '#') {
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "%%%02X", static_cast<unsigned char>(c));
+      out += hex;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// Said once per file and process: a command opens its database more than once.
+void SayReadOnly(const std::filesystem::path& path, bool folder) {
+  static std::set<std::string> said;
+  if (!said.insert(path.string()).second) return;
+  std::fprintf(stderr, "opened %s read-only (%s): nothing will be written to it\n", path.c_str(),
+               folder ? "its folder cannot be written: a read-only filesystem or folder"
+                      : "the file cannot be written");
+}
+
+}  // namespace
+
 Database::Database(const std::filesystem::path& path, double busy_timeout_s, OpenMode mode)
     : busy_timeout_s_(busy_timeout_s) {
   path_ = std::filesystem::absolute(path).lexically_normal();
@@ -64,9 +97,23 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s, Ope
                 "no doasido database here (doasido init or doasido ingest creates one)",
                 {.file = path_.string()});
   }
+  // A database nobody may write (a read-only mount, a write-protected file)
+  // is opened read-only and said so; every write then fails with
+  // Error(kReadOnly) naming the file. access(W_OK) decides, so a read-only
+  // mount counts for root too (a chmod does not stop root, nor this).
+  const bool exists = std::filesystem::is_regular_file(path_);
+  const bool folder_read_only = access(root_.c_str(), W_OK) != 0;
+  read_only_ = exists && (folder_read_only || access(path_.c_str(), W_OK) != 0);
   const int flags =
-      SQLITE_OPEN_READWRITE | (mode == OpenMode::kCreate ? SQLITE_OPEN_CREATE : 0);
-  if (sqlite3_open_v2(path_.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
+      read_only_ ? SQLITE_OPEN_READONLY | SQLITE_OPEN_URI
+                 : SQLITE_OPEN_READWRITE | (mode == OpenMode::kCreate ? SQLITE_OPEN_CREATE : 0);
+  // On a read-only folder SQLite cannot make the WAL's -shm file; nothing
+  // can change the file there, which is what immutable=1 tells it.
+  const std::string name = !read_only_ ? path_.string()
+                           : folder_read_only ? "file:" + UriPath(path_) + "?immutable=1"
+                                              : "file:" + UriPath(path_) + "?mode=ro";
+  if (read_only_) SayReadOnly(path_, folder_read_only);
+  if (sqlite3_open_v2(name.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
@@ -80,11 +127,17 @@ Database::Database(const std::filesystem::path& path, double busy_timeout_s, Ope
     // WAL lets readers and one writer work at once; NORMAL sync is durable
     // against process crashes (a killed worker), which is what the queue
     // must survive. Reads go through mmap to spare a copy per page.
-    db::Exec(db_, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;"
-                  " PRAGMA mmap_size=268435456; PRAGMA cache_size=-65536;");
+    if (!read_only_) db::Exec(db_, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+    db::Exec(db_, "PRAGMA foreign_keys=ON; PRAGMA mmap_size=268435456; PRAGMA cache_size=-65536;");
     Migrate();
     OpenArtifactRoot();
-    FinishPlacement();  // a merge killed after its commit
+    if (!read_only_) {
+      FinishPlacement();  // a merge killed after its commit
+    } else if (GetMeta(kPlacementKey)) {
+      std::fprintf(stderr, "warning: a merge into %s did not finish placing its folders, and a "
+                   "read-only database cannot finish it: some merged runs may lack their folders\n",
+                   path_.c_str());
+    }
   } catch (const Error& e) {
     // Statements still prepared keep sqlite3_close from closing (found by
     // LeakSanitizer: every refused foreign database leaked its connection).
@@ -133,10 +186,23 @@ void Database::RefuseForeign() {
                     (id == 0 ? ", tables of another program" : "") +
                     "); nothing was written to it");
   }
-  db::Exec(db_, "PRAGMA application_id = " + std::to_string(kApplicationId));
+  if (!read_only_) db::Exec(db_, "PRAGMA application_id = " + std::to_string(kApplicationId));
 }
 
 void Database::Migrate() {
+  if (read_only_) {
+    const int version =
+        QueryInt("SELECT COUNT(*) FROM sqlite_master WHERE name = 'schema_version'") > 0
+            ? SchemaVersion()
+            : 0;
+    if (version != LatestSchemaVersion()) {
+      throw Error(kReadOnly, "the database is read-only and its schema (version " +
+                                 std::to_string(version) + ") is not this doasido's (" +
+                                 std::to_string(LatestSchemaVersion()) +
+                                 "): open it once where it can be written");
+    }
+    return;
+  }
   db::Exec(db_, "CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
   Transaction tx(*this);
   int version = SchemaVersion();

@@ -111,6 +111,9 @@ class Database {
   Database& operator=(const Database&) = delete;
 
   const std::filesystem::path& path() const { return path_; }
+  // True when the file (or its folder) cannot be written: it was opened
+  // read-only, and any write throws Error(kReadOnly) naming it.
+  bool read_only() const { return read_only_; }
   // The folder relative paths are resolved against.
   const std::filesystem::path& root() const { return root_; }
   int SchemaVersion();
@@ -226,6 +229,23 @@ class Database {
   // out. Returns nullopt when nothing is claimable right now.
   std::optional<Claim> ClaimNext(const std::string& worker, const std::vector<std::string>& stages,
                                  double lease_s, int max_attempts);
+  // Who holds a lease: "<host>:<command pid>/<worker pid>" (the command a
+  // person started, and the process that runs the stage; the same for a
+  // command that runs stages itself, as `rethreshold`). The ONE place that
+  // writes the form; ExpireDeadLeases reads it.
+  static std::string LeaseOwner(long command_pid, long worker_pid);
+  struct Lease {
+    std::int64_t run_id = 0;
+    ClipId clip_id = 0;
+    std::string stage, owner;
+    double expires = 0;  // seconds since the epoch
+  };
+  // Runs leased by a process of this machine that is gone (its worker pid
+  // runs no more): their leases end now, so the next ClaimNext takes them
+  // over at once instead of after the lease. Returns them.
+  std::vector<Lease> ExpireDeadLeases();
+  // Running runs of `stages` (all when empty) whose lease still holds.
+  std::vector<Lease> LiveLeases(const std::vector<std::string>& stages);
   // Extends the lease; false when the worker no longer holds it.
   bool Heartbeat(std::int64_t run_id, const std::string& worker, double lease_s);
   // Records the result and marks the run done, with the upstream runs it
@@ -567,6 +587,28 @@ class Database {
   // Removes staging folders of merges killed before their commit (their
   // process is gone and no journal names them); returns them.
   std::vector<std::filesystem::path> RemoveAbandonedStaging();
+  // Readers never see a merge half placed (db/artifact_lock.cc): a merge
+  // holds the artifact root's placement lock (an flock on
+  // kPlacementLockFile) exclusively from before its rows commit until its
+  // folders are placed; a reader of artifacts (deploy plan, dataset create)
+  // holds it shared while it reads rows and files, so it sees the rows and
+  // folders of before the merge or of after it. A holder that dies releases
+  // it; a journal found under the shared lock is a dead merge's and is
+  // finished first. Each says on stderr when it waits. No lock (and no
+  // wait) on a read-only artifact root: nothing can merge into it.
+  static constexpr const char* kPlacementLockFile = ".doasido-placement.lock";
+  class ArtifactLock {
+   public:
+    explicit ArtifactLock(int fd = -1) : fd_(fd) {}
+    ArtifactLock(ArtifactLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+    ArtifactLock& operator=(ArtifactLock&&) = delete;
+    ~ArtifactLock();
+
+   private:
+    int fd_;
+  };
+  ArtifactLock LockForReading();
+  ArtifactLock LockForPlacement();
   // The artifact rows of `clip` as stored: (stage, path relative to the
   // artifact root).
   std::vector<std::pair<std::string, std::string>> ListArtifacts(ClipId clip);
@@ -645,6 +687,7 @@ class Database {
   std::filesystem::path path_;
   std::filesystem::path root_;
   std::filesystem::path artifact_root_;
+  bool read_only_ = false;  // opened read-only: nobody may write the file (see the constructor)
   sqlite3* db_ = nullptr;
   double busy_timeout_s_;
   std::map<std::string, std::unique_ptr<db::Statement>> statements_;

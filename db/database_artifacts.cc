@@ -65,9 +65,11 @@ void Database::OpenArtifactRoot() {
     // A folder another database owns is never shared: this one gets its own.
     const std::string owner = OwnerOf(root_ / "artifacts");
     stored = owner.empty() || owner == uuid ? "artifacts" : path_.stem().string() + ".artifacts";
-    Transaction tx(*this);
-    SetMeta(kArtifactRootKey, *stored);
-    tx.Commit();
+    if (!read_only_) {  // a read-only database reads where it would have put it
+      Transaction tx(*this);
+      SetMeta(kArtifactRootKey, *stored);
+      tx.Commit();
+    }
   }
   artifact_root_ = (root_ / *stored).lexically_normal();
   const std::string owner = OwnerOf(artifact_root_);

@@ -2,10 +2,12 @@
 #include "db/database.h"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <algorithm>
 
 #include "core/bounded_text.h"
+#include "core/whole_output.h"  // ParsePid, ProcessAlive
 #include "db/statement.h"
 
 namespace doasido {
@@ -76,6 +78,57 @@ std::optional<Claim> Database::ClaimNext(const std::string& worker,
     tx.Commit();
     return claim;
   }
+}
+
+std::string Database::LeaseOwner(long command_pid, long worker_pid) {
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  return std::string(host) + ":" + std::to_string(command_pid) + "/" + std::to_string(worker_pid);
+}
+
+std::vector<Database::Lease> Database::ExpireDeadLeases() {
+  const std::string prefix = LeaseOwner(0, 0).substr(0, LeaseOwner(0, 0).find(':') + 1);
+  std::vector<Lease> dead;
+  {
+    auto& q = Prepare(
+        "SELECT id, clip_id, stage, lease_owner, IFNULL(lease_expires, 0) FROM stage_runs"
+        " WHERE state = 'running' AND substr(lease_owner, 1, length(?1)) = ?1 AND lease_expires >= ?2");
+    q.Bind(1, prefix).Bind(2, Now());
+    while (q.Step()) {
+      const std::string owner = q.Text(3);
+      const size_t slash = owner.rfind('/');
+      const std::optional<long> pid =
+          slash == std::string::npos ? std::nullopt : ParsePid(owner.substr(slash + 1));
+      if (pid && !ProcessAlive(*pid)) {
+        dead.push_back({q.Int(0), q.Int(1), q.Text(2), owner, q.Real(4)});
+      }
+    }
+    q.Reset();
+  }
+  if (dead.empty()) return dead;
+  Transaction tx(*this);
+  for (const Lease& l : dead) {
+    Prepare("UPDATE stage_runs SET lease_expires = 0 WHERE id = ? AND state = 'running'"
+            " AND lease_owner = ?")
+        .Bind(1, l.run_id)
+        .Bind(2, l.owner)
+        .Run();
+  }
+  tx.Commit();
+  return dead;
+}
+
+std::vector<Database::Lease> Database::LiveLeases(const std::vector<std::string>& stages) {
+  auto& q = Prepare(
+      "SELECT id, clip_id, stage, IFNULL(lease_owner, ''), IFNULL(lease_expires, 0) FROM stage_runs"
+      " WHERE state = 'running' AND lease_expires >= ?" +
+      StageFilter("stage", stages.size()) + " ORDER BY id");
+  q.Bind(1, Now());
+  for (size_t i = 0; i < stages.size(); ++i) q.Bind(static_cast<int>(i + 2), stages[i]);
+  std::vector<Lease> out;
+  while (q.Step()) out.push_back({q.Int(0), q.Int(1), q.Text(2), q.Text(3), q.Real(4)});
+  q.Reset();
+  return out;
 }
 
 void Database::RefuseMergedShard() {

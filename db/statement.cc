@@ -1,8 +1,21 @@
 #include "db/statement.h"
 
 #include "core/error.h"
+#include "core/error_codes.h"
 
 namespace doasido::db {
+
+namespace {
+
+[[noreturn]] void ThrowReadOnly(sqlite3* db, const std::string& message) {
+  const char* file = sqlite3_db_filename(db, "main");
+  throw Error(kReadOnly,
+              "cannot write: the database is read-only (a read-only filesystem or file; " +
+                  message + ")",
+              {.file = file ? file : ""});
+}
+
+}  // namespace
 
 Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
   if (sqlite3_prepare_v3(db, sql.data(), static_cast<int>(sql.size()), SQLITE_PREPARE_PERSISTENT,
@@ -51,6 +64,7 @@ bool Statement::Step() {
   sqlite3_reset(stmt_);
   stepped_ = false;
   const char* file = sqlite3_db_filename(db_, "main");
+  if ((code & 0xff) == SQLITE_READONLY) ThrowReadOnly(db_, message);
   throw Error(code == SQLITE_FULL ? "disk_full" : "database",
               code == SQLITE_FULL ? message
                                   : message + " (" + (sqlite3_sql(stmt_) ? sqlite3_sql(stmt_) : "") +
@@ -92,6 +106,7 @@ void Exec(sqlite3* db, const std::string& sql) {
     const std::string message = err ? err : "unknown";
     sqlite3_free(err);
     const char* file = sqlite3_db_filename(db, "main");
+    if ((sqlite3_errcode(db) & 0xff) == SQLITE_READONLY) ThrowReadOnly(db, message);
     throw Error(message.find("full") != std::string::npos ? "disk_full" : "database", message,
                 {.file = file ? file : ""});
   }

@@ -254,6 +254,7 @@ void WriteBimanualPlanJson(const BimanualPlan& plan, const BimanualConfig& confi
                   {"arm_distance", plan.arm_distance}, {"collisions", collisions}, {"ok", plan.ok}};
   std::ofstream out(path);
   out << j.dump(1) << "\n";
+  out.close();  // the last bytes reach the disk here: a full disk shows now
   if (!out) throw Error("io", "cannot write plan", {.file = path.string()});
 }
 

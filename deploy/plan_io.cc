@@ -136,6 +136,7 @@ Json PlanToJson(const Plan& plan) {
 void WritePlanJson(const Plan& plan, const std::filesystem::path& path) {
   std::ofstream out(path);
   out << PlanToJson(plan).dump(1) << "\n";
+  out.close();  // the last bytes reach the disk here: a full disk shows now
   if (!out) throw Error("io", "cannot write plan", {.file = path.string()});
 }
 

@@ -1,6 +1,12 @@
 #include "pipeline/rethreshold.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <set>
+#include <thread>
 
 #include "stages/stage_registry.h"
 #include "pipeline/stage_run.h"
@@ -65,6 +71,32 @@ void RedecideFinished(Database& db, const stages::Stage& stage, const std::strin
   }
 }
 
+// After the last claimable run of `stage`: takes over the runs of dead
+// processes of this machine (true: claim again), or, while another live
+// process holds a run of it, says so once and waits for that lease (true);
+// false when nothing of the stage is running.
+bool WaitForLeases(Database& db, const std::string& stage, std::set<std::int64_t>& told) {
+  const auto dead = db.ExpireDeadLeases();
+  for (const Database::Lease& l : dead) {
+    std::fprintf(stderr, "taking over clip %lld's %s run %lld: %s is gone\n",
+                 static_cast<long long>(l.clip_id), l.stage.c_str(),
+                 static_cast<long long>(l.run_id), l.owner.c_str());
+  }
+  if (!dead.empty()) return true;
+  const auto live = db.LiveLeases({stage});
+  if (live.empty()) return false;
+  const Database::Lease& l = live.front();
+  if (told.insert(l.run_id).second) {
+    std::fprintf(stderr,
+                 "waiting for clip %lld's %s run %lld: leased by %s for %.0f s more (a live "
+                 "process; taken over when the lease ends)\n",
+                 static_cast<long long>(l.clip_id), l.stage.c_str(),
+                 static_cast<long long>(l.run_id), l.owner.c_str(), std::max(0.0, l.expires - Now()));
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::string> RethresholdStages(Database& db, const std::vector<std::string>& wanted) {
@@ -95,14 +127,21 @@ RethresholdTally RethresholdStage(Database& db, const std::string& name, const J
   const std::string hash = ParamHash(stage->Params());
   RedecideFinished(db, *stage, hash, dry_run, tally);
   if (dry_run) return tally;
-  const std::string worker = "rethreshold";
-  while (auto claim = db.ClaimNext(worker, {name}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
-    const StageRunReport report =
-        RunClaimedStage(db, *stage, *claim, worker, hash, kDefaultMaxAttempts);
-    if (report.outcome != RunOutcome::kDone) continue;
-    ++tally.transitions["(queued) -> " +
-                        Outcome(ToString(report.result.verdict), report.result.reason)];
-    ++tally.rerun;
+  // Claims like a worker (its lease names this process), so a re-run after
+  // a kill takes the killed run's claims over at once.
+  const std::string worker = Database::LeaseOwner(getpid(), getpid());
+  std::set<std::int64_t> told;
+  for (;;) {
+    if (auto claim = db.ClaimNext(worker, {name}, kDefaultLeaseSeconds, kDefaultMaxAttempts)) {
+      const StageRunReport report =
+          RunClaimedStage(db, *stage, *claim, worker, hash, kDefaultMaxAttempts);
+      if (report.outcome != RunOutcome::kDone) continue;
+      ++tally.transitions["(queued) -> " +
+                          Outcome(ToString(report.result.verdict), report.result.reason)];
+      ++tally.rerun;
+      continue;
+    }
+    if (!WaitForLeases(db, name, told)) break;
   }
   return tally;
 }

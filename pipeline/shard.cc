@@ -131,6 +131,8 @@ void WriteShardFolder(Database& db, const Database::ShardSpec& spec) {
   const fs::path folder = spec.path.parent_path();
   const fs::path temp = TempSibling(folder);
   try {
+    fs::create_directories(folder.parent_path());
+    MarkTemporary(temp);
     fs::create_directories(temp);
     db.WriteShardDatabase(spec, temp / kShardDbName);
     {
@@ -149,9 +151,11 @@ void WriteShardFolder(Database& db, const Database::ShardSpec& spec) {
                     {.file = folder.string()});
       }
     });
+    UnmarkTemporary(temp);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(temp, ec);
+    UnmarkTemporary(temp);
     throw;
   }
 }
@@ -271,6 +275,8 @@ Database::MergeStats MergeShard(Database& db, const std::filesystem::path& shard
   // next open of this database finishes (Database::FinishPlacement).
   const Database::MergePlacement placement = StageShardFiles(shard_root, db.ArtifactRoot(), clips);
   const bool moves = !placement.place.empty() || !placement.remove.empty();
+  // Readers wait from before the commit until the folders are in place.
+  const Database::ArtifactLock placing = db.LockForPlacement();
   Database::MergeStats stats;
   try {
     stats = db.MergeShard(shard_db, hold_back, moves ? Database::PlacementJson(placement) : "");

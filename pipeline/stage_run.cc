@@ -53,6 +53,7 @@ void PointXmlAtPublished(const StageResult& result, const std::filesystem::path&
     }
     std::ofstream out(file, std::ios::binary | std::ios::trunc);
     out << text;
+    out.close();  // the last bytes reach the disk here: a full disk shows now
     if (!out) throw Error("io", "cannot rewrite", {.file = file.string()});
   }
 }

@@ -10,7 +10,9 @@
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
+#include <ctime>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <opencv2/core/utility.hpp>
@@ -32,11 +34,7 @@ void OnStopSignal(int) { g_stop = true; }
 
 // "host:<pid of the command>/<pid of the worker>": the command is the
 // process a person started (and may kill), the worker its child.
-std::string WorkerName() {
-  char host[256] = {0};
-  gethostname(host, sizeof host - 1);
-  return std::string(host) + ":" + std::to_string(getppid()) + "/" + std::to_string(getpid());
-}
+std::string WorkerName() { return Database::LeaseOwner(getppid(), getpid()); }
 
 // Watches the run in progress from a second thread with its own
 // connection. It renews the run's lease (so a long stage is not mistaken for
@@ -231,6 +229,46 @@ void PrepareQueue(const WorkerOptions& options) {
   }
 }
 
+// What the supervisor says about leases that are not its workers': a dead
+// worker's run on this machine is taken over at once (Database::
+// ExpireDeadLeases), and a run another live process holds is named once
+// (clip, stage, holder, until when) so a wait is never silent.
+class LeaseWatch {
+ public:
+  explicit LeaseWatch(std::vector<std::string> stages) : stages_(std::move(stages)) {}
+  void Check(Database& db) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_) return;
+    next_ = now + std::chrono::seconds(1);
+    for (const Database::Lease& l : db.ExpireDeadLeases()) {
+      spdlog::warn("taking over clip {}'s {} run {}: its worker {} is gone (its lease ran until {})",
+                   l.clip_id, l.stage, l.run_id, l.owner, Utc(l.expires));
+    }
+    const std::string ours = Database::LeaseOwner(getpid(), 0);
+    const std::string mine = ours.substr(0, ours.rfind('/') + 1);
+    for (const Database::Lease& l : db.LiveLeases(stages_)) {
+      if (l.owner.compare(0, mine.size(), mine) == 0) continue;  // one of our workers
+      if (!told_.insert({l.run_id, l.owner}).second) continue;
+      spdlog::warn("waiting for clip {}'s {} run {}: leased by {} until {} (another live worker; "
+                   "taken over when the lease ends)",
+                   l.clip_id, l.stage, l.run_id, l.owner, Utc(l.expires));
+    }
+  }
+
+ private:
+  static std::string Utc(double seconds) {
+    const std::time_t t = static_cast<std::time_t>(seconds);
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &tm);
+    return text;
+  }
+  std::vector<std::string> stages_;
+  std::set<std::pair<std::int64_t, std::string>> told_;
+  std::chrono::steady_clock::time_point next_{};
+};
+
 // Runs options.jobs worker processes until they have all ended, starting
 // another in place of one killed by a signal or by its stage timeout while
 // work is left, and reports progress meanwhile.
@@ -257,7 +295,9 @@ void SuperviseWorkers(const WorkerOptions& options) {
   };
   for (int i = 0; i < options.jobs; ++i) spawn(i);
   Database db(options.db);
+  LeaseWatch leases(options.stages);
   while (!children.empty()) {
+    leases.Check(db);
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid > 0) {

@@ -24,6 +24,14 @@ says so; anything else is a failure and is printed. Operations:
   report, hand-import, synth, shard, deploy-plan
       described only: what the kill left (files, leftovers) and whether the
       re-run succeeded
+  rethreshold  `doasido rethreshold` with a stricter activity limit after the
+      activity runs were queued again: killed, then run again at once (within
+      the lease); the stage runs must equal an uninterrupted run's ("runs
+      left running" counts kills that left a claim behind)
+  full-disk  (needs `unshare -rm`) each export (new, replacing) and `dataset
+      create` into a tmpfs of a random size between 5 % and 150 % of what it
+      needs: it succeeds with a whole output, or fails with a message leaving
+      the earlier output byte for byte (or none) and no temporary
 
 Usage: scripts/kill_probe.py --bin build/bin/doasido --work /tmp/probe [--kills 20]
 """
@@ -266,6 +274,119 @@ class Probe:
                 for c in done_trajectories(parent))
             self.results[op]["rerun_ok"] += good
 
+    def rethreshold(self):
+        op = "rethreshold"
+        base = os.path.join(self.work, "rt-base")
+        shutil.copytree(os.path.dirname(self.db), base, symlinks=True)
+        run(self.bin, ["queue", "reset", "--db", f"{base}/d.db", "--stage", "activity", "--all"])
+        strict = os.path.join(self.work, "strict.toml")
+        open(strict, "w").write("[activity]\nmin_active_fraction = 0.9\n")
+
+        def fresh(name):
+            d = os.path.join(self.work, name)
+            shutil.rmtree(d, ignore_errors=True)
+            shutil.copytree(base, d, symlinks=True)
+            return f"{d}/d.db", ["rethreshold", "--db", f"{d}/d.db", "--config", strict]
+
+        def runs(db):
+            c = sqlite3.connect(db)
+            rows = c.execute("SELECT clip_id, stage, state, IFNULL(verdict, ''), IFNULL(reason, '')"
+                             " FROM stage_runs ORDER BY clip_id, position").fetchall()
+            c.close()
+            return rows
+
+        db, args = fresh("rt-ref")
+        full = timed(self.bin, args)
+        want = runs(db)
+        r = self.results.setdefault(op, {"old": 0, "new": 0, "finished": 0, "bad": 0, "rerun_ok": 0,
+                                         "runs_left_running": 0, "notes": []})
+        for k in range(self.kills):
+            db, args = fresh("rt")
+            before = runs(db)
+            # Start-up takes most of a short run: every other kill lands in
+            # its last half (the claims).
+            finished = not killed(self.bin, args, self.rng.uniform(0.5 * full if k % 2 else 0, full))
+            left = runs(db)
+            r["runs_left_running"] += any(row[2] == "running" for row in left)
+            self.record(op, "finished" if finished else ("old" if left == before else "new"), True)
+            rr = run(self.bin, args, check=False)  # at once: within the killed run's lease
+            same = rr.returncode == 0 and runs(db) == want
+            r["rerun_ok"] += same
+            if not same:
+                r["bad"] += 1
+                r["notes"].append(f"re-run exit {rr.returncode}: runs differ from an uninterrupted run")
+
+    def full_disk(self):
+        if subprocess.run(["unshare", "-rm", "true"], capture_output=True).returncode != 0:
+            self.results["full-disk"] = {"skipped": "no user namespaces"}
+            return
+        w = os.path.join(self.work, "fd")
+        os.makedirs(w, exist_ok=True)
+        mnt = os.path.join(w, "mnt")
+        os.makedirs(mnt, exist_ok=True)
+        good = {"robomimic": os.path.join(w, "good.hdf5"), "lerobot": os.path.join(w, "good-lerobot"),
+                "create": os.path.join(w, "good-root")}
+        run(self.bin, ["dataset", "export", "--root", self.root, "v1", "--format", "robomimic",
+                       "--out", good["robomimic"]])
+        run(self.bin, ["dataset", "export", "--root", self.root, "v1", "--format", "lerobot",
+                       "--out", good["lerobot"]])
+        run(self.bin, ["dataset", "create", "--db", self.db, "--root", good["create"], "--select", "all",
+                       "--no-thumbnails"])
+
+        def size(p):
+            return os.path.getsize(p) if os.path.isfile(p) else sum(
+                os.path.getsize(os.path.join(a, f)) + 4096 for a, _, fs in os.walk(p) for f in fs)
+
+        def args_for(kind, out):
+            if kind == "create":
+                return ["dataset", "create", "--db", self.db, "--root", out, "--select", "all",
+                        "--no-thumbnails"]
+            return ["dataset", "export", "--root", self.root, "v1", "--format", kind, "--out", out]
+
+        whole = {"robomimic": robomimic_whole, "lerobot": lerobot_whole,
+                 "create": lambda o: os.path.exists(os.path.join(o, "default", "v1", "manifest.json"))}
+        q = lambda p: "'" + p + "'"
+        for kind, replace in (("robomimic", False), ("robomimic", True), ("lerobot", False),
+                              ("lerobot", True), ("create", False)):
+            op = f"full-disk-{kind}-{'replace' if replace else 'new'}"
+            r = self.results.setdefault(op, {"fit": 0, "failed_clean": 0, "bad": 0, "notes": []})
+            need = size(good[kind])
+            for _ in range(self.kills):
+                kb = int(need * self.rng.uniform(0.05, 1.5) / 1024) + 8
+                if replace:
+                    kb += need // 1024 + 8
+                out = os.path.join(mnt, "out")
+                copy = os.path.join(w, "copy")
+                shutil.rmtree(copy, ignore_errors=True) if os.path.isdir(copy) else (
+                    os.path.exists(copy) and os.remove(copy))
+                script = (f"mount -t tmpfs -o size={kb}k tmpfs {q(mnt)} || exit 90; "
+                          + (f"cp -a {q(good[kind])} {q(out)} || exit 91; " if replace else "")
+                          + " ".join(q(a) for a in [self.bin] + args_for(kind, out))
+                          + f" > {q(w)}/log 2>&1; echo $? > {q(w)}/rc; ls -a {q(mnt)} > {q(w)}/ls; "
+                          f"[ -e {q(out)} ] && cp -a {q(out)} {q(copy)}; umount {q(mnt)}; exit 0")
+                if subprocess.run(["unshare", "-rm", "sh", "-c", script]).returncode != 0:
+                    r["notes"].append(f"{kb} kB: the namespace script failed")
+                    continue
+                rc = int(open(f"{w}/rc").read())
+                log = open(f"{w}/log").read().strip()
+                names = set(open(f"{w}/ls").read().split()) - {".", ".."}
+                if rc == 0:
+                    fine = whole[kind](copy)
+                    r["fit" if fine else "bad"] += 1
+                    if not fine:
+                        r["notes"].append(f"{kb} kB: exit 0 but the output is not whole")
+                    continue
+                kept = (tree_hash(copy) == tree_hash(good[kind])) if replace else (
+                    not os.path.exists(copy) or (kind == "create" and not whole[kind](copy) and
+                                                 not os.listdir(os.path.join(copy, "default"))))
+                fine = kept and bool(log) and names <= {"out"}
+                r["failed_clean" if fine else "bad"] += 1
+                if not fine:
+                    r["notes"].append(f"{kb} kB: exit {rc}, earlier output kept {kept}, "
+                                      f"left {sorted(names)}, said {log.splitlines()[-1:] if log else 'nothing'}")
+                elif log.splitlines()[-1:] and len(r["notes"]) < 3:
+                    r["notes"].append(f"{kb} kB: {log.splitlines()[-1][:160]}")
+
     def shard_whole(self, out):
         """Every shard folder is recorded by the parent and every recorded
         shard has its database, after any doasido command opened the parent."""
@@ -348,7 +469,8 @@ def main():
     p.setup()
     only = set(filter(None, args.only.split(",")))
     steps = [("export", lambda: [p.export(f, r) for f in ("lerobot", "robomimic") for r in (False, True)]),
-             ("publish", p.publish), ("merge", p.merge), ("others", p.others)]
+             ("publish", p.publish), ("merge", p.merge), ("rethreshold", p.rethreshold),
+             ("full-disk", p.full_disk), ("others", p.others)]
     for name, step in steps:
         if not only or name in only:
             t0 = time.monotonic()

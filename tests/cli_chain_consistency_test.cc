@@ -10,8 +10,11 @@
 //  - error text is bounded in bytes, the whole log named;
 //  - a merged shard hands its clips back and refuses further runs;
 //  - worker options are range-checked before anything runs.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -368,6 +371,81 @@ TEST(WorkerOptions, OutOfRangeValuesAreRefusedBeforeAnyWork) {
   }
   EXPECT_EQ(Count(db, "SELECT COUNT(*) FROM events WHERE kind = 'claim'"), 0);
   EXPECT_EQ(RunDoasido({"status", "--db", db.string()}).exit_code, 0);
+}
+
+}  // namespace
+}  // namespace doasido
+
+namespace doasido {
+namespace {
+
+// Issue #50, finding 2: between a merge's commit and the end of its folder
+// moves (slowed here to 0.3 s a folder) `deploy plan` and `dataset create`
+// saw the merged rows without their folders (`no_trajectory`,
+// `empty_version`). They now wait for the placement and see the new state.
+TEST(MergePlacement, ReadersNeverSeeRowsWithoutTheirFolders) {
+  TempDir dir;
+  const fs::path synth = dir / "s";
+  ASSERT_EQ(RunDoasido({"synth", "--out", synth.string(), "--clips", "3", "--seed", "7",
+                        "--frames", "24", "--width", "160", "--height", "120", "--mix", "clean=1"})
+                .exit_code,
+            0);
+  WriteFile(dir / "run.toml", kBundleCommand);
+  const fs::path parent = dir / "p/d.db";
+  fs::create_directories(parent.parent_path());
+  ASSERT_EQ(RunDoasido({"init", "--db", parent.string(), "--pipeline", kPipeline}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"ingest", "--db", parent.string(), (synth / "clips.csv").string()})
+                .exit_code,
+            0);
+  ASSERT_EQ(RunDoasido({"shard", "--db", parent.string(), "--shards", "1", "--config",
+                        (dir / "run.toml").string()})
+                .exit_code,
+            0);
+  const fs::path shard = parent.parent_path() / "shards/shard-000/doasido.db";
+  const auto ran =
+      RunDoasido({"run", "--db", shard.string(), "--config", (dir / "run.toml").string()});
+  ASSERT_EQ(ran.exit_code, 0) << ran.err;
+  const std::string done_sql =
+      "SELECT clip_id FROM stage_runs WHERE stage = 'retarget_kinematic' AND state = 'done'"
+      " AND verdict = 'pass' ORDER BY clip_id";
+  const auto passed = QueryRows(shard, done_sql);
+  ASSERT_GE(passed.size(), 2u);
+
+  setenv("DOASIDO_TEST_PAUSE", "merge_placement=300", 1);
+  const int merge = testing::Spawn(
+      {testing::DoasidoBin().string(), "merge", "--db", parent.string(), shard.string()},
+      dir / "merge.log");
+  unsetenv("DOASIDO_TEST_PAUSE");
+  // Wait for the merge's commit (its journal), then read at once.
+  bool committed = false;
+  for (int i = 0; i < 600 && !committed; ++i) {
+    committed = QueryRows(parent, "SELECT COUNT(*) FROM meta WHERE key = 'pending_placement'")
+                    .at(0) == "1";
+    if (!committed) usleep(10000);
+  }
+  ASSERT_TRUE(committed) << ReadFile(dir / "merge.log");
+  const auto plan = RunDoasido({"deploy", "plan", "--db", parent.string(), "--clip",
+                                passed.back(), "--no-replay", "--yaw-steps", "1",
+                                "--offset-steps", "1", "--out", (dir / "plan.json").string()});
+  const auto made = RunDoasido({"dataset", "create", "--db", parent.string(), "--root",
+                                (dir / "datasets").string(), "--select", "all",
+                                "--no-thumbnails"});
+  EXPECT_EQ(testing::WaitFor(merge), 0) << ReadFile(dir / "merge.log");
+  // The plan found the merged run's trajectory (whether the synthetic
+  // trajectory passes the arm's checks is another matter: exit 0 or
+  // plan_failed_checks, with the plan written either way).
+  EXPECT_THAT(plan.err, ::testing::HasSubstr("planning retarget_kinematic run"));
+  EXPECT_THAT(plan.err, ::testing::Not(::testing::HasSubstr("no_trajectory")));
+  EXPECT_TRUE(plan.exit_code == 0 || plan.err.find("plan_failed_checks") != std::string::npos)
+      << plan.err;
+  EXPECT_TRUE(fs::exists(dir / "plan.json"));
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const dataset::Manifest m = dataset::ReadManifest(dir / "datasets/default/v1");
+  EXPECT_EQ(m.episodes.size(), passed.size()) << made.out << made.err;
+  // Every merged row has its folder.
+  for (const auto& path : QueryRows(parent, "SELECT path FROM artifacts")) {
+    EXPECT_TRUE(fs::exists(parent.parent_path() / "artifacts" / path)) << path;
+  }
 }
 
 }  // namespace

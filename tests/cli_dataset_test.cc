@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 #include <set>
 #include <thread>
 
@@ -349,6 +350,161 @@ TEST_F(CliDataset, KilledCreateLeavesNoPartialVersion) {
   for (const auto& entry : fs::directory_iterator(root / "default")) {
     EXPECT_NE(entry.path().filename().string()[0], '.') << "left behind: " << entry.path();
   }
+}
+
+// A copy of the fixture's database and artifacts in `work` (videos linked).
+fs::path CopyOfTheDatabase(const fs::path& pool, const fs::path& work) {
+  fs::create_directories(work);
+  fs::copy_file(pool / "d.db", work / "d.db");
+  fs::copy(pool / "artifacts", work / "artifacts", fs::copy_options::recursive);
+  fs::create_directory_symlink(pool / "s", work / "s");
+  return work / "d.db";
+}
+
+std::string Quote(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// Issue #50, finding 1: a robomimic export that does not fit on the disk
+// (a tmpfs sized for one export and a little, in a private user + mount
+// namespace) fails naming the file and the cause, and the earlier export is
+// byte for byte what it was; with no earlier export, nothing appears.
+TEST_F(CliDataset, RobomimicOnAFullDiskKeepsTheEarlierExport) {
+  if (std::system("unshare -rm true 2>/dev/null") != 0) {
+    GTEST_SKIP() << "user namespaces are not available on this machine";
+  }
+  TempDir work;
+  const fs::path root = work / "datasets";
+  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(), "--select",
+                        "all", "--no-thumbnails"})
+                .exit_code,
+            0);
+  const fs::path good = work / "good.hdf5";
+  const auto first = RunDoasido({"dataset", "export", "--root", root.string(), "v1", "--format",
+                                 "robomimic", "--out", good.string()});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string bytes = testing::ReadFile(good);
+  ASSERT_GT(bytes.size(), 8192u);
+  const fs::path disk = work / "disk";
+  fs::create_directories(disk);
+  const std::string bin = Quote(testing::DoasidoBin());
+  const std::string export_args = " dataset export --root " + Quote(root) +
+                                  " v1 --format robomimic --out ";
+  // The disk holds the earlier export and half as much again: the marker
+  // and a second copy do not fit. Then an empty disk smaller than one.
+  const size_t kb = bytes.size() * 3 / 2 / 1024 + 1;
+  const std::string script =
+      "set -u; mount -t tmpfs -o size=" + std::to_string(kb) + "k tmpfs " + Quote(disk) +
+      " || exit 90; cp " + Quote(good) + " " + Quote(disk / "x.hdf5") + " || exit 91; " + bin +
+      export_args + Quote(disk / "x.hdf5") + " > " + Quote(work / "full.out") + " 2>&1; echo $? > " +
+      Quote(work / "full.rc") + "; cp " + Quote(disk / "x.hdf5") + " " + Quote(work / "after.hdf5") +
+      "; ls -a " + Quote(disk) + " > " + Quote(work / "full.ls") + "; umount " + Quote(disk) +
+      "; mount -t tmpfs -o size=" + std::to_string(bytes.size() / 2048) + "k tmpfs " + Quote(disk) +
+      " || exit 92; " + bin + export_args + Quote(disk / "y.hdf5") + " > " +
+      Quote(work / "small.out") + " 2>&1; echo $? > " + Quote(work / "small.rc") + "; ls -a " +
+      Quote(disk) + " > " + Quote(work / "small.ls") + "; exit 0";
+  WriteFile(work / "disk.sh", script);
+  ASSERT_EQ(std::system(("unshare -rm sh " + Quote(work / "disk.sh")).c_str()), 0);
+
+  const std::string full = testing::ReadFile(work / "full.out");
+  EXPECT_NE(testing::ReadFile(work / "full.rc"), "0\n") << full;
+  EXPECT_THAT(full, HasSubstr("io"));
+  EXPECT_THAT(full, HasSubstr("No space left on device"));
+  EXPECT_THAT(full, HasSubstr("x.hdf5"));
+  EXPECT_TRUE(testing::ReadFile(work / "after.hdf5") == bytes) << "the earlier export changed";
+  EXPECT_EQ(testing::ReadFile(work / "full.ls"), ".\n..\nx.hdf5\n") << "temporaries left";
+  const std::string small = testing::ReadFile(work / "small.out");
+  EXPECT_NE(testing::ReadFile(work / "small.rc"), "0\n") << small;
+  EXPECT_THAT(small, HasSubstr("No space left on device"));
+  EXPECT_EQ(testing::ReadFile(work / "small.ls"), ".\n..\n") << "a failed export left a file";
+  // The export that stayed is whole: h5py reads every demo.
+  WriteFile(work / "read.py",
+            "import h5py, sys\nd = h5py.File(sys.argv[1], 'r')['data']\n"
+            "print(sum(int(d[k].attrs['num_samples']) for k in d), int(d.attrs['total']))\n");
+  const std::string read = testing::ShellOk("/usr/bin/python3 " + Quote(work / "read.py") + " " +
+                                            Quote(work / "after.hdf5"));
+  std::istringstream numbers(read);
+  long samples = -1, total = -2;
+  numbers >> samples >> total;
+  EXPECT_GT(samples, 0) << read;
+  EXPECT_EQ(samples, total) << read;
+}
+
+// Issue #50, finding 5: `dataset create` racing a re-queue (slowed to 0.6 s
+// an episode, the trajectory stage queued again meanwhile) names the race,
+// the clip and the stage, and leaves no version and no temporary.
+TEST_F(CliDataset, CreateRacingAReQueueNamesTheRunsThatChanged) {
+  TempDir work;
+  const fs::path db = CopyOfTheDatabase(dir_->path(), work / "w");
+  const fs::path root = work / "datasets";
+  setenv("DOASIDO_TEST_PAUSE", "version_episode=600", 1);
+  const int create = testing::Spawn({testing::DoasidoBin().string(), "dataset", "create", "--db",
+                                     db.string(), "--root", root.string(), "--select", "all",
+                                     "--no-thumbnails"},
+                                    work / "create.log");
+  unsetenv("DOASIDO_TEST_PAUSE");
+  // Re-queue once the version is being written (its temporary exists).
+  bool writing = false;
+  for (int i = 0; i < 1000 && !writing; ++i) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(root / "default", ec)) {
+      writing |= e.path().filename().string().rfind(".v1.tmp-", 0) == 0;
+    }
+    if (!writing) usleep(10000);
+  }
+  ASSERT_TRUE(writing) << testing::ReadFile(work / "create.log");
+  const auto reset = RunDoasido({"queue", "reset", "--db", db.string(), "--stage",
+                                 "retarget_kinematic", "--all"});
+  ASSERT_EQ(reset.exit_code, 0) << reset.err;
+  EXPECT_NE(testing::WaitFor(create), 0);
+  const std::string log = testing::ReadFile(work / "create.log");
+  EXPECT_THAT(log, HasSubstr("runs_changed"));
+  EXPECT_THAT(log, HasSubstr("retarget_kinematic"));
+  EXPECT_THAT(log, HasSubstr("clip "));
+  EXPECT_THAT(log, ::testing::Not(HasSubstr("No such file")));
+  for (const auto& e : fs::directory_iterator(root / "default")) {
+    ADD_FAILURE() << "left behind: " << e.path();
+  }
+}
+
+// Issue #50, finding 6: a database on a read-only mount (a bind mount in a
+// private user + mount namespace: root cannot write it either) is opened
+// read-only and said so; status, report and dataset create into another
+// root work; a write fails with read_only naming the file.
+TEST_F(CliDataset, AReadOnlyDatabaseIsShownAndRefusesWrites) {
+  if (std::system("unshare -rm true 2>/dev/null") != 0) {
+    GTEST_SKIP() << "user namespaces are not available on this machine";
+  }
+  TempDir work;
+  const fs::path db = CopyOfTheDatabase(dir_->path(), work / "ro");
+  const fs::path out = work / "out";
+  fs::create_directories(out);
+  const std::string bin = Quote(testing::DoasidoBin());
+  auto step = [&](const std::string& name, const std::string& args) {
+    return bin + " " + args + " > " + Quote(out / (name + ".out")) + " 2> " +
+           Quote(out / (name + ".err")) + "; echo $? > " + Quote(out / (name + ".rc")) + "; ";
+  };
+  const std::string script =
+      "set -u; mount --bind " + Quote(work / "ro") + " " + Quote(work / "ro") +
+      " && mount -o remount,ro,bind " + Quote(work / "ro") + " || exit 90; " +
+      step("status", "status --db " + Quote(db)) +
+      step("report", "report --db " + Quote(db) + " --no-thumbnails --out " + Quote(out / "report")) +
+      step("create", "dataset create --db " + Quote(db) + " --root " + Quote(out / "datasets") +
+                         " --select all --no-thumbnails") +
+      step("reset", "queue reset --db " + Quote(db) + " --stage retarget_kinematic --all") +
+      "exit 0";
+  WriteFile(work / "ro.sh", script);
+  ASSERT_EQ(std::system(("unshare -rm sh " + Quote(work / "ro.sh")).c_str()), 0);
+  for (const char* name : {"status", "report", "create"}) {
+    const std::string err = testing::ReadFile(out / (std::string(name) + ".err"));
+    EXPECT_EQ(testing::ReadFile(out / (std::string(name) + ".rc")), "0\n") << name << ": " << err;
+    EXPECT_THAT(err, HasSubstr("read-only")) << name;
+  }
+  EXPECT_THAT(testing::ReadFile(out / "status.out"), HasSubstr("retarget_kinematic"));
+  EXPECT_TRUE(fs::exists(out / "report/report.html"));
+  EXPECT_TRUE(fs::exists(out / "datasets/default/v1/manifest.json"));
+  const std::string reset = testing::ReadFile(out / "reset.err");
+  EXPECT_NE(testing::ReadFile(out / "reset.rc"), "0\n") << reset;
+  EXPECT_THAT(reset, HasSubstr("read_only"));
+  EXPECT_THAT(reset, HasSubstr(db.string()));
 }
 
 // Two hands through the queue into a dataset: a synthetic two-handed carry

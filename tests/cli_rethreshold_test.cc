@@ -4,17 +4,20 @@
 // clips a change sends on are judged by the later stages, a person's verdict
 // is kept, and a later `doasido run` with the same config has nothing to redo.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <sstream>
 
 #include "db/database.h"
+#include "testing/db_dump.h"
 #include "test_util.h"
 
 namespace doasido {
 namespace {
 
 using testing::RunDoasido;
+using testing::DeadPid;
 using testing::TempDir;
 
 TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
@@ -104,6 +107,91 @@ TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
   const auto again = RunDoasido({"run", "--db", db_path, "--config", (dir / "strict.toml").string()});
   EXPECT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(db.DoneEventCounts(), done_after);
+}
+
+// A filtered pool whose activity runs are queued again; `copies` databases
+// of it in their own folders.
+std::vector<std::string> RequeuedActivity(const TempDir& dir, int copies) {
+  const std::string out = (dir / "synth").string();
+  EXPECT_EQ(RunDoasido({"synth", "--out", out, "--clips", "6", "--frames", "40", "--width", "128",
+                        "--height", "96", "--seed", "9", "--mix", "clean=0.6,static=0.4"})
+                .exit_code,
+            0);
+  const std::string db_path = (dir / "d.db").string();
+  EXPECT_EQ(RunDoasido({"init", "--db", db_path}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", db_path, out + "/Annotations"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  const auto reset =
+      RunDoasido({"queue", "reset", "--db", db_path, "--stage", "activity", "--all"});
+  EXPECT_EQ(reset.exit_code, 0) << reset.err;
+  std::vector<std::string> dbs;
+  for (int i = 0; i < copies; ++i) {
+    const auto folder = dir / ("copy" + std::to_string(i));
+    std::filesystem::create_directories(folder);
+    std::filesystem::copy_file(db_path, folder / "d.db");
+    dbs.push_back((folder / "d.db").string());
+  }
+  return dbs;
+}
+
+std::vector<std::string> Runs(const std::string& db) {
+  return testing::QueryRows(db, "SELECT clip_id, stage, state, IFNULL(verdict, ''),"
+                                " IFNULL(reason, '') FROM stage_runs ORDER BY clip_id, position");
+}
+
+// Issue #50, finding 4: a killed `rethreshold` left its claim `running`, and
+// a re-run within the lease exited 0 without finishing it. The claim names
+// its process now: a re-run takes a dead one over at once and ends with
+// the database of an uninterrupted run; a live holder's claim is waited
+// for, and said so.
+TEST(Rethreshold, AReRunTakesOverAKilledRunsClaim) {
+  TempDir dir;
+  const auto dbs = RequeuedActivity(dir, 3);
+  ASSERT_EQ(dbs.size(), 3u);
+  const auto whole = RunDoasido({"rethreshold", "--db", dbs[0], "--stages", "activity"});
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  ASSERT_EQ(testing::QueryRows(dbs[0], "SELECT COUNT(*) FROM stage_runs WHERE stage = 'activity'"
+                                       " AND state != 'done'")[0],
+            "0");
+  {  // What a rethreshold killed with its claim held leaves.
+    Database db(dbs[1]);
+    ASSERT_TRUE(db.ClaimNext(Database::LeaseOwner(DeadPid(), DeadPid()), {"activity"}, 600, 3));
+  }
+  const auto again = RunDoasido({"rethreshold", "--db", dbs[1], "--stages", "activity"});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find("taking over clip"), std::string::npos) << again.err;
+  EXPECT_EQ(Runs(dbs[1]), Runs(dbs[0]));
+
+  {  // A live holder (this test process) with a 2-s lease: waited for.
+    Database db(dbs[2]);
+    ASSERT_TRUE(db.ClaimNext(Database::LeaseOwner(getpid(), getpid()), {"activity"}, 2, 3));
+  }
+  const auto waited = RunDoasido({"rethreshold", "--db", dbs[2], "--stages", "activity"});
+  ASSERT_EQ(waited.exit_code, 0) << waited.err;
+  EXPECT_NE(waited.err.find("waiting for clip"), std::string::npos) << waited.err;
+  EXPECT_EQ(Runs(dbs[2]), Runs(dbs[0]));
+}
+
+// Issue #50, finding 7: `run` after a killed `run` sat silent for the whole
+// lease. A dead worker's run on this machine is taken over at once; a run
+// another live worker holds is named with its clip, stage and lease end.
+TEST(LeaseWaits, RunTakesOverDeadWorkersAndNamesLiveLeases) {
+  TempDir dir;
+  const auto dbs = RequeuedActivity(dir, 1);
+  ASSERT_EQ(dbs.size(), 1u);
+  {
+    Database db(dbs[0]);
+    ASSERT_TRUE(db.ClaimNext(Database::LeaseOwner(DeadPid(), DeadPid()), {"activity"}, 600, 3));
+    ASSERT_TRUE(db.ClaimNext("elsewhere:1/2", {"activity"}, 3, 3));
+  }
+  const auto run = RunDoasido({"run", "--db", dbs[0]});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("taking over clip"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("'s activity run"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("leased by elsewhere:1/2 until"), std::string::npos) << run.err;
+  EXPECT_EQ(testing::QueryRows(dbs[0], "SELECT COUNT(*) FROM stage_runs WHERE state IN"
+                                       " ('pending', 'running')")[0],
+            "0");
 }
 
 TEST(Rethreshold, UnknownStageIsRefused) {

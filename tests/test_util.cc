@@ -132,6 +132,13 @@ int WaitFor(int pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+long DeadPid() {
+  const pid_t pid = fork();
+  if (pid == 0) _exit(0);
+  WaitFor(pid);
+  return pid;
+}
+
 std::string LoopbackLcmUrl() {
   return "udpm://239.255.76.67:" + std::to_string(7700 + getpid() % 2000) + "?ttl=0";
 }

@@ -64,6 +64,9 @@ std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path)
 int Spawn(const std::vector<std::string>& args, const std::filesystem::path& log);
 // Waits for `pid`; its exit status, or 128 + the signal that ended it.
 int WaitFor(int pid);
+// The id of a process that has ended (forked, exited and reaped here): a
+// writer or lease holder that is gone.
+long DeadPid();
 // A loopback-only LCM multicast URL (ttl=0) on a port of this process's
 // own, so parallel test runs do not hear each other.
 std::string LoopbackLcmUrl();

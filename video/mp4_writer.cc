@@ -123,6 +123,8 @@ std::int64_t Mp4Writer::Finish() {
   Check(avcodec_send_frame(av_->codec, nullptr), "cannot flush the encoder", path_);
   Drain(true);
   Check(av_write_trailer(av_->format), "cannot write the trailer", path_);
+  // Closing writes what the I/O buffer still holds: a full disk shows here.
+  if (av_->format->pb) Check(avio_closep(&av_->format->pb), "cannot close the file", path_);
   return frames_;
 }
 

@@ -70,6 +70,7 @@ void WriteTrajectoryJson(const HandTrajectory& t, const std::filesystem::path& p
   if (!t.metrics.empty()) j["metrics"] = t.metrics;
   std::ofstream out(path);
   out << j.dump(1);
+  out.close();  // the last bytes reach the disk here: a full disk shows now
   if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
 }
 
@@ -149,6 +150,7 @@ void WriteTrajectoryCsv(const HandTrajectory& t, const std::filesystem::path& pa
     }
     out << CsvLine(row);
   }
+  out.close();
   if (!out) throw Error("io", "cannot write trajectory", {.file = path.string()});
 }
 

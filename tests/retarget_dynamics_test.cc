@@ -427,13 +427,15 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
 // the reference's own controls (no noise); rung "starved" averages four
 // samples with uniform weights (no optimisation) under a noise that opens
 // the grip.
+TriMesh LadderCylinder() { return synth::MakeCylinder(0.03, 0.09, 16); }
+
 recon::Reconstruction Lift(int frames) {
   synth::EpisodeSpec spec;
   spec.frames = frames;
   spec.verb = synth::Verb::kPickPlace;
   spec.grasp = synth::GraspType::kPinch;
-  spec.manipulation_scale = 3;
-  return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, Cylinder()), 30.0);
+  spec.manipulation_scale = 2;  // lifts of ~20 cm: an object left on the floor fails
+  return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, LadderCylinder()), 30.0);
 }
 
 DynamicRetargetConfig LadderRung(const std::string& rung) {
@@ -443,7 +445,8 @@ DynamicRetargetConfig LadderRung(const std::string& rung) {
   c.scene.density = 400;
   AnnealedSamplerConfig& s = c.sampler;
   s.perturb = false;
-  s.horizon = s.ctrl_dt = s.knot_dt = 0.25;
+  s.horizon = s.ctrl_dt = s.knot_dt = s.blend_seconds = 0.25;
+  s.warmup_seconds = -1;
   if (rung == "replay") {
     s.num_samples = 2;
     s.max_num_iterations = 1;
@@ -463,7 +466,8 @@ TEST(SamplerLadder, AClipFailingAtTheFirstRungKeepsTheSecondRungsRunAndRecordsBo
   TempDir dir;
   const recon::Reconstruction r = Lift(kLadderFrames);
   const std::function<DynamicRetargetRun(const std::string&)> track = [&](const std::string& rung) {
-    return Retarget(r, LadderRung(rung), dir);
+    const DynamicRetargetConfig c = LadderRung(rung);
+    return RetargetReconstruction(r, LadderCylinder(), FindEmbodiment(c.hand, c.robots_dir), c, dir / "scene", "lift");
   };
   const LadderResult<DynamicRetargetRun> ladder = RunLadder(std::vector<std::string>{"starved", "replay"}, track);
   ASSERT_EQ(ladder.rungs.size(), 2u);
@@ -488,7 +492,7 @@ TEST(SamplerLadder, AClipFailingAtTheFirstRungKeepsTheSecondRungsRunAndRecordsBo
 TEST(SamplerLadder, AClipSucceedingAtTheFirstRungRunsNoOther) {
   TempDir root;
   recon::Reconstruction r = Lift(kLadderFrames);
-  SaveObj(Cylinder(), root / "cylinder.obj");
+  SaveObj(LadderCylinder(), root / "cylinder.obj");
   r.object_mesh = root / "cylinder.obj";
   recon::WriteReconstruction(r, root / "artifacts/9" / recon::kReconStageName);
   ClipContext context;
@@ -496,7 +500,7 @@ TEST(SamplerLadder, AClipSucceedingAtTheFirstRungRunsNoOther) {
   context.artifact_dir = root / "artifacts/9" / kRetargetStageName;
   DynamicRetargetConfig config = LadderRung("replay");
   config.preset = kLadderPreset;
-  config.ladder = {kSamplerRung, "seed"};  // seed would take minutes
+  config.ladder = {kSamplerRung, "fast"};
   stages::DynamicRetargetStage stage(config);
   const StageResult result = stage.Run(context);
   const Json& m = result.measurements;

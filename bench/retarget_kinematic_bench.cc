@@ -84,8 +84,9 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.single_mean = Mean(err_a);
   row.single_p95 = P95(err_a);
 
-  KinematicConfig multi;  // default restarts
+  KinematicConfig multi;  // default restarts, on every frame below, with the tolerance before 2026-11-28
   multi.scale = row.scale;
+  multi.tolerance = 1e-12;
   KinematicRetargeter b(hand, multi);
   std::vector<double> err_b;
   Eigen::VectorXd prev;
@@ -102,7 +103,9 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   // The sequence as the stages solve it (Solve): random starts only at the
   // first frame and after a jump.
   {
-    KinematicRetargeter track(hand, multi);
+    KinematicConfig defaults;
+    defaults.scale = row.scale;
+    KinematicRetargeter track(hand, defaults);
     const auto w0 = Clock::now();
     const std::clock_t c0 = std::clock();
     const HandTrajectory t = track.Solve(frames, {}, 30.0);
@@ -178,7 +181,12 @@ int main(int argc, char** argv) {
               "1x mean", "1x p95", "mx mean", "mx p95", "worst", "1x worst", "9x worst",
               "ms/frame", "mj_step/s", "frame/steps");
   std::vector<Row> rows;
+  std::string only;  // --hands=NAME measures that hand alone
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]).rfind("--hands=", 0) == 0) only = argv[i] + 8;
+  }
   for (const char* name : kHands) {
+    if (!only.empty() && only != name) continue;
     const Row& r = rows.emplace_back(Measure(name, frames));
     std::printf("%-13s %6.3f | %8.2f %8.2f | %8.2f %8.2f | %5d %9.2f %9.2f | %9.3f %10.0f %12.1f\n",
                 r.hand.c_str(), r.scale, 1000 * r.single_mean, 1000 * r.single_p95,

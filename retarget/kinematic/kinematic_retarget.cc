@@ -397,8 +397,8 @@ void KinematicRetargeter::SolveHolding(Eigen::VectorXd& q, const std::vector<Vec
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = config_.max_iterations;
-  options.function_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-12;
+  options.function_tolerance = config_.tolerance;
+  options.parameter_tolerance = config_.tolerance;
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);

@@ -70,6 +70,10 @@ struct KinematicConfig {
   // other frames are solved from the previous frame's answer alone.
   double jump_distance = 0.05;
   int max_iterations = 100;      // Levenberg-Marquardt iterations per start
+  // Ceres' function and parameter tolerances: a start stops when an
+  // iteration changes the objective (relative) or q by less (1e-12 before
+  // 2026-11-28: iterations that moved fingertips by micrometres).
+  double tolerance = 1e-6;
   double sigma = 0.01;           // m: position residual unit
   double smooth_weight = 1e-3;   // lambda, per rad^2 (or m^2) of change from the previous frame
   bool use_intermediate = true;  // also match knuckles and other non-fingertip points
@@ -84,7 +88,7 @@ struct KinematicConfig {
   double contact_epsilon = 0.02;   // m: a human fingertip this close to the object touches it
   double contact_depth = 0.002;    // m: how far a touching fingertip geom is asked into the object
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, jump_distance, max_iterations, sigma,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, jump_distance, max_iterations, tolerance, sigma,
                                                 smooth_weight, use_intermediate, scale, seed,
                                                 wrist_noise_rad, wrist_noise_m, robust_loss_scale,
                                                 contact_weight, contact_epsilon, contact_depth)

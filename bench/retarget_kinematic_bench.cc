@@ -64,6 +64,10 @@ struct Row {
   double steps_per_s = 0;    // mj_step of the hand scene
 };
 
+// --track_only: only the track solve (Solve); --tolerance=T: its Ceres tolerance.
+bool g_track_only = false;
+double g_tolerance = 0;
+
 Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   Row row;
   row.hand = name;
@@ -76,7 +80,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.scale = a.AdaptScale(frames);
   std::vector<double> err_a;
   std::vector<Eigen::VectorXd> q_a;
-  for (size_t t = 0; t < frames.size(); ++t) {
+  for (size_t t = 0; t < (g_track_only ? 0 : frames.size()); ++t) {
     const FrameSolution s = a.SolveFrame(frames[t], t ? &q_a.back() : nullptr);
     q_a.push_back(s.qpos);
     err_a.push_back(s.fingertip_mean);
@@ -91,7 +95,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   std::vector<double> err_b;
   Eigen::VectorXd prev;
   const auto t0 = Clock::now();
-  for (size_t t = 0; t < frames.size(); ++t) {
+  for (size_t t = 0; t < (g_track_only ? 0 : frames.size()); ++t) {
     const FrameSolution s = b.SolveFrame(frames[t], t ? &prev : nullptr);
     prev = s.qpos;
     err_b.push_back(s.fingertip_mean);
@@ -105,6 +109,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   {
     KinematicConfig defaults;
     defaults.scale = row.scale;
+    if (g_tolerance > 0) defaults.tolerance = g_tolerance;
     KinematicRetargeter track(hand, defaults);
     const auto w0 = Clock::now();
     const std::clock_t c0 = std::clock();
@@ -118,6 +123,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
     }
   }
 
+  if (g_track_only) return row;
   // Worst 10% of the single-start run, re-solved from the same warm start.
   std::vector<size_t> order(frames.size());
   std::iota(order.begin(), order.end(), 0);
@@ -184,6 +190,8 @@ int main(int argc, char** argv) {
   std::string only;  // --hands=NAME measures that hand alone
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]).rfind("--hands=", 0) == 0) only = argv[i] + 8;
+    if (std::string(argv[i]) == "--track_only") g_track_only = true;
+    if (std::string(argv[i]).rfind("--tolerance=", 0) == 0) g_tolerance = std::stod(argv[i] + 12);
   }
   for (const char* name : kHands) {
     if (!only.empty() && only != name) continue;

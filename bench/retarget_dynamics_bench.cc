@@ -41,6 +41,15 @@
 //   [--wall_clips=3 --wall_first=0 --seed_wall=0 --wall_preset=fast] (the wall-time section)
 //   [--noise_scale=1] (times the sampler's noise; 0 replays the kinematic reference)
 //   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; not where a preset replaces the flags)
+//   [--ladder_clips=2 --ladder_first=0 --ladder_clean --ladder_presets=fast,medium] (section "ladder")
+//  7. the ladder (--sections=ladder): each preset of --ladder_presets alone
+//     on --ladder_clips clips, wall and CPU seconds and success per clip;
+//     the ladder of those presets in that order is composed from the same
+//     runs (a rung's run is the preset's run: same seed, deterministic), its
+//     success, wall time (the rungs it ran) and the rungs' shares;
+//  8. the default configuration (--sections=default): DynamicRetargetConfig{}
+//     (the ladder) on a --clip_seconds synthetic clip (clean), wall and CPU
+//     seconds, the rung that succeeded.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -50,6 +59,8 @@
 #include <map>
 #include <string>
 #include <thread>
+
+#include <sys/resource.h>
 
 #include "core/error.h"
 #include "eval/hot3d_recording.h"
@@ -94,6 +105,12 @@ struct Flags {
   int wall_first = 0;  // the index of its first clip (MakeCase)
   int seed_wall = 0;   // of those clips, how many also run the seed preset (noisy)
   std::string sections = "ablation,throughput,wall,hot3d,grasp,bimanual";
+  // The ladder section: clips --ladder_first ... + --ladder_clips (noisy,
+  // and clean with --ladder_clean), each preset of --ladder_presets alone;
+  // the ladder (those presets in that order) follows from them.
+  int ladder_clips = 2, ladder_first = 0;
+  bool ladder_clean = false;
+  std::string ladder_presets = "fast,medium";
 };
 
 Flags Parse(int argc, char** argv) {
@@ -128,6 +145,10 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--wall_first") f.wall_first = std::stoi(v);
     else if (k == "--wall_preset") f.wall_preset = eq == std::string::npos ? "" : v;
     else if (k == "--sections") f.sections = v;
+    else if (k == "--ladder_clips") f.ladder_clips = std::stoi(v);
+    else if (k == "--ladder_first") f.ladder_first = std::stoi(v);
+    else if (k == "--ladder_clean") f.ladder_clean = v != "0";
+    else if (k == "--ladder_presets") f.ladder_presets = v;
     else if (k == "--verbose") f.verbose = v != "0";
     else std::fprintf(stderr, "unknown flag %s\n", a.c_str());
   }
@@ -605,6 +626,96 @@ void Bimanual(const Flags& f) {
   }
 }
 
+double CpuSeconds() {
+  rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::string item;
+  for (char ch : text + ",") {
+    if (ch != ',') item += ch;
+    else if (!item.empty()) out.push_back(item), item.clear();
+  }
+  return out;
+}
+
+void Ladder(const Flags& f) {
+  const int frames = static_cast<int>(f.clip_seconds * 30);
+  const std::vector<std::string> presets = SplitList(f.ladder_presets);
+  std::printf("\n== Ladder %s on %d %.0f-s clips from clip %d (%s), %d threads\n", f.ladder_presets.c_str(),
+              f.ladder_clips, f.clip_seconds, f.ladder_first, f.ladder_clean ? "noisy and clean" : "noisy",
+              f.threads);
+  struct Sum { int n = 0, success = 0; double wall = 0, cpu = 0; };
+  std::map<std::string, Sum> alone;
+  Sum ladder;
+  std::map<std::string, int> shares;
+  for (int n = 0; n < f.ladder_clips; ++n) {
+    const int i = f.ladder_first + n;
+    const Case c = MakeCase(f, i, frames);
+    for (int noisy = 1; noisy >= (f.ladder_clean ? 0 : 1); --noisy) {
+      bool done = false;
+      for (const std::string& preset : presets) {
+        DynamicRetargetConfig config = BaseConfig(f);
+        config.preset = preset;
+        const double cpu0 = CpuSeconds();
+        const auto [seconds, run] = TimedRun(noisy ? c.noisy : c.clean, c.mesh, config, "ladder");
+        const double cpu = CpuSeconds() - cpu0;
+        Sum& a = alone[preset];
+        ++a.n, a.success += run.metrics.success, a.wall += seconds, a.cpu += cpu;
+        if (!done) {
+          ladder.wall += seconds, ladder.cpu += cpu;
+          if (run.metrics.success || &preset == &presets.back()) {
+            done = true;
+            ++ladder.n, ladder.success += run.metrics.success;
+            ++shares[run.metrics.success ? preset : "none"];
+          }
+        }
+        std::printf("clip %d (%s) %-7s: success %d, E_pos %.3f, E_rot %.3f, %.1f s wall, %.1f s CPU, "
+                    "%d iterations in %d plans, %lld sim steps\n", i, noisy ? "noisy" : "clean", preset.c_str(),
+                    run.metrics.success, run.metrics.e_pos, run.metrics.e_rot, seconds, cpu,
+                    run.stats.iterations, run.stats.plans, run.stats.sim_steps);
+        std::fflush(stdout);
+      }
+    }
+  }
+  for (const std::string& preset : presets) {
+    const Sum& a = alone[preset];
+    std::printf("%-7s alone : success %d of %d, %.1f s wall, %.1f s CPU per clip\n", preset.c_str(), a.success,
+                a.n, a.wall / std::max(1, a.n), a.cpu / std::max(1, a.n));
+  }
+  std::printf("ladder        : success %d of %d, %.1f s wall, %.1f s CPU per clip; kept rung:", ladder.success,
+              ladder.n, ladder.wall / std::max(1, ladder.n), ladder.cpu / std::max(1, ladder.n));
+  for (const auto& [rung, count] : shares) std::printf(" %s %d,", rung.c_str(), count);
+  std::printf("\n");
+}
+
+// The default configuration, as a new user runs the `retarget` stage.
+void Default(const Flags& f) {
+  const int frames = static_cast<int>(f.clip_seconds * 30);
+  const Case c = MakeCase(f, f.ladder_first, frames);
+  DynamicRetargetConfig config;
+  config.robots_dir = (kData / "robots").string();
+  std::printf("\n== Default configuration (ladder");
+  for (const std::string& rung : config.ladder) std::printf(" %s", rung.c_str());
+  std::printf(") on clip %d, %.0f s (clean), %d threads\n", f.ladder_first, f.clip_seconds, config.sampler.threads);
+  const double cpu0 = CpuSeconds();
+  const auto t0 = Clock::now();
+  const std::function<DynamicRetargetRun(const std::string&)> track = [&](const std::string& rung) {
+    return RunOne(c.clean, c.mesh, AtRung(config, rung), "default");
+  };
+  const LadderResult<DynamicRetargetRun> result = RunLadder(LadderRungs(config), track);
+  for (const RungOutcome& r : result.rungs) {
+    std::printf("rung %-7s: success %d, E_pos %.3f, E_rot %.3f, %.1f s wall\n", r.name.c_str(), r.metrics.success,
+                r.metrics.e_pos, r.metrics.e_rot, r.seconds);
+  }
+  std::printf("default: success %d at rung %s, %.1f s wall, %.1f s CPU\n", result.best.metrics.success,
+              result.rungs[result.best_rung].name.c_str(),
+              std::chrono::duration<double>(Clock::now() - t0).count(), CpuSeconds() - cpu0);
+}
+
 constexpr const char* kCoffeePot = "228358276546933";
 
 void Hot3d(const Flags& f) {
@@ -674,5 +785,7 @@ int main(int argc, char** argv) {
   if (f.sections.find("hot3d") != std::string::npos) Hot3d(f);
   if (f.sections.find("grasp") != std::string::npos) Grasp(f);
   if (f.sections.find("bimanual") != std::string::npos) Bimanual(f);
+  if (f.sections.find("ladder") != std::string::npos) Ladder(f);
+  if (f.sections.find("default") != std::string::npos) Default(f);
   return 0;
 }

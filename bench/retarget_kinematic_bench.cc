@@ -7,8 +7,14 @@
 // start; and the cost of one retargeted frame against raw mj_step of the
 // hand scene (hand + floor + YCB sugar box), measured in the same run.
 // Google Benchmark timings of the same two operations follow the table.
+// Then, per hand, the track as the stages solve it (Solve: random starts at
+// the first frame and after a jump only) against the multi-start run with
+// the old Ceres tolerance (1e-12): error and ms per hand-frame, wall and CPU.
+// Flags: --hands=NAME (one hand), --track_only (the track solve alone),
+// --tolerance=T (its Ceres tolerance), --benchmark_filter=NONE (no timings).
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <filesystem>
 #include <numeric>
@@ -57,9 +63,15 @@ struct Row {
   double single_mean = 0, single_p95 = 0, multi_mean = 0, multi_p95 = 0;
   double worst_single = 0, worst_multi = 0;
   int worst_frames = 0;
-  double ms_per_frame = 0;   // multi-start
+  double ms_per_frame = 0;   // multi-start on every frame (before jump_distance)
+  double track_mean = 0, track_p95 = 0, track_ms = 0, track_cpu_ms = 0;  // Solve: restarts at jumps only
+  int track_jumps = 0;
   double steps_per_s = 0;    // mj_step of the hand scene
 };
+
+// --track_only: only the track solve (Solve); --tolerance=T: its Ceres tolerance.
+bool g_track_only = false;
+double g_tolerance = 0;
 
 Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   Row row;
@@ -73,7 +85,7 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.scale = a.AdaptScale(frames);
   std::vector<double> err_a;
   std::vector<Eigen::VectorXd> q_a;
-  for (size_t t = 0; t < frames.size(); ++t) {
+  for (size_t t = 0; t < (g_track_only ? 0 : frames.size()); ++t) {
     const FrameSolution s = a.SolveFrame(frames[t], t ? &q_a.back() : nullptr);
     q_a.push_back(s.qpos);
     err_a.push_back(s.fingertip_mean);
@@ -81,13 +93,14 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.single_mean = Mean(err_a);
   row.single_p95 = P95(err_a);
 
-  KinematicConfig multi;  // default restarts
+  KinematicConfig multi;  // default restarts, on every frame below, with the tolerance before 2026-11-28
   multi.scale = row.scale;
+  multi.tolerance = 1e-12;
   KinematicRetargeter b(hand, multi);
   std::vector<double> err_b;
   Eigen::VectorXd prev;
   const auto t0 = Clock::now();
-  for (size_t t = 0; t < frames.size(); ++t) {
+  for (size_t t = 0; t < (g_track_only ? 0 : frames.size()); ++t) {
     const FrameSolution s = b.SolveFrame(frames[t], t ? &prev : nullptr);
     prev = s.qpos;
     err_b.push_back(s.fingertip_mean);
@@ -96,6 +109,26 @@ Row Measure(const char* name, const std::vector<Keypoints21>& frames) {
   row.multi_mean = Mean(err_b);
   row.multi_p95 = P95(err_b);
 
+  // The sequence as the stages solve it (Solve): random starts only at the
+  // first frame and after a jump.
+  {
+    KinematicConfig defaults;
+    defaults.scale = row.scale;
+    if (g_tolerance > 0) defaults.tolerance = g_tolerance;
+    KinematicRetargeter track(hand, defaults);
+    const auto w0 = Clock::now();
+    const std::clock_t c0 = std::clock();
+    const HandTrajectory t = track.Solve(frames, {}, 30.0);
+    row.track_cpu_ms = 1000.0 * (std::clock() - c0) / CLOCKS_PER_SEC / frames.size();
+    row.track_ms = std::chrono::duration<double, std::milli>(Clock::now() - w0).count() / frames.size();
+    row.track_mean = Mean(t.fingertip_error);
+    row.track_p95 = P95(t.fingertip_error);
+    for (size_t f = 1; f < frames.size(); ++f) {
+      row.track_jumps += (frames[f] - frames[f - 1]).rowwise().norm().maxCoeff() > multi.jump_distance;
+    }
+  }
+
+  if (g_track_only) return row;
   // Worst 10% of the single-start run, re-solved from the same warm start.
   std::vector<size_t> order(frames.size());
   std::iota(order.begin(), order.end(), 0);
@@ -158,13 +191,31 @@ int main(int argc, char** argv) {
   std::printf("%-13s %6s | %8s %8s | %8s %8s | %5s %9s %9s | %9s %10s %12s\n", "hand", "scale",
               "1x mean", "1x p95", "mx mean", "mx p95", "worst", "1x worst", "9x worst",
               "ms/frame", "mj_step/s", "frame/steps");
+  std::vector<Row> rows;
+  std::string only;  // --hands=NAME measures that hand alone
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]).rfind("--hands=", 0) == 0) only = argv[i] + 8;
+    if (std::string(argv[i]) == "--track_only") g_track_only = true;
+    if (std::string(argv[i]).rfind("--tolerance=", 0) == 0) g_tolerance = std::stod(argv[i] + 12);
+  }
   for (const char* name : kHands) {
-    const Row r = Measure(name, frames);
+    if (!only.empty() && only != name) continue;
+    const Row& r = rows.emplace_back(Measure(name, frames));
     std::printf("%-13s %6.3f | %8.2f %8.2f | %8.2f %8.2f | %5d %9.2f %9.2f | %9.3f %10.0f %12.1f\n",
                 r.hand.c_str(), r.scale, 1000 * r.single_mean, 1000 * r.single_p95,
                 1000 * r.multi_mean, 1000 * r.multi_p95, r.worst_frames, 1000 * r.worst_single,
                 1000 * r.worst_multi, r.ms_per_frame, r.steps_per_s,
                 r.ms_per_frame / 1000.0 * r.steps_per_s);
+  }
+  std::printf("\nAs the stages solve a track (Solve: warm start, random starts only at the first frame and\n"
+              "after a jump of more than %.0f mm), against mx above (random starts on every frame):\n",
+              1000 * KinematicConfig{}.jump_distance);
+  std::printf("%-13s | %8s %8s %9s | %8s %8s %9s %9s %6s\n", "hand", "mx mean", "mx p95", "mx ms/f",
+              "tr mean", "tr p95", "tr ms/f", "tr cpu ms", "jumps");
+  for (const Row& r : rows) {
+    std::printf("%-13s | %8.2f %8.2f %9.2f | %8.2f %8.2f %9.2f %9.2f %6d\n", r.hand.c_str(),
+                1000 * r.multi_mean, 1000 * r.multi_p95, r.ms_per_frame, 1000 * r.track_mean,
+                1000 * r.track_p95, r.track_ms, r.track_cpu_ms, r.track_jumps);
   }
   std::printf("\nworst = the 10%% of frames with the largest single-start error, re-solved from the same\n"
               "warm start with 8 random starts (9x). frame/steps = one multi-start retargeted frame\n"

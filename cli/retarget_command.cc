@@ -32,7 +32,8 @@ void AddRetargetCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "retarget-kinematic",
       "Retarget human hand keypoints onto a robot hand (fingertips and knuckles matched\n"
-      "under joint limits, scale adapted, several random starts per frame) and write the\n"
+      "under joint limits, scale adapted, warm-started from the previous frame, random starts\n"
+      "at the first frame and after a jump) and write the\n"
       "reference robot trajectory");
   cmd->add_option("--hand", opt->hand,
                   "sharpa_right, sharpa_left, shadow, allegro, or an embodiment .json (for a URDF or "
@@ -47,7 +48,10 @@ void AddRetargetCommand(CLI::App& app) {
                   "$DOASIDO_ROBOTS_DIR, else share/doasido/robots beside the executable's "
                   "folder)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the keypoints")->check(FiniteRange(0.1, 10000))->capture_default_str();
-  cmd->add_option("--restarts", opt->kinematic.restarts, "Random starts per frame")->check(FiniteRange(1, 1000))
+  cmd->add_option("--restarts", opt->kinematic.restarts,
+                  "Random starts at the first frame and after a jump (a keypoint moving more than 5 cm "
+                  "from the last solved frame)")
+      ->check(FiniteRange(1, 1000))
       ->capture_default_str();
   cmd->add_option("--scale", opt->kinematic.scale, "Human->robot scale; 0 adapts it")->check(FiniteRange(0, 100))
       ->capture_default_str();

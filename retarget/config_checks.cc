@@ -9,7 +9,9 @@ namespace doasido::retarget {
 
 void CheckConfig(const KinematicConfig& c, const std::string& section) {
   RequireInRange(section, "restarts", c.restarts, 0, 1000);
+  RequireInRange(section, "jump_distance", c.jump_distance, 0, 10);  // m; 0: every frame restarts
   RequireInRange(section, "max_iterations", c.max_iterations, 1, 1e5);
+  RequireInRange(section, "tolerance", c.tolerance, 1e-16, 1e-2);
   RequireInRange(section, "sigma", c.sigma, 1e-6, 1);  // m
   RequireInRange(section, "smooth_weight", c.smooth_weight, 0, 1e6);
   RequireInRange(section, "scale", c.scale, 0, 10);  // 0 adapts; robot hands are 0.5-3x

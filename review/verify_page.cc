@@ -222,7 +222,7 @@ function row(table, k, v, cls) { const tr = table.insertRow(); tr.insertCell().t
 function showMetrics(m, d) {
   const t = $('metrics'); t.innerHTML = '';
   const flat = Object.assign({}, m, m.summary || {});
-  const keys = Object.keys(flat).filter(k => /e_pos|e_rot|success|error|fingertip|object/i.test(k) &&
+  const keys = Object.keys(flat).filter(k => /e_pos|e_rot|success|error|fingertip|object|rung/i.test(k) &&
                                             typeof flat[k] !== 'object');
   for (const k of keys) { const v = flat[k];
     row(t, k, typeof v === 'number' ? (Math.abs(v) < 10 ? v.toFixed(4) : v.toFixed(1)) : String(v),

@@ -1,6 +1,7 @@
 #include "stages/dynamic_stage.h"
 
 #include <fstream>
+#include <functional>
 
 #include <spdlog/spdlog.h>
 
@@ -45,27 +46,50 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   std::filesystem::create_directories(context.artifact_dir);
   bool left_seen = false;
   for (bool v : r.left_valid) left_seen |= v;
-  DynamicRetargetRun run;
   Json& m = result.measurements;
-  if (!config_.left_hand.empty() && left_seen) {
-    BimanualRun both = RetargetBimanual(r, mesh, FindEmbodiment(config_.left_hand, robots),
-                                        FindEmbodiment(config_.hand, robots), config_,
-                                        context.artifact_dir / kSceneFolder, clip);
-    WriteTrajectoryJson(both.left_kinematic, context.artifact_dir / "kinematic_reference_left.json");
+  const bool bimanual = !config_.left_hand.empty() && left_seen;
+  // One rung's run: the one-hand run, or the two-hand run in its fields
+  // with the left hand's extras.
+  struct ClipRun {
+    DynamicRetargetRun run;
+    TrackingMetrics metrics;
+    HandTrajectory left_kinematic;
+    Json extra = Json::object();
+  };
+  const std::function<ClipRun(const std::string&)> track = [&](const std::string& rung) {
+    const DynamicRetargetConfig config = AtRung(config_, rung);
+    ClipRun out;
+    if (bimanual) {
+      BimanualRun both = RetargetBimanual(r, mesh, FindEmbodiment(config.left_hand, robots),
+                                          FindEmbodiment(config.hand, robots), config,
+                                          context.artifact_dir / kSceneFolder, clip);
+      out.left_kinematic = std::move(both.left_kinematic);
+      out.extra["left_wrist_error"] = both.left_wrist_error;
+      out.extra["right_wrist_error"] = both.right_wrist_error;
+      out.extra["left_in_hand_frames"] = both.left_in_hand_frames;
+      out.run.trajectory = std::move(both.trajectory);
+      out.run.kinematic = std::move(both.right_kinematic);
+      out.run.metrics = both.metrics;
+      out.run.stats = both.stats;
+      out.run.robot_scene_xml = std::move(both.robot_scene_xml);
+      out.run.in_hand_frames = both.right_in_hand_frames;
+    } else {
+      out.run = RetargetReconstruction(r, mesh, FindEmbodiment(config.hand, robots), config,
+                                       context.artifact_dir / kSceneFolder, clip);
+    }
+    out.metrics = out.run.metrics;
+    spdlog::info("{} {}: rung {}: E_pos {:.3f} m, E_rot {:.3f} rad, {}", kRetargetStageName, clip, rung,
+                 out.metrics.e_pos, out.metrics.e_rot, out.metrics.success ? "success" : "failure");
+    return out;
+  };
+  LadderResult<ClipRun> ladder = RunLadder(LadderRungs(config_), track);
+  DynamicRetargetRun& run = ladder.best.run;
+  if (bimanual) {
+    WriteTrajectoryJson(ladder.best.left_kinematic, context.artifact_dir / "kinematic_reference_left.json");
     result.artifacts.push_back({"kinematic_reference_left", "kinematic_reference_left.json"});
-    m["left_wrist_error"] = both.left_wrist_error;
-    m["right_wrist_error"] = both.right_wrist_error;
-    m["left_in_hand_frames"] = both.left_in_hand_frames;
-    run.trajectory = std::move(both.trajectory);
-    run.kinematic = std::move(both.right_kinematic);
-    run.metrics = both.metrics;
-    run.stats = both.stats;
-    run.robot_scene_xml = std::move(both.robot_scene_xml);
-    run.in_hand_frames = both.right_in_hand_frames;
-  } else {
-    run = RetargetReconstruction(r, mesh, FindEmbodiment(config_.hand, robots), config_,
-                                 context.artifact_dir / kSceneFolder, clip);
+    m.update(ladder.best.extra);
   }
+  WriteLadderMeasurements(ladder.rungs, ladder.best_rung, m);
 
   WriteTrajectoryJson(run.trajectory, context.artifact_dir / kTrajectoryFile);
   WriteTrajectoryCsv(run.trajectory, context.artifact_dir / kTrajectoryCsvFile);
@@ -92,9 +116,9 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
     result.verdict = redecided->verdict;
     result.reason = redecided->reason;
   }
-  spdlog::info("{} {}: E_pos {:.3f} m, E_rot {:.3f} rad, {} in {:.0f} s", kRetargetStageName, clip,
+  spdlog::info("{} {}: E_pos {:.3f} m, E_rot {:.3f} rad, {} at rung {} of {}", kRetargetStageName, clip,
                run.metrics.e_pos, run.metrics.e_rot, run.metrics.success ? "success" : "failure",
-               run.stats.seconds);
+               ladder.best_rung + 1, ladder.rungs.size());
   return result;
 }
 

@@ -12,7 +12,11 @@
 //   scene/scene.xml + hull OBJs, robot_scene.xml  the scene it ran in
 // Measurements: e_pos, e_rot, success, frames, in_hand_frames (frames the
 // reference holds the object off the floor), plans, iterations, rollouts,
-// sim_steps, optimizer_seconds, rollout_steps_per_second.
+// sim_steps, optimizer_seconds, rollout_steps_per_second (all of the kept
+// run), and the ladder's (sampler_ladder.h): rung (the kept run's rung),
+// rungs_run, and per rung that ran rung_<name>_seconds (wall),
+// rung_<name>_e_pos, rung_<name>_e_rot, rung_<name>_success. A clip runs
+// at the ladder's first rung and at the next only while it fails.
 // With config.left_hand set and a left hand in the reconstruction, both
 // hands are retargeted in one scene (bimanual_retarget.h): the trajectory
 // holds both (names prefixed l_ / r_, embodiment "<left>+<right>"),

@@ -5,6 +5,7 @@
 // the synth module, a cylinder on the floor).
 #include <cmath>
 #include <fstream>
+#include <functional>
 
 #include <gtest/gtest.h>
 
@@ -13,6 +14,7 @@
 #include "retarget/dynamic/dynamic_reference.h"
 #include "retarget/dynamic/dynamic_retarget.h"
 #include "retarget/dynamic/retarget_reward.h"
+#include "retarget/dynamic/sampler_ladder.h"
 #include "stages/dynamic_stage.h"
 #include "stages/kinematic_stage.h"
 #include "synth/objects.h"
@@ -27,6 +29,7 @@ using doasido::testing::ErrorCode;
 using doasido::testing::TempDir;
 
 constexpr int kFrames = 20;
+constexpr int kLadderFrames = 60;
 
 TriMesh Cylinder() { return synth::MakeCylinder(0.03, 0.08, 16); }
 
@@ -415,6 +418,127 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
   const StageResult none = stage.Run(context);
   EXPECT_EQ(none.verdict, Verdict::kReject);
   EXPECT_EQ(none.reason, stages::kReasonNoObject);
+}
+
+
+// The ladder (sampler_ladder.h) on a lifting reference whose kinematic
+// grasp holds the object (pinch, grasp terms pressing 1 cm in, a hollow
+// object's density: the bench's synthetic setting). Rung "replay" executes
+// the reference's own controls (no noise); rung "starved" averages four
+// samples with uniform weights (no optimisation) under a noise that opens
+// the grip.
+TriMesh LadderCylinder() { return synth::MakeCylinder(0.03, 0.09, 16); }
+
+recon::Reconstruction Lift(int frames) {
+  synth::EpisodeSpec spec;
+  spec.frames = frames;
+  spec.verb = synth::Verb::kPickPlace;
+  spec.grasp = synth::GraspType::kPinch;
+  spec.manipulation_scale = 2;  // lifts of ~20 cm: an object left on the floor fails
+  return synth::EpisodeReconstruction(synth::ScriptEpisode(spec, LadderCylinder()), 30.0);
+}
+
+DynamicRetargetConfig LadderRung(const std::string& rung) {
+  DynamicRetargetConfig c = SmallConfig();
+  c.kinematic.contact_weight = 16;
+  c.kinematic.contact_depth = 0.01;
+  c.scene.density = 400;
+  AnnealedSamplerConfig& s = c.sampler;
+  s.perturb = false;
+  s.horizon = s.ctrl_dt = s.knot_dt = s.blend_seconds = 0.25;
+  s.warmup_seconds = -1;
+  if (rung == "replay") {
+    s.num_samples = 2;
+    s.max_num_iterations = 1;
+    s.pos_noise_scale = s.rot_noise_scale = s.joint_noise_scale = 0;
+  } else {
+    s.num_samples = 4;
+    s.max_num_iterations = 1;
+    s.top_fraction = 1;
+    s.temperature = 1e6;
+    s.pos_noise_scale = 0.05;
+    s.joint_noise_scale = 1.0;
+  }
+  return c;
+}
+
+TEST(SamplerLadder, AClipFailingAtTheFirstRungKeepsTheSecondRungsRunAndRecordsBoth) {
+  TempDir dir;
+  const recon::Reconstruction r = Lift(kLadderFrames);
+  const std::function<DynamicRetargetRun(const std::string&)> track = [&](const std::string& rung) {
+    const DynamicRetargetConfig c = LadderRung(rung);
+    return RetargetReconstruction(r, LadderCylinder(), FindEmbodiment(c.hand, c.robots_dir), c, dir / "scene", "lift");
+  };
+  const LadderResult<DynamicRetargetRun> ladder = RunLadder(std::vector<std::string>{"starved", "replay"}, track);
+  ASSERT_EQ(ladder.rungs.size(), 2u);
+  EXPECT_EQ(ladder.rungs[0].name, "starved");
+  ASSERT_FALSE(ladder.rungs[0].metrics.success) << "E_pos " << ladder.rungs[0].metrics.e_pos;
+  ASSERT_TRUE(ladder.rungs[1].metrics.success) << "E_pos " << ladder.rungs[1].metrics.e_pos;
+  EXPECT_EQ(ladder.best_rung, 1);
+  const DynamicRetargetRun replay = track("replay");
+  ASSERT_EQ(ladder.best.trajectory.qpos.size(), replay.trajectory.qpos.size());
+  for (size_t f = 0; f < replay.trajectory.qpos.size(); ++f) {
+    EXPECT_EQ(ladder.best.trajectory.qpos[f], replay.trajectory.qpos[f]) << "frame " << f;
+  }
+  Json m;
+  WriteLadderMeasurements(ladder.rungs, ladder.best_rung, m);
+  EXPECT_EQ(m[kMeasurementRung], "replay");
+  EXPECT_EQ(m[kMeasurementRungsRun], 2);
+  EXPECT_EQ(m[RungMeasurementKey("starved", kMetricSuccess)], false);
+  EXPECT_EQ(m[RungMeasurementKey("replay", kMetricPositionError)].get<double>(), replay.metrics.e_pos);
+  EXPECT_GT(m[RungMeasurementKey("starved", kRungSeconds)].get<double>(), 0);
+}
+
+TEST(SamplerLadder, AClipSucceedingAtTheFirstRungRunsNoOther) {
+  TempDir root;
+  recon::Reconstruction r = Lift(kLadderFrames);
+  SaveObj(LadderCylinder(), root / "cylinder.obj");
+  r.object_mesh = root / "cylinder.obj";
+  recon::WriteReconstruction(r, root / "artifacts/9" / recon::kReconStageName);
+  ClipContext context;
+  context.clip.id = 9;
+  context.artifact_dir = root / "artifacts/9" / kRetargetStageName;
+  DynamicRetargetConfig config = LadderRung("replay");
+  config.preset = kLadderPreset;
+  config.ladder = {kSamplerRung, "fast"};
+  stages::DynamicRetargetStage stage(config);
+  const StageResult result = stage.Run(context);
+  const Json& m = result.measurements;
+  ASSERT_TRUE(m[kMetricSuccess].get<bool>());
+  EXPECT_EQ(m[kMeasurementRung], kSamplerRung);
+  EXPECT_EQ(m[kMeasurementRungsRun], 1);
+  EXPECT_TRUE(m.contains(RungMeasurementKey(kSamplerRung, kRungSeconds)));
+  EXPECT_FALSE(m.contains(RungMeasurementKey("seed", kRungSeconds)));
+  EXPECT_EQ(result.verdict, Verdict::kPass);
+}
+
+TEST(SamplerLadder, TheConfigNamesItsRungs) {
+  DynamicRetargetConfig c;
+  EXPECT_EQ(LadderRungs(c), (std::vector<std::string>{"fast", "medium", "seed"}));
+  c.preset = "fast";
+  EXPECT_EQ(LadderRungs(c), std::vector<std::string>{"fast"});
+  c.preset = "";
+  EXPECT_EQ(LadderRungs(c), std::vector<std::string>{kSamplerRung});
+  c.sampler.num_samples = 7;
+  EXPECT_EQ(EffectiveSampler(c).num_samples, 7);
+  c.preset = kLadderPreset;
+  c.sampler.threads = 1;
+  EXPECT_EQ(RungSampler(c, "medium").threads, 1);
+  EXPECT_EQ(RungSampler(c, "medium").num_samples, SamplerPreset("medium").num_samples);
+  c.ladder = {"fast", "turbo"};
+  try {
+    stages::DynamicRetargetStage stage(c);
+    ADD_FAILURE() << "an unknown rung must be refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "bad_config");
+    EXPECT_EQ(e.site().field, "retarget.ladder");
+  }
+  c.ladder = {};
+  EXPECT_EQ(ErrorCode([&] { stages::DynamicRetargetStage stage(c); }), "bad_config");
+  // The ladder is a parameter: another ladder hashes differently.
+  DynamicRetargetConfig a, b;
+  b.ladder = {"fast", "seed"};
+  EXPECT_NE(ParamHash(stages::DynamicRetargetStage(a).Params()), ParamHash(stages::DynamicRetargetStage(b).Params()));
 }
 
 }  // namespace

@@ -62,7 +62,15 @@ AnnealedSamplerConfig SamplerPreset(const std::string& name) {
     c.blend_seconds = 0.25;
     return c;
   }
-  throw Error("bad_config", "unknown sampler preset '" + name + "' (seed, fast)", {.field = "preset"});
+  if (name == "medium") {  // the ladder's middle rung: see docs/retargeting.md for the measurement
+    c.num_samples = 256;
+    c.max_num_iterations = 16;
+    c.horizon = 1.5;
+    c.knot_dt = 0.25;
+    c.blend_seconds = 0.5;
+    return c;
+  }
+  throw Error("bad_config", "unknown sampler preset '" + name + "' (seed, medium, fast)", {.field = "preset"});
 }
 
 RowMatrix NoiseScales(const AnnealedSamplerConfig& config, const std::vector<int>& act_kind,

@@ -104,8 +104,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
     seed)
 void CheckConfig(const AnnealedSamplerConfig& c, const std::string& section);
 
-// The named presets: "seed" (the seed's table, the defaults) and "fast" (the
-// project's CPU setting: 64 samples, 8 iterations, 1-s horizon). Throws
+// The named presets: "seed" (the seed's table, the defaults), "fast" (the
+// project's CPU setting: 64 samples, 8 iterations, 1-s horizon) and
+// "medium" (the ladder's middle rung, between the two). Throws
 // Error("bad_config") for another name.
 AnnealedSamplerConfig SamplerPreset(const std::string& name);
 

@@ -44,7 +44,18 @@ HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, co
 }
 
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
-  if (!c.preset.empty()) SamplerPreset(c.preset);  // throws on an unknown name
+  if (c.preset == kLadderPreset && c.ladder.empty()) {
+    throw Error("bad_config", "an empty ladder (name one rung or more)", {.field = section + ".ladder"});
+  }
+  for (const std::string& rung : LadderRungs(c)) {
+    if (rung == kSamplerRung) continue;
+    try {
+      SamplerPreset(rung);
+    } catch (const Error& e) {
+      throw Error("bad_config", e.message() + " or \"" + kSamplerRung + "\"",
+                  {.field = section + (c.preset == kLadderPreset ? ".ladder" : ".preset")});
+    }
+  }
   CheckHandName(c.hand, c.robots_dir, section, "hand");
   CheckHandName(c.left_hand, c.robots_dir, section, "left_hand");
   CheckConfig(c.sampler, section + ".sampler");
@@ -52,12 +63,27 @@ void CheckConfig(const DynamicRetargetConfig& c, const std::string& section) {
   CheckConfig(c.scene, section + ".scene");
 }
 
-AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config) {
-  if (config.preset.empty()) return config.sampler;
-  AnnealedSamplerConfig s = SamplerPreset(config.preset);
+std::vector<std::string> LadderRungs(const DynamicRetargetConfig& config) {
+  if (config.preset == kLadderPreset) return config.ladder;
+  return {config.preset.empty() ? std::string(kSamplerRung) : config.preset};
+}
+
+AnnealedSamplerConfig RungSampler(const DynamicRetargetConfig& config, const std::string& rung) {
+  if (rung == kSamplerRung) return config.sampler;
+  AnnealedSamplerConfig s = SamplerPreset(rung);
   s.threads = config.sampler.threads;
   s.seed = config.sampler.seed;
   return s;
+}
+
+DynamicRetargetConfig AtRung(const DynamicRetargetConfig& config, const std::string& rung) {
+  DynamicRetargetConfig c = config;
+  c.preset = rung == kSamplerRung ? "" : rung;
+  return c;
+}
+
+AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config) {
+  return RungSampler(config, LadderRungs(config).front());
 }
 
 DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const TriMesh& mesh,

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -22,6 +23,7 @@
 #include "retarget/dynamic/annealed_sampler.h"
 #include "retarget/dynamic/dynamic_reference.h"
 #include "retarget/dynamic/retarget_metrics.h"
+#include "retarget/dynamic/sampler_ladder.h"
 #include "retarget/kinematic/kinematic_retarget.h"
 #include "retarget/scene/scene_builder.h"
 #include "robot/embodiment.h"
@@ -35,18 +37,31 @@ struct DynamicRetargetConfig {
   // hand on the left and `hand` on the right (bimanual_retarget.h).
   std::string left_hand;
   std::string robots_dir;             // "" = DefaultRobotsDir()
-  // "seed" or "fast" replaces `sampler` by that preset (annealed_sampler.h
-  // SamplerPreset); "" uses `sampler` as written.
-  std::string preset = "seed";
-  AnnealedSamplerConfig sampler;
+  // kLadderPreset ("ladder", the default) retargets each clip along
+  // `ladder` (sampler_ladder.h); a preset name ("fast", "medium", "seed":
+  // annealed_sampler.h SamplerPreset) runs that preset alone; "" runs
+  // `sampler` as written.
+  std::string preset = kLadderPreset;
+  // Rungs, cheapest first: preset names, or kSamplerRung ("sampler") for
+  // `sampler` as written. A clip re-runs at the next rung only when it fails.
+  std::vector<std::string> ladder = {"fast", "medium", "seed"};
+  AnnealedSamplerConfig sampler;  // threads and seed apply to every preset
   KinematicConfig kinematic;
   SceneConfig scene;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DynamicRetargetConfig, hand, left_hand, robots_dir, preset,
-                                                sampler, kinematic, scene)
+                                                ladder, sampler, kinematic, scene)
 void CheckConfig(const DynamicRetargetConfig& c, const std::string& section);
 
-// The sampler settings `config` asks for (preset applied).
+// The rung names `config` runs, in order: `ladder` for kLadderPreset, else
+// the one preset ("" -> kSamplerRung).
+std::vector<std::string> LadderRungs(const DynamicRetargetConfig& config);
+// The sampler settings of rung `rung` (a preset with `config.sampler`'s
+// threads and seed, or kSamplerRung: `config.sampler`).
+AnnealedSamplerConfig RungSampler(const DynamicRetargetConfig& config, const std::string& rung);
+// `config` running rung `rung` alone.
+DynamicRetargetConfig AtRung(const DynamicRetargetConfig& config, const std::string& rung);
+// The sampler settings `config` asks for: its first rung's.
 AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config);
 
 struct DynamicRetargetRun {

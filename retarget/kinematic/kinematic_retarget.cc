@@ -397,8 +397,8 @@ void KinematicRetargeter::SolveHolding(Eigen::VectorXd& q, const std::vector<Vec
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = config_.max_iterations;
-  options.function_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-12;
+  options.function_tolerance = config_.tolerance;
+  options.parameter_tolerance = config_.tolerance;
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
@@ -530,6 +530,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
   out.fingertip_error.assign(human.size(), std::nan(""));
   out.reference_keypoints.assign(human.size(), Keypoints21::Constant(std::nan("")));
   std::optional<Eigen::VectorXd> previous;
+  Keypoints21 last_solved;
   for (size_t t = 0; t < human.size(); ++t) {
     if (progress && t > 0) progress(t);
     out.valid[t] = is_valid(t);
@@ -542,7 +543,9 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
       const int touching = PoseObject(human[t], (*object)[t]);
       if (contacts) (*contacts)[t] = touching;
     }
-    FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr);
+    const bool jump = !previous || (human[t] - last_solved).rowwise().norm().maxCoeff() > config_.jump_distance;
+    FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr, jump ? -1 : 0);
+    last_solved = human[t];
     out.qpos[t] = s.qpos;
     out.fingertip_error[t] = s.fingertip_mean;
     if (!previous) {

@@ -12,10 +12,13 @@
 // a limit are held there and the rest solved again) and optionally a Huber
 // loss per point (robust_loss_scale, in sigma; off by default, since on the
 // real-hand bench it did not lower the fingertip error). Each frame is
-// solved from the previous frame's answer (warm start) and from `restarts`
-// random configurations (wrist from a Kabsch fit of the palm points, fingers
-// uniform in their ranges); the lowest objective wins, which avoids the local
-// minima a single start falls into (a thumb on the wrong side of a finger).
+// solved from the previous frame's answer (warm start); a track's first
+// frame and a frame after a jump (keypoints moved more than jump_distance)
+// also from `restarts` random configurations (wrist from a Kabsch fit of
+// the palm points, fingers uniform in their ranges); the lowest objective
+// wins, which avoids the local minima a single start falls into (a thumb on
+// the wrong side of a finger). Between jumps the warm start keeps the
+// previous frame's basin, so further starts rarely win and cost 5x.
 //
 // Scale adaptation: s = sum_f L_robot(f) / sum_f L_human(f) over the mapped
 // fingers other than the thumb, where L = |wrist -> knuckle| + straight
@@ -61,8 +64,16 @@ namespace doasido::retarget {
 inline constexpr int kMinGraspFingertips = 2;
 
 struct KinematicConfig {
-  int restarts = 4;              // random starts per frame, besides the warm start
+  int restarts = 4;              // random starts at a track's start and after a jump, besides the warm start
+  // m: a frame whose keypoints moved farther than this from the last solved
+  // frame's (largest over the 21) is a jump and gets the random starts;
+  // other frames are solved from the previous frame's answer alone.
+  double jump_distance = 0.05;
   int max_iterations = 100;      // Levenberg-Marquardt iterations per start
+  // Ceres' function and parameter tolerances: a start stops when an
+  // iteration changes the objective (relative) or q by less (1e-12 before
+  // 2026-11-28: iterations that moved fingertips by micrometres).
+  double tolerance = 1e-6;
   double sigma = 0.01;           // m: position residual unit
   double smooth_weight = 1e-3;   // lambda, per rad^2 (or m^2) of change from the previous frame
   bool use_intermediate = true;  // also match knuckles and other non-fingertip points
@@ -77,7 +88,7 @@ struct KinematicConfig {
   double contact_epsilon = 0.02;   // m: a human fingertip this close to the object touches it
   double contact_depth = 0.002;    // m: how far a touching fingertip geom is asked into the object
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, max_iterations, sigma,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(KinematicConfig, restarts, jump_distance, max_iterations, tolerance, sigma,
                                                 smooth_weight, use_intermediate, scale, seed,
                                                 wrist_noise_rad, wrist_noise_m, robust_loss_scale,
                                                 contact_weight, contact_epsilon, contact_depth)
@@ -107,8 +118,10 @@ class KinematicRetargeter {
   FrameSolution SolveFrame(const Keypoints21& human, const Eigen::VectorXd* previous,
                            int restarts = -1);
 
-  // Solves a sequence (scale adapted first unless fixed). Frames with
-  // valid[t] false hold the previous pose. `valid` may be empty (all valid).
+  // Solves a sequence (scale adapted first unless fixed): the first valid
+  // frame and every jump (jump_distance) with the random restarts, the
+  // others from the previous answer alone. Frames with valid[t] false hold
+  // the previous pose. `valid` may be empty (all valid).
   // `progress` (may be empty) is called with the number of frames done
   // after each frame. `object` (one pose per frame, or null) turns on the
   // grasp terms (header comment); `contacts` (may be null) receives, per

@@ -72,6 +72,9 @@ void PckScore::Add(const PckScore& o) {
   hands += o.hands;
   missed += o.missed;
   swaps += o.swaps;
+  error_px += o.error_px;
+  error_boxes += o.error_boxes;
+  found_keypoints += o.found_keypoints;
 }
 
 PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand>& predicted) {
@@ -108,6 +111,9 @@ PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand
       const double d = (predicted[best_k].uv[j] - l.uv[j]).norm();
       s.within_01 += d <= 0.1 * box ? 1 : 0;
       s.within_02 += d <= 0.2 * box ? 1 : 0;
+      s.error_px += d;
+      s.error_boxes += d / box;
+      ++s.found_keypoints;
     }
   }
   return s;

@@ -25,7 +25,11 @@ PACKAGES=(
   nodejs
   slurm-wlm munge
   clang libclang-rt-14-dev
+  opencv-doc
 )
+# opencv-doc: its tutorials' hand photos (handSrc.jpg, Histogram_Comparison_
+# Source_*.jpg, Hull_Original_Image.jpg) are the real photos labelled by hand
+# in bench/hand_labels/photos/ (the hands' still-image tests and bench).
 
 # npm packages (pinned), into a cache folder outside the repository: three.js
 # for the review app's 3D view (served by review/verify_routes.cc), DuckDB's

@@ -769,7 +769,8 @@ int main(int argc, char** argv) {
     Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
     std::fprintf(stderr,
-                 "usage: hands_bench real|dex|jumps|labels|stills|startup|synth [frames|clips] [models]\n");
+                 "usage: hands_bench real|dex|jumps|labels|stills|startup|synth [frames|clips] "
+                 "[models]\n");
     return 2;
   }
   return 0;

@@ -123,7 +123,8 @@ std::unique_ptr<filters::HandLandmarker> StartLandmarker(const HandsConfig& c) {
   return std::make_unique<filters::HandLandmarker>(
       filters::HandLandmarkerOptions{.max_hands = c.max_hands, .max_side = c.max_side, .backend = c.backend,
                                       .models = c.models, .palm_every = c.palm_every,
-                                      .lost_search = c.palm_every, .wide_every = c.wide_search_every});
+                                      .lost_search = c.palm_every,
+                                      .wide_every = c.wide_search_every});
 }
 
 void RunHands(const HandsOptions& o) {

@@ -17,6 +17,13 @@ namespace {
 }
 
 double BoxSize(const LabelledHand& h) {
+  const auto [lo, hi] = VisibleBounds(h);
+  return std::max(1.0, (hi - lo).maxCoeff());
+}
+
+}  // namespace
+
+std::pair<Eigen::Vector2d, Eigen::Vector2d> VisibleBounds(const LabelledHand& h) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo;
   for (int j = 0; j < kJoints; ++j) {
@@ -24,10 +31,8 @@ double BoxSize(const LabelledHand& h) {
     lo = lo.cwiseMin(h.uv[j]);
     hi = hi.cwiseMax(h.uv[j]);
   }
-  return std::max(1.0, (hi - lo).maxCoeff());
+  return {lo, hi};
 }
-
-}  // namespace
 
 HandLabels ReadHandLabels(const std::filesystem::path& file) {
   Json j;

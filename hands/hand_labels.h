@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hands/hand_observation.h"
@@ -31,6 +32,9 @@ struct LabelledHand {
   std::array<Eigen::Vector2d, kJoints> uv;
   std::array<bool, kJoints> visible{};
 };
+
+// The corners of the box of a labelled hand's visible keypoints.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> VisibleBounds(const LabelledHand& hand);
 
 struct LabelledFrame {
   int frame = 0;

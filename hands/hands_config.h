@@ -101,9 +101,12 @@ struct HandsConfig {
   // The wide search for hands the palm detector misses (zoomed windows,
   // the landmark model on the whole frame, low-contrast crops stretched;
   // filters::HandLandmarker): always on a still image; on video on the
-  // first frame when no hand is tracked there, then on every
-  // wide_search_every-th frame without a tracked hand. 0: stills only.
-  int wide_search_every = 30;
+  // first frame, then on every wide_search_every-th frame without a
+  // tracked hand (one search: 0.1-0.3 CPU s; every 30 frames it added
+  // 0.04-0.18 CPU s per video second on the first 150 frames of the real
+  // clips, hands_bench real; every 150, about 5 s, keeps hand-less footage
+  // near its budget). 0: stills only.
+  int wide_search_every = 150;
   TrackerConfig tracker;
   FitConfig fit;
 };

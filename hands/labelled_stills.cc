@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -27,19 +26,14 @@ cv::Mat DecodeFrame(const std::filesystem::path& video, int frame) {
 
 LabelledStill CloseUp(const cv::Mat& bgr, const LabelledFrame& labels, std::size_t hand,
                       double fill) {
-  const LabelledHand& h = labels.hands.at(hand);
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector2d hi = -lo;
-  for (int j = 0; j < kJoints; ++j) {
-    if (!h.visible[j]) continue;
-    lo = lo.cwiseMin(h.uv[j]);
-    hi = hi.cwiseMax(h.uv[j]);
-  }
+  const auto [lo, hi] = VisibleBounds(labels.hands.at(hand));
   const Eigen::Vector2d centre = (lo + hi) / 2;
   const int side = std::min({static_cast<int>(std::lround((hi - lo).maxCoeff() / fill)),
                              bgr.cols, bgr.rows});
-  const int x = std::clamp(static_cast<int>(std::lround(centre.x() - side / 2.0)), 0, bgr.cols - side);
-  const int y = std::clamp(static_cast<int>(std::lround(centre.y() - side / 2.0)), 0, bgr.rows - side);
+  const auto corner = [side](double c, int length) {
+    return std::clamp(static_cast<int>(std::lround(c - side / 2.0)), 0, length - side);
+  };
+  const int x = corner(centre.x(), bgr.cols), y = corner(centre.y(), bgr.rows);
   LabelledStill still;
   still.kind = kStillCloseUp;
   still.image = bgr(cv::Rect(x, y, side, side)).clone();
@@ -66,15 +60,17 @@ LabelledStill Gray(const LabelledStill& still) {
 std::vector<LabelledStill> PhotoStills(const std::filesystem::path& labels_file) {
   const HandLabels labels = ReadHandLabels(labels_file);
   if (labels.frames.size() != 1 || labels.frames[0].frame != 0) {
-    throw Error("bad_labels", "a photo has one frame, 0", {.file = labels_file.string(), .field = "frames"});
+    throw Error("bad_labels", "a photo has one frame, 0",
+                {.file = labels_file.string(), .field = "frames"});
   }
   const cv::Mat image = cv::imread(labels.video, cv::IMREAD_COLOR);
   if (image.empty()) {
-    throw Error("bad_labels", "cannot read the photo " + labels.video + " (scripts/setup.sh installs it)",
+    throw Error("bad_labels",
+                "cannot read the photo " + labels.video + " (scripts/setup.sh installs it)",
                 {.file = labels_file.string(), .field = "video"});
   }
-  const LabelledStill photo{.kind = kStillPhoto, .name = labels_file.stem().string(), .image = image,
-                            .labels = labels.frames[0]};
+  const LabelledStill photo{.kind = kStillPhoto, .name = labels_file.stem().string(),
+                            .image = image, .labels = labels.frames[0]};
   return {photo, Gray(photo)};
 }
 

@@ -90,8 +90,10 @@ TEST(HandsFit, TheWorldLandmarkPriorBringsTheJointsNearerTheTruth) {
   FitConfig without = ModelSize();
   without.world_prior = false;
   const auto all = [](size_t) { return true; };
-  const double with_prior = Mpjpe(FitTrack(tracks[0], h.K, h.fps, ModelSize()), h.truth, false, all);
-  const double without_prior = Mpjpe(FitTrack(tracks[0], h.K, h.fps, without), h.truth, false, all);
+  const double with_prior =
+      Mpjpe(FitTrack(tracks[0], h.K, h.fps, ModelSize()), h.truth, false, all);
+  const double without_prior =
+      Mpjpe(FitTrack(tracks[0], h.K, h.fps, without), h.truth, false, all);
   std::printf("MPJPE with the world prior %.2f cm, without %.2f cm\n", 100 * with_prior,
               100 * without_prior);
   EXPECT_LT(with_prior, without_prior);

@@ -73,7 +73,8 @@ TEST_F(HandStills, RealCloseUpPhotoAndGrayPhotoAreFound) {
 // asl_hand frame 0 (one right hand, labelled) cropped so that the hand's
 // box spans 0.7 of the side, in colour and in gray (one channel).
 TEST_F(HandStills, CloseUpOfALabelledFrameAndItsGrayVersionAreFound) {
-  const HandLabels labels = ReadHandLabels(testing::SourceDir() / "bench/hand_labels/asl_hand.json");
+  const HandLabels labels =
+      ReadHandLabels(testing::SourceDir() / "bench/hand_labels/asl_hand.json");
   const LabelledFrame& frame = labels.frames.at(0);
   ASSERT_EQ(frame.frame, 0);
   const cv::Mat bgr = DecodeFrame(testing::SharedData() / labels.video, frame.frame);

@@ -14,13 +14,25 @@
 //                              hands: camera-frame MPJPE and wrist error after
 //                              the fit, with the true K and with the default
 //                              field of view, with the model's own size and
-//                              with the adult size prior (0 clips: tracks only).
+//                              with the adult size prior, and that prior
+//                              without the world-landmark prior
+//                              (fit.world_prior false; 0 clips: tracks only).
 //   hands_bench labels         PCK at 0.1 and 0.2 of the hand box against the
 //                              hand-made labels in bench/hand_labels/*.json
 //                              (hands/hand_labels.h), for the models alone,
 //                              the tracker and the fit; missed hands of each,
 //                              left/right swaps of the models and the tracker;
 //                              the fit with every frame trusted beside it.
+//   hands_bench startup [0|1]  the start-up tax of a fresh process, with (1)
+//                              or without the graphs prepared before the
+//                              first clip: models' ms per sample of three
+//                              runs of one clip, graph pairs built.
+//   hands_bench stills         stills made from the labelled frames (frame,
+//                              gray, close-up, close-up gray;
+//                              hands/labelled_stills.h): hands found, PCK@0.2
+//                              and 0.1, 2D error, before and after the wide
+//                              search (HandLandmarker::DetectStill), per
+//                              video and kind.
 //   hands_bench jumps [frames] per side of each bundled positive, with every
 //                              frame trusted and as the stage runs (untrusted
 //                              frames, hands/hand_outliers.h): the largest
@@ -29,7 +41,8 @@
 // [frames] limits each video to its first frames (default: all); a third
 // argument picks the hand models ([hands] models: full, lite, lite_landmark),
 // a fourth keeps a tracked hand's keypoints where its crop barely changed
-// (HandLandmarkerOptions::unchanged_crop_fraction; not a [hands] option).
+// (HandLandmarkerOptions::unchanged_crop_fraction; not a [hands] option), a
+// fifth sets [hands] wide_search_every (0: the wide search on stills only).
 #include <dirent.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -42,16 +55,20 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "core/log.h"
+#include "filters/hand_models.h"
 #include "hands/hand_detection.h"
 #include "hands/hand_labels.h"
 #include "hands/hand_outliers.h"
 #include "hands/hand_reconstruction.h"
+#include "hands/labelled_stills.h"
 #include "synth/generator.h"
 #include "testing/synthetic_hand_track.h"
 
@@ -97,14 +114,28 @@ std::string g_models = HandsConfig{}.models;  // the third argument
 // The fourth: HandLandmarkerOptions::unchanged_crop_fraction (0: off, the
 // hands stage's behaviour), to measure keeping a still hand's keypoints.
 double g_unchanged_crop = 0;
+// The fifth: [hands] wide_search_every (the wide search on video frames
+// without a tracked hand; 0: stills only).
+int g_wide_every = HandsConfig{}.wide_search_every;
+
+filters::HandLandmarkerOptions LandmarkerOptions(int wide_every) {
+  return {.max_hands = HandsConfig{}.max_hands,
+          .max_side = HandsConfig{}.max_side,
+          .models = g_models,
+          .palm_every = HandsConfig{}.palm_every,
+          .lost_search = HandsConfig{}.palm_every,
+          .unchanged_crop_fraction = g_unchanged_crop,
+          .wide_every = wide_every};
+}
 
 filters::HandLandmarker& Landmarker() {
-  static filters::HandLandmarker landmarker({.max_hands = HandsConfig{}.max_hands,
-                                             .max_side = HandsConfig{}.max_side,
-                                             .models = g_models,
-                                             .palm_every = HandsConfig{}.palm_every,
-                                             .lost_search = HandsConfig{}.palm_every,
-                                             .unchanged_crop_fraction = g_unchanged_crop});
+  static filters::HandLandmarker landmarker(LandmarkerOptions(g_wide_every));
+  return landmarker;
+}
+
+// As the stage was before the wide search (issue 54): the palm detector only.
+filters::HandLandmarker& PalmOnlyLandmarker() {
+  static filters::HandLandmarker landmarker(LandmarkerOptions(0));
   return landmarker;
 }
 
@@ -315,7 +346,9 @@ void SynthRendered(int clips) {
   synth::SynthConfig cfg;
   cfg.frames = 48;
   cfg.seed = 11;
-  SynthError errors[2];
+  SynthError errors[4];  // [K][world prior on, off]
+  HandsConfig no_world;
+  no_world.fit.world_prior = false;
   int truth_hand_frames = 0;
   for (int i = 0; i < clips; ++i) {
     const synth::RenderedClip clip = synth::RenderClip(cfg, i, synth::DefectKind::kClean);
@@ -341,14 +374,17 @@ void SynthRendered(int clips) {
         {.K = KFromFov(b.width, b.height, HandsConfig{}.default_fov_deg),
          .assumed = true,
          .source = kIntrinsicsFromDefault}};
-    for (int v = 0; v < 2; ++v) {
-      for (const FittedTrack& t : ReconstructHands(d, variants[v], HandsConfig{}).tracks)
+    for (int v = 0; v < 4; ++v) {
+      for (const FittedTrack& t :
+           ReconstructHands(d, variants[v / 2], v % 2 ? no_world : HandsConfig{}).tracks)
         Score(t, b, errors[v]);
     }
   }
   std::printf("rendered clips: %d clips, %d hand-frames in the truth\n", clips, truth_hand_frames);
   PrintError("true K", errors[0]);
-  PrintError("default fov", errors[1]);
+  PrintError("true K, no world prior", errors[1]);
+  PrintError("default fov", errors[2]);
+  PrintError("default fov, no world prior", errors[3]);
 }
 
 // Synthetic tracks (testing/synthetic_hand_track.h): a real hand's motion
@@ -362,25 +398,28 @@ void SynthTracks() {
   std::printf("synthetic tracks: 8 x 90 frames per camera, 1.5 px and 3 mm noise\n");
   FitConfig model_size;
   model_size.size_prior = "model";
-  const FitConfig fits[2] = {model_size, FitConfig{}};
-  const char* fit_names[2] = {"model size", "adult prior"};
+  FitConfig no_world;
+  no_world.world_prior = false;
+  constexpr int kFits = 3;
+  const FitConfig fits[kFits] = {model_size, FitConfig{}, no_world};
+  const char* fit_names[kFits] = {"model size", "adult prior", "adult, no world prior"};
   int untrusted = 0;  // untrusted frames (hands/hand_outliers.h), true K, model size
   for (double fx : {400.0, 500.0, 700.0}) {
-    SynthError errors[5];  // [K][fit] as 2k+f; 4 = PnP only (true K, model size)
+    SynthError errors[2 * kFits + 1];  // [K][fit] as kFits k + f; the last: PnP only
     for (int k = 0; k < 8; ++k) {
       const auto h = testing::MakeSyntheticHand(rows, 90, 60 * k, 1.5, 0.003, 0.9, 100 + k, fx);
       std::vector<FrameObservations> frames;
       for (const auto& o : h.seen) frames.push_back({o});
       const auto tracks = BuildTracks(frames, TrackerConfig{});
       const Mat3 Ks[2] = {h.K, KFromFov(h.width, h.height, HandsConfig{}.default_fov_deg)};
-      for (int v = 0; v < 4; ++v) {
+      for (int v = 0; v < 2 * kFits; ++v) {
         for (const Track& tr : tracks) {
-          const FittedTrack fit = FitTrack(tr, Ks[v / 2], h.fps, fits[v % 2]);
+          const FittedTrack fit = FitTrack(tr, Ks[v / kFits], h.fps, fits[v % kFits]);
           if (v == 0) untrusted += fit.untrusted_frames;
           for (size_t f = 0; f < fit.joints.size(); ++f) {
             for (int pnp = 0; pnp < (v == 0 ? 2 : 1); ++pnp) {
               if (pnp && !fit.has_pnp[f]) continue;
-              SynthError& e = errors[pnp ? 4 : v];
+              SynthError& e = errors[pnp ? 2 * kFits : v];
               const Joints& x = pnp ? fit.pnp_joints[f] : fit.joints[f];
               double sum = 0;
               for (int j = 0; j < kJoints; ++j)
@@ -396,10 +435,10 @@ void SynthTracks() {
     const double fov = 2 * std::atan(320 / fx) * 180 / M_PI;
     char name[64];
     std::snprintf(name, 64, "fx %.0f (%.0f deg), true K, PnP only", fx, fov);
-    PrintError(name, errors[4]);
-    for (int v = 0; v < 4; ++v) {
-      std::snprintf(name, 64, "fx %.0f, %s, %s", fx, v / 2 ? "default 65 deg" : "true K",
-                    fit_names[v % 2]);
+    PrintError(name, errors[2 * kFits]);
+    for (int v = 0; v < 2 * kFits; ++v) {
+      std::snprintf(name, 64, "fx %.0f, %s, %s", fx, v / kFits ? "default 65 deg" : "true K",
+                    fit_names[v % kFits]);
       PrintError(name, errors[v]);
     }
   }
@@ -568,12 +607,152 @@ void Labels() {
   }
 }
 
+// The start-up tax (issue 54): in this fresh process, with the graphs
+// prepared before the first clip (PrepareHandModels, as a worker does) or
+// not, the same clip (02_cups, 5 samples per second at analysis size, as
+// the analysis pass samples) three times, each with a new landmarker (the
+// analysis makes one per clip): the models' ms per sample (what
+// hands.ms_per_sample records), the clip's CPU seconds with the
+// landmarker's construction, and the graph pairs built so far.
+void Startup(bool prepare) {
+  const double c0 = CpuSeconds();
+  if (prepare) filters::PrepareHandModels(g_models);
+  std::printf("prepare %s: %.3f CPU s, graph pairs built %d\n", prepare ? "on" : "off",
+              CpuSeconds() - c0, filters::HandModelGraphBuilds());
+  VideoDecoder decoder(kData + "/videos/02_cups.mp4", DecoderOptions{.clip = "02_cups"});
+  const int every = std::max(1, static_cast<int>(std::lround(decoder.geometry().fps / 5)));
+  std::vector<cv::Mat> samples;
+  AnalysisFrame frame;
+  for (int i = 0; decoder.Next(&frame); ++i) {
+    if (i % every == 0) samples.push_back(frame.bgr.clone());
+  }
+  for (int clip = 1; clip <= 3; ++clip) {
+    const double c = CpuSeconds();
+    filters::HandLandmarker landmarker(LandmarkerOptions(0));
+    double ms = 0, first_ms = 0;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      landmarker.Detect(samples[i]);
+      ms += landmarker.last_ms();
+      if (i == 0) first_ms = landmarker.last_ms();
+    }
+    std::printf("clip %d: %zu samples, %.2f ms per sample (first sample %.1f ms), %.3f CPU s, "
+                "graph pairs built %d\n",
+                clip, samples.size(), ms / samples.size(), first_ms, CpuSeconds() - c,
+                filters::HandModelGraphBuilds());
+    std::fflush(stdout);
+  }
+}
+
+// The stills made from the labelled frames (hands/labelled_stills.h): per
+// video and kind, and per kind over all videos, the hands found (recall),
+// PCK@0.2 (a miss counts 0), PCK@0.1 and the mean 2D error of the hands
+// found (pixels, and hand boxes), before (the palm detector on the whole
+// image, as DetectImage was; a gray image replicated to three channels as
+// the CLI reads it) and after (DetectStill: the wide search); the models'
+// milliseconds per still.
+struct StillScores {
+  PckScore before, after;
+  double before_ms = 0, after_ms = 0;
+  int stills = 0;
+  void Add(const StillScores& o) {
+    before.Add(o.before);
+    after.Add(o.after);
+    before_ms += o.before_ms;
+    after_ms += o.after_ms;
+    stills += o.stills;
+  }
+};
+
+std::vector<PredictedHand> Predicted(const std::vector<filters::LandmarkedHand>& hands, int width,
+                                     int height) {
+  std::vector<PredictedHand> out;
+  for (const auto& h : hands) {
+    const HandObservation o = FromLandmarked(h, 1.0, width, height);
+    out.push_back({.side = o.p_right >= 0.5 ? Side::kRight : Side::kLeft, .uv = o.uv});
+  }
+  return out;
+}
+
+StillScores ScoreStill(const LabelledStill& still) {
+  StillScores s;
+  s.stills = 1;
+  cv::Mat bgr = still.image;
+  if (bgr.channels() == 1) cv::cvtColor(still.image, bgr, cv::COLOR_GRAY2BGR);
+  const int w = bgr.cols, h = bgr.rows;
+  PalmOnlyLandmarker().Reset();
+  s.before = ScoreFrame(still.labels, Predicted(PalmOnlyLandmarker().Detect(bgr), w, h));
+  s.before_ms = PalmOnlyLandmarker().last_ms();
+  s.after = ScoreFrame(still.labels, Predicted(Landmarker().DetectStill(still.image), w, h));
+  s.after_ms = Landmarker().last_ms();
+  return s;
+}
+
+void PrintStills(const std::string& name, const StillScores& s) {
+  const auto row = [](const PckScore& p) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%3d/%-3d %5.3f %5.3f %6.1f %5.3f", p.hands - p.missed,
+                  p.hands, p.Pck02(), p.Pck01(), p.MeanErrorPx(), p.MeanErrorBoxes());
+    return std::string(text);
+  };
+  std::printf("%-30s %4d | %s %6.1f | %s %6.1f\n", name.c_str(), s.stills, row(s.before).c_str(),
+              s.stills ? s.before_ms / s.stills : 0.0, row(s.after).c_str(),
+              s.stills ? s.after_ms / s.stills : 0.0);
+  std::fflush(stdout);
+}
+
+void Stills() {
+  const std::filesystem::path dir = std::filesystem::path(DOASIDO_SOURCE_DIR) / "bench/hand_labels";
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::printf("%-30s %4s | %-35s | %-35s\n", "source (video, kind)", "n",
+              "before: found PCK.2 PCK.1 err_px err_box ms", "after (wide search): same");
+  std::map<std::string, StillScores> kinds;
+  for (const auto& file : files) {
+    const HandLabels labels = ReadHandLabels(file);
+    std::map<std::string, StillScores> mine;
+    for (const LabelledFrame& f : labels.frames) {
+      const cv::Mat bgr = DecodeFrame(kData + "/" + labels.video, f.frame);
+      for (const LabelledStill& still :
+           StillsOfFrame(bgr, f, file.stem().string() + " " + std::to_string(f.frame))) {
+        mine[still.kind].Add(ScoreStill(still));
+      }
+    }
+    for (const auto& [kind, scores] : mine) {
+      PrintStills(file.stem().string() + " " + kind, scores);
+      kinds[kind].Add(scores);
+    }
+  }
+  // The photos labelled by hand (bench/hand_labels/photos/).
+  std::vector<std::filesystem::path> photos;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "photos")) {
+    if (e.path().extension() == ".json") photos.push_back(e.path());
+  }
+  std::sort(photos.begin(), photos.end());
+  for (const auto& file : photos) {
+    for (const LabelledStill& still : PhotoStills(file)) {
+      const StillScores scores = ScoreStill(still);
+      PrintStills(still.name + " " + still.kind, scores);
+      kinds[still.kind].Add(scores);
+    }
+  }
+  StillScores total;
+  for (const auto& [kind, scores] : kinds) {
+    PrintStills("all " + kind, scores);
+    total.Add(scores);
+  }
+  PrintStills("all", total);
+}
+
 int main(int argc, char** argv) {
   InitLogging("warn");
   const std::string mode = argc > 1 ? argv[1] : "real";
   const long arg = argc > 2 ? std::atol(argv[2]) : 0;
   if (argc > 3) g_models = argv[3];
   if (argc > 4) g_unchanged_crop = std::atof(argv[4]);
+  if (argc > 5) g_wide_every = std::atoi(argv[5]);
   if (mode == "real")
     Real(arg);
   else if (mode == "dex")
@@ -582,11 +761,16 @@ int main(int argc, char** argv) {
     Jumps(arg);
   else if (mode == "labels")
     Labels();
+  else if (mode == "stills")
+    Stills();
+  else if (mode == "startup")
+    Startup(argc > 2 && arg != 0);
   else if (mode == "synth")
     Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
     std::fprintf(stderr,
-                 "usage: hands_bench real|dex|jumps|labels|synth [frames|clips] [models]\n");
+                 "usage: hands_bench real|dex|jumps|labels|stills|startup|synth [frames|clips] "
+                 "[models]\n");
     return 2;
   }
   return 0;

@@ -122,7 +122,9 @@ void RequireDistinctStems(const std::vector<std::string>& inputs) {
 std::unique_ptr<filters::HandLandmarker> StartLandmarker(const HandsConfig& c) {
   return std::make_unique<filters::HandLandmarker>(
       filters::HandLandmarkerOptions{.max_hands = c.max_hands, .max_side = c.max_side, .backend = c.backend,
-                                      .palm_every = c.palm_every, .lost_search = c.palm_every});
+                                      .models = c.models, .palm_every = c.palm_every,
+                                      .lost_search = c.palm_every,
+                                      .wide_every = c.wide_search_every});
 }
 
 void RunHands(const HandsOptions& o) {
@@ -174,7 +176,9 @@ void AddHandsCommand(CLI::App& app) {
       "\"intrinsics_assumed\": true. Joint order is MediaPipe's (0 wrist, 4 thumb tip, 8 index\n"
       "tip, 12 middle, 16 ring, 20 little finger tip); keypoints_2d are pixels of the input as\n"
       "displayed, joints_camera metres (x right, y down, z forward). Frames where a hand was\n"
-      "briefly lost are filled by the fit and marked \"filled\".\n\n"
+      "briefly lost are filled by the fit and marked \"filled\". An image (gray ones too) is\n"
+      "searched wide: zoomed windows and the whole frame for hands the palm detector misses\n"
+      "(docs/hands.md, \"Stills, close-ups and gray\").\n\n"
       "Example:\n"
       "  doasido hands clips/cups.mp4 photos/grasp.jpg --out work/hands --overlay\n"
       "  # work/hands/cups.json, cups.overlay.mp4, grasp.json, grasp.overlay.png");

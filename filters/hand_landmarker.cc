@@ -186,6 +186,60 @@ double ChangedFraction(const std::vector<float>& a, const std::vector<float>& b,
   return a.empty() ? 1.0 : static_cast<double>(changed) / (a.size() / 3);
 }
 
+// Stretches an input tensor (RGB in [0, 1]) so that its brightness's 2nd
+// to 98th percentile spans [0, 1], when that span is below kLowContrast;
+// false (the tensor untouched) when it is not.
+bool StretchLowContrast(std::vector<float>* input) {
+  int histogram[256] = {};
+  const std::size_t pixels = input->size() / 3;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const float* p = input->data() + 3 * i;
+    ++histogram[std::clamp(static_cast<int>((p[0] + p[1] + p[2]) / 3 * 255 + 0.5f), 0, 255)];
+  }
+  const auto percentile = [&](double q) {
+    std::size_t seen = 0;
+    for (int v = 0; v < 256; ++v) {
+      seen += histogram[v];
+      if (seen >= q * pixels) return v / 255.0f;
+    }
+    return 1.0f;
+  };
+  const float lo = percentile(0.02), hi = percentile(0.98);
+  if (hi - lo >= kLowContrast || hi - lo < 1e-3f) return false;
+  for (float& v : *input) v = std::clamp((v - lo) / (hi - lo), 0.0f, 1.0f);
+  return true;
+}
+
+// The wide search's zoomed windows over a cols x rows frame: squares of
+// half the longer side (at most the shorter side), half a window apart,
+// spread evenly from edge to edge.
+std::vector<cv::Rect> ZoomWindows(int cols, int rows) {
+  const int side = std::min(std::max(cols, rows) / 2, std::min(cols, rows));
+  const auto starts = [side](int length) {
+    const int n = (length - side + side / 2 - 1) / (side / 2) + 1;
+    std::vector<int> out;
+    for (int i = 0; i < n; ++i) out.push_back(n == 1 ? 0 : (length - side) * i / (n - 1));
+    return out;
+  };
+  std::vector<cv::Rect> windows;
+  if (side < kPalmInputSize / 2) return windows;  // too small to zoom into
+  for (int y : starts(rows)) {
+    for (int x : starts(cols)) windows.emplace_back(x, y, side, side);
+  }
+  return windows;
+}
+
+// The hand crop a palm gives (MediaPipe's palm -> hand crop).
+HandCrop PalmCrop(const DetectedPalm& p) {
+  return CropFrom(p.box.x + p.box.width / 2, p.box.y + p.box.height / 2, p.box.width,
+                  p.box.height, UprightAngle(p.keypoints[kPalmWrist], p.keypoints[kPalmMiddleBase]),
+                  kPalmCropScale, kPalmCropShift);
+}
+
+cv::Rect2d CropSquare(const HandCrop& c) {
+  return cv::Rect2d(c.cx - c.side / 2, c.cy - c.side / 2, c.side, c.side);
+}
+
 LandmarkedHand Scaled(LandmarkedHand hand, double scale) {
   hand.box = cv::Rect2d(hand.box.tl() * scale, hand.box.br() * scale);
   for (cv::Point3d& p : hand.keypoints) p *= scale;
@@ -214,6 +268,8 @@ void HandLandmarker::Reset() {
   tracked_.clear();
   since_palms_ = 0;
   searching_ = 0;
+  frames_ = 0;
+  handless_ = 0;
 }
 
 std::vector<DetectedPalm> HandLandmarker::Palms(const cv::Mat& rgb) {
@@ -258,10 +314,12 @@ std::vector<DetectedPalm> HandLandmarker::DetectPalms(const cv::Mat& bgr) {
   return palms;
 }
 
-bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand) {
+bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand,
+                               bool stretch) {
   const cv::Matx23d map = CropMap(crop);
   const double k = crop.side / kLandmarkInputSize;
   SampleRgb(rgb, kLandmarkInputSize, map, &input_);
+  if (stretch && !StretchLowContrast(&input_)) return false;  // not low in contrast: no new look
   LandmarkOutput out;
   models_->Landmark(input_.data(), &out);
   if (out.presence < kMinPresence) return false;
@@ -280,6 +338,69 @@ bool HandLandmarker::Landmarks(const cv::Mat& rgb, const HandCrop& crop, Landmar
     y2 = std::max(y2, y);
   }
   hand->box = cv::Rect2d(cv::Point2d(x1, y1), cv::Point2d(x2, y2));
+  return true;
+}
+
+std::vector<TrackedHand> HandLandmarker::WideSearch(const cv::Mat& rgb,
+                                                    const std::vector<LandmarkedHand>& known) {
+  ++wide_searches_;
+  std::vector<TrackedHand> found;
+  // A crop on a hand already found, or one this search found: no new look.
+  const auto seen = [&](const HandCrop& crop) {
+    for (const LandmarkedHand& h : known) {
+      if (IoU(CropSquare(CropFromHand(h)), CropSquare(crop)) > kSameHandIou) return true;
+    }
+    for (const TrackedHand& t : found) {
+      if (IoU(CropSquare(t.run_crop), CropSquare(crop)) > kSameHandIou) return true;
+    }
+    return false;
+  };
+  const auto enough = [&] {
+    return static_cast<int>(known.size() + found.size()) >= options_.max_hands;
+  };
+  // A candidate crop is a hand when the landmark model finds one on it
+  // (as is, else stretched when low in contrast) and again on the crop its
+  // keypoints give.
+  const auto look = [&](const HandCrop& crop) {
+    if (seen(crop)) return false;
+    for (const bool stretch : {false, true}) {
+      LandmarkedHand first, hand;
+      if (!Landmarks(rgb, crop, &first, stretch)) continue;
+      const HandCrop own = CropFromHand(first);
+      if (!Landmarks(rgb, own, &hand, stretch)) continue;
+      if (seen(own)) return true;  // a hand already found, from another crop
+      found.push_back({.run_crop = own, .run_hand = hand});
+      return true;
+    }
+    return false;
+  };
+  for (const cv::Rect& window : ZoomWindows(rgb.cols, rgb.rows)) {
+    if (enough()) break;
+    for (DetectedPalm palm : Palms(rgb(window))) {
+      palm.box.x += window.x;
+      palm.box.y += window.y;
+      for (cv::Point2d& k : palm.keypoints) k += cv::Point2d(window.tl());
+      look(PalmCrop(palm));
+    }
+  }
+  // No palm at all: the whole frame, letterboxed, and its centred square,
+  // upright first, then turned (stops at the first turn that finds a hand).
+  const double cx = rgb.cols / 2.0, cy = rgb.rows / 2.0;
+  for (const int side : {std::max(rgb.cols, rgb.rows), std::min(rgb.cols, rgb.rows)}) {
+    for (const double turn : {0.0, M_PI / 2, -M_PI / 2, M_PI}) {
+      if (enough() || look({cx, cy, static_cast<double>(side), turn})) break;
+    }
+  }
+  std::stable_sort(found.begin(), found.end(), [](const TrackedHand& a, const TrackedHand& b) {
+    return a.run_hand.score > b.run_hand.score;
+  });
+  return found;
+}
+
+bool HandLandmarker::WideDue() {
+  if (options_.wide_every <= 0 || !tracked_.empty()) return false;
+  if (frames_ > 0 && ++handless_ < options_.wide_every) return false;
+  handless_ = 0;
   return true;
 }
 
@@ -312,6 +433,21 @@ cv::Mat HandLandmarker::Rgb(const cv::Mat& bgr, double* shrink) const {
 std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
   double shrink = 1;
   const cv::Mat rgb = Rgb(bgr, &shrink);
+  return DetectRgb(rgb, shrink, WideDue());
+}
+
+std::vector<LandmarkedHand> HandLandmarker::DetectStill(const cv::Mat& image) {
+  cv::Mat bgr = image;
+  if (image.type() == CV_8UC1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+  if (image.type() == CV_8UC4) cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+  Reset();
+  double shrink = 1;
+  const cv::Mat rgb = Rgb(bgr, &shrink);
+  return DetectRgb(rgb, shrink, true);
+}
+
+std::vector<LandmarkedHand> HandLandmarker::DetectRgb(const cv::Mat& rgb, double shrink,
+                                                      bool wide) {
   models_->TakeModelMs();
   std::vector<LandmarkedHand> hands;
   std::vector<TrackedHand> runs;  // per hand found: its last landmark run
@@ -344,23 +480,31 @@ std::vector<LandmarkedHand> HandLandmarker::Detect(const cv::Mat& bgr) {
   if (static_cast<int>(hands.size()) < options_.max_hands &&
       (hands.empty() || searching_ > 0 || since_palms_ >= options_.palm_every)) {
     since_palms_ = 0;
-    const auto square = [](const HandCrop& c) {
-      return cv::Rect2d(c.cx - c.side / 2, c.cy - c.side / 2, c.side, c.side);
-    };
     for (const Palm& p : Palms(rgb)) {
       if (static_cast<int>(hands.size()) >= options_.max_hands) break;
-      const HandCrop crop =
-          CropFrom(p.box.x + p.box.width / 2, p.box.y + p.box.height / 2, p.box.width,
-                   p.box.height, UprightAngle(p.keypoints[kPalmWrist], p.keypoints[kPalmMiddleBase]),
-                   kPalmCropScale, kPalmCropShift);
+      const HandCrop crop = PalmCrop(p);
       // A palm of a hand already found: no landmark run (MediaPipe's association).
       bool known = false;
       for (const LandmarkedHand& h : hands) {
-        known |= IoU(square(CropFromHand(h)), square(crop)) > kSameHandIou;
+        known |= IoU(CropSquare(CropFromHand(h)), CropSquare(crop)) > kSameHandIou;
       }
       if (!known) consider(crop);
     }
   }
+  if (wide && static_cast<int>(hands.size()) < options_.max_hands) {
+    for (TrackedHand& run : WideSearch(rgb, hands)) {
+      if (static_cast<int>(hands.size()) >= options_.max_hands) break;
+      bool known = false;
+      for (const LandmarkedHand& h : hands) {
+        known |= IoU(CropSquare(CropFromHand(h)), CropSquare(run.run_crop)) > kSameHandIou;
+      }
+      if (known) continue;
+      const std::size_t before = hands.size();
+      add(run.run_hand, std::move(run));
+      wide_found_ += static_cast<int>(hands.size() - before);
+    }
+  }
+  ++frames_;
   if (searching_ > 0) --searching_;
   if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = 0;
   tracked_ = std::move(runs);

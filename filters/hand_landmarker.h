@@ -68,7 +68,27 @@ struct HandLandmarkerOptions {
   // motion adds up until it counts. 0: the model runs on every tracked hand.
   double unchanged_crop_fraction = 0;
   int unchanged_crop_level = 15;  // the activity signal's pixel_threshold
+  // The wide search (WideSearch below) on video: on the first frame after
+  // Reset() when no hand is tracked there, and on every wide_every-th frame
+  // after it with no hand tracked. 0: only DetectStill() searches wide.
+  int wide_every = 0;
 };
+
+// What the wide search looks at beyond the palm detector on the whole
+// frame letterboxed (issue 54: hands that palm detector misses, a hand
+// filling the frame, small hands, grayscale and low-contrast input):
+//   - the palm detector on overlapping zoomed windows (side: half the
+//     frame's longer side, at most its shorter one; half a window apart);
+//   - the landmark model straight on the whole frame (letterboxed, and its
+//     centred square) at four rotations, with no palm at all;
+//   - where a crop is low in contrast (its 2nd to 98th percentile of
+//     brightness spans less than kLowContrast), the same crop stretched to
+//     that range, as one more candidate.
+// A candidate is a hand when the landmark model's presence on it is at
+// least 0.5, and again on the crop its own keypoints give (the crop the
+// tracker would use next): that second run's keypoints are kept. Its side
+// is the landmark model's handedness, as for every hand.
+inline constexpr double kLowContrast = 0.5;
 
 // A square crop of the frame, rotated: where the landmark model looks.
 struct HandCrop {
@@ -109,6 +129,9 @@ class HandLandmarker {
   // Hands in a BGR frame, boxes and keypoints in its pixels. Throws
   // Error("hand_detector_failed") when the process dies or answers garbage.
   std::vector<LandmarkedHand> Detect(const cv::Mat& bgr);
+  // One still image: Reset(), then Detect() with the wide search. A gray
+  // (one channel) or BGRA image is taken too.
+  std::vector<LandmarkedHand> DetectStill(const cv::Mat& image);
   void Reset();
   // True when a hand of the last frame is tracked into the next (else
   // Detect runs the palm detector; PalmGate in filters/learned_hand_detector.h
@@ -120,6 +143,10 @@ class HandLandmarker {
   double last_ms() const { return last_ms_; }
   // Landmark runs saved by unchanged crops since the landmarker was made.
   int reused() const { return reused_; }
+  // Wide searches run since the landmarker was made, and the hands they
+  // added (beyond the palm detector's on the whole frame).
+  int wide_searches() const { return wide_searches_; }
+  int wide_found() const { return wide_found_; }
   // The runtime that runs the models ("native" or "wasm"), and why it is
   // not the one asked for (empty when it is).
   const char* backend() const;
@@ -128,8 +155,12 @@ class HandLandmarker {
  private:
   cv::Mat Rgb(const cv::Mat& bgr, double* shrink) const;
   std::vector<DetectedPalm> Palms(const cv::Mat& rgb);
-  bool Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand);
+  bool Landmarks(const cv::Mat& rgb, const HandCrop& crop, LandmarkedHand* hand,
+                 bool stretch = false);
   bool CropUnchanged(const cv::Mat& rgb, const TrackedHand& track);
+  std::vector<TrackedHand> WideSearch(const cv::Mat& rgb, const std::vector<LandmarkedHand>& known);
+  bool WideDue();
+  std::vector<LandmarkedHand> DetectRgb(const cv::Mat& rgb, double shrink, bool wide);
 
   HandLandmarkerOptions options_;
   std::unique_ptr<HandModels> models_;
@@ -138,6 +169,9 @@ class HandLandmarker {
   std::vector<TrackedHand> tracked_;  // where to look first in the next frame
   int since_palms_ = 0;            // frames since the palm detector last ran
   int searching_ = 0;              // frames left to look for a lost hand on every frame
+  int frames_ = 0;                 // frames since Reset()
+  int handless_ = 0;               // frames without a tracked hand since the last wide search
+  int wide_searches_ = 0, wide_found_ = 0;
   std::vector<float> input_, compare_;
   double last_ms_ = 0;
   int reused_ = 0;

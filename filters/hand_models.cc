@@ -1,5 +1,8 @@
 #include "filters/hand_models.h"
 
+#include <time.h>
+
+#include <atomic>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -27,7 +30,7 @@ std::size_t OutputNamed(const TfliteModel& m, const std::string& name) {
 }
 
 // The parsed models of one pair, read once per process and shared by every
-// thread's graphs (XNNPACK reads the weights from them).
+// graph pair (XNNPACK reads the weights from them).
 struct ParsedModels {
   std::shared_ptr<const TfliteModel> palm, landmark;
 };
@@ -45,9 +48,9 @@ ParsedModels LoadParsedModels(const std::string& pair) {
   return models;
 }
 
-// One thread's pair of graphs.
-struct ThreadGraphs {
-  explicit ThreadGraphs(const ParsedModels& m)
+// One pair of graphs (used by one HandModels at a time).
+struct GraphPair {
+  explicit GraphPair(const ParsedModels& m)
       : palm(m.palm), landmark(m.landmark),
         palm_boxes(OutputNamed(*m.palm, "Identity")),
         palm_scores(OutputNamed(*m.palm, "Identity_1")),
@@ -66,14 +69,57 @@ struct ThreadGraphs {
   std::size_t palm_boxes, palm_scores, screen, presence, right, world;
 };
 
+// Graph pairs built once per process and lent to one HandModels at a
+// time, whatever thread it runs on: a worker builds them before its first
+// clip (PrepareHandModels) and each landmarker after borrows them. A
+// thread-local pair would be built again by every new thread and would
+// cost its first clip the build and the first runs.
+class GraphPool {
+ public:
+  static GraphPool& Get() {
+    static GraphPool pool;
+    return pool;
+  }
+  std::unique_ptr<GraphPair> Borrow(const std::string& pair) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      std::vector<std::unique_ptr<GraphPair>>& free = free_[pair];
+      if (!free.empty()) {
+        std::unique_ptr<GraphPair> graphs = std::move(free.back());
+        free.pop_back();
+        return graphs;
+      }
+    }
+    auto graphs = std::make_unique<GraphPair>(LoadParsedModels(pair));
+    Warm(*graphs);
+    ++builds_;
+    return graphs;
+  }
+  void Return(const std::string& pair, std::unique_ptr<GraphPair> graphs) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_[pair].push_back(std::move(graphs));
+  }
+  int builds() const { return builds_.load(); }
+
+ private:
+  // One run of each graph on a blank input: the first run of a new graph
+  // touches its scratch memory for the first time, paid here, not in a clip.
+  static void Warm(GraphPair& g) {
+    std::fill(g.palm.input(), g.palm.input() + g.palm.input_size(), 0.f);
+    g.palm.Run();
+    std::fill(g.landmark.input(), g.landmark.input() + g.landmark.input_size(), 0.f);
+    g.landmark.Run();
+  }
+  std::mutex mutex_;
+  std::map<std::string, std::vector<std::unique_ptr<GraphPair>>> free_;
+  std::atomic<int> builds_{0};
+};
+
 class NativeHandModels : public HandModels {
  public:
-  explicit NativeHandModels(const std::string& pair) {
-    thread_local std::map<std::string, std::unique_ptr<ThreadGraphs>> graphs;
-    std::unique_ptr<ThreadGraphs>& mine = graphs[pair];
-    if (!mine) mine = std::make_unique<ThreadGraphs>(LoadParsedModels(pair));
-    graphs_ = mine.get();
-  }
+  explicit NativeHandModels(const std::string& pair)
+      : pair_(pair), graphs_(GraphPool::Get().Borrow(pair)) {}
+  ~NativeHandModels() override { GraphPool::Get().Return(pair_, std::move(graphs_)); }
   void Palm(const float* input, PalmOutput* out) override {
     const double start = ThreadCpuMs();
     XnnpackGraph& g = graphs_->palm;
@@ -98,11 +144,28 @@ class NativeHandModels : public HandModels {
   const char* backend() const override { return kBackendNative; }
 
  private:
-  ThreadGraphs* graphs_ = nullptr;  // this thread's, lives as long as the thread
+  std::string pair_;
+  std::unique_ptr<GraphPair> graphs_;  // borrowed from the pool
   double ms_ = 0;
 };
 
 }  // namespace
+
+bool PrepareHandModels(const std::string& models, int count, std::string* why) {
+  PalmModelFile(models);  // a bad name is the config's error
+  if (!HandModelFilesAvailable(why, models)) return false;
+  std::vector<std::unique_ptr<GraphPair>> built;
+  try {
+    for (int i = 0; i < count; ++i) built.push_back(GraphPool::Get().Borrow(models));
+  } catch (const Error& e) {
+    if (why) *why = e.what();
+    return false;
+  }
+  for (auto& graphs : built) GraphPool::Get().Return(models, std::move(graphs));
+  return true;
+}
+
+int HandModelGraphBuilds() { return GraphPool::Get().builds(); }
 
 std::filesystem::path MediapipeHandsDir() { return NpmDir() / "node_modules" / "@mediapipe/hands"; }
 

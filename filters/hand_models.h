@@ -1,8 +1,9 @@
 // The two MediaPipe Hands models as functions from an input tensor to their
 // raw outputs, behind one interface with two runtimes:
 //   native: our TFLite reader (filters/tflite_model.h) executed by XNNPACK
-//           (filters/xnnpack_graph.h) in this process, one graph pair per
-//           thread (built on a thread's first use, kept for its life);
+//           (filters/xnnpack_graph.h) in this process; graph pairs built
+//           once per process into a pool (PrepareHandModels), each
+//           HandModels borrowing one for its life;
 //   wasm:   TFLite's WebAssembly runtime in a Node process
 //           (filters/mediapipe_hands.js), the reference the tests compare
 //           the native runtime against, and the fallback where the native
@@ -75,6 +76,16 @@ std::unique_ptr<HandModels> MakeNativeHandModels(const std::string& clip,
                                                  const std::string& models = kModelsFull);
 std::unique_ptr<HandModels> MakeWasmHandModels(const std::string& clip,
                                                const std::string& models = kModelsFull);
+
+// Builds `count` native graph pairs of `models` (and runs each once) into
+// the process's pool, unless that many are already there: each native
+// HandModels borrows a pair for its life and gives it back, so a worker
+// that calls this before its first clip pays no build on any clip. False
+// (with the reason in `why`) when the native runtime cannot load; throws
+// Error("bad_config") for a bad `models`.
+bool PrepareHandModels(const std::string& models, int count = 1, std::string* why = nullptr);
+// Graph pairs built in this process so far (the pool's; for tests and benches).
+int HandModelGraphBuilds();
 
 // True when the wasm runtime can start (node and the npm packages), else
 // false with the reason in `why`.

@@ -50,8 +50,7 @@ DetectedFrames DetectImage(const cv::Mat& bgr, filters::HandLandmarker& landmark
   DetectedFrames out;
   out.width = bgr.cols;
   out.height = bgr.rows;
-  landmarker.Reset();
-  out.frames.push_back(Observe(landmarker.Detect(bgr), 1.0, out.width, out.height));
+  out.frames.push_back(Observe(landmarker.DetectStill(bgr), 1.0, out.width, out.height));
   out.model_seconds = landmarker.last_ms() / 1000.0;
   out.seconds = Since(start);
   return out;

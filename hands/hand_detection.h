@@ -37,7 +37,8 @@ DetectedFrames DetectVideo(const std::filesystem::path& video, DecoderOptions sp
                            int max_side, filters::HandLandmarker& landmarker,
                            const std::function<void(std::int64_t)>& progress = {});
 
-// One still image (BGR), as one frame; the landmarker is reset first.
+// One still image (BGR, gray or BGRA), as one frame: the landmarker is
+// reset and searches wide (filters::HandLandmarker::DetectStill).
 DetectedFrames DetectImage(const cv::Mat& bgr, filters::HandLandmarker& landmarker);
 
 }  // namespace doasido::hands

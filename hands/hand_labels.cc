@@ -17,6 +17,13 @@ namespace {
 }
 
 double BoxSize(const LabelledHand& h) {
+  const auto [lo, hi] = VisibleBounds(h);
+  return std::max(1.0, (hi - lo).maxCoeff());
+}
+
+}  // namespace
+
+std::pair<Eigen::Vector2d, Eigen::Vector2d> VisibleBounds(const LabelledHand& h) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo;
   for (int j = 0; j < kJoints; ++j) {
@@ -24,10 +31,8 @@ double BoxSize(const LabelledHand& h) {
     lo = lo.cwiseMin(h.uv[j]);
     hi = hi.cwiseMax(h.uv[j]);
   }
-  return std::max(1.0, (hi - lo).maxCoeff());
+  return {lo, hi};
 }
-
-}  // namespace
 
 HandLabels ReadHandLabels(const std::filesystem::path& file) {
   Json j;
@@ -72,6 +77,9 @@ void PckScore::Add(const PckScore& o) {
   hands += o.hands;
   missed += o.missed;
   swaps += o.swaps;
+  error_px += o.error_px;
+  error_boxes += o.error_boxes;
+  found_keypoints += o.found_keypoints;
 }
 
 PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand>& predicted) {
@@ -108,6 +116,9 @@ PckScore ScoreFrame(const LabelledFrame& labels, const std::vector<PredictedHand
       const double d = (predicted[best_k].uv[j] - l.uv[j]).norm();
       s.within_01 += d <= 0.1 * box ? 1 : 0;
       s.within_02 += d <= 0.2 * box ? 1 : 0;
+      s.error_px += d;
+      s.error_boxes += d / box;
+      ++s.found_keypoints;
     }
   }
   return s;

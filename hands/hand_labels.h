@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hands/hand_observation.h"
@@ -31,6 +32,9 @@ struct LabelledHand {
   std::array<Eigen::Vector2d, kJoints> uv;
   std::array<bool, kJoints> visible{};
 };
+
+// The corners of the box of a labelled hand's visible keypoints.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> VisibleBounds(const LabelledHand& hand);
 
 struct LabelledFrame {
   int frame = 0;
@@ -57,6 +61,13 @@ struct PckScore {
   int within_01 = 0, within_02 = 0;
   int hands = 0, missed = 0;  // labelled hands; those with no prediction near them
   int swaps = 0;              // labelled hands whose nearest prediction has the other side
+  // Over the labelled keypoints of the hands found: the sum of their 2D
+  // errors in pixels and in the labelled hand's box sizes, and their number.
+  double error_px = 0, error_boxes = 0;
+  int found_keypoints = 0;
+  double MeanErrorPx() const { return found_keypoints ? error_px / found_keypoints : 0.0; }
+  double MeanErrorBoxes() const { return found_keypoints ? error_boxes / found_keypoints : 0.0; }
+  double Recall() const { return hands ? 1.0 - static_cast<double>(missed) / hands : 0.0; }
   double Pck01() const { return keypoints ? static_cast<double>(within_01) / keypoints : 0.0; }
   double Pck02() const { return keypoints ? static_cast<double>(within_02) / keypoints : 0.0; }
   void Add(const PckScore& o);

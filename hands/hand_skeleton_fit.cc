@@ -305,7 +305,9 @@ FittedTrack FitObserved(const Track& track, const Mat3& K, double fps, const Fit
   const double sigma_px = c.reprojection_sigma * ImageSize(track);
   for (size_t f = 0; f < n; ++f) {
     if (track.frames[f]) AddReprojection(problem, *track.frames[f], K, sigma_px, c, out.joints[f]);
-    if (poses[f]) AddShape(problem, *track.frames[f], *poses[f], size, c, out.joints[f], &scale);
+    if (poses[f] && c.world_prior) {
+      AddShape(problem, *track.frames[f], *poses[f], size, c, out.joints[f], &scale);
+    }
     for (size_t k = 0; k < links.size(); ++k) {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Link, 1, 3, 3, 1>(
                                    new Link{1.0 / c.bone_sigma_m, base[k]}),

@@ -41,6 +41,12 @@ struct FitConfig {
   double huber = 2.0;                 // robust loss: quadratic up to this many sigmas
   double bone_sigma_m = 0.002;        // a bone's length against the track's constant length
   double shape_sigma_m = 0.01;        // wrist-relative joints against the model's 3D landmarks
+  // The landmark model's world landmarks (metric, hand frame) as the fit's
+  // shape and pose prior: the shape residual above, turned into the camera
+  // by each frame's PnP pose. false: only reprojection, bones, size and
+  // acceleration shape the hand (PnP still starts it). hands_bench synth
+  // measures both.
+  bool world_prior = true;
   double acceleration_sigma_ms2 = 4;  // joint acceleration, m/s^2
   int max_iterations = 50;
   // A frame whose PnP pose turns more than this from most of the poses
@@ -72,7 +78,7 @@ struct FitConfig {
   double hand_length_sigma = 0.06;  // the spread of adult hand lengths, relative
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FitConfig, reprojection_sigma, huber, bone_sigma_m,
-                                                shape_sigma_m, acceleration_sigma_ms2,
+                                                shape_sigma_m, world_prior, acceleration_sigma_ms2,
                                                 max_iterations, max_pnp_turn_deg, max_untrusted_run,
                                                 max_wrist_speed_m_s, max_wrist_turn_deg_s,
                                                 size_prior, hand_length_m, hand_length_sigma)
@@ -92,11 +98,21 @@ struct HandsConfig {
   // hand tracked on every frame; after a hand is lost on every frame for
   // palm_every frames (filters::HandLandmarkerOptions).
   int palm_every = 10;
+  // The wide search for hands the palm detector misses (zoomed windows,
+  // the landmark model on the whole frame, low-contrast crops stretched;
+  // filters::HandLandmarker): always on a still image; on video on the
+  // first frame, then on every wide_search_every-th frame without a
+  // tracked hand (one search: 0.1-0.3 CPU s; every 30 frames it added
+  // 0.04-0.18 CPU s per video second on the first 150 frames of the real
+  // clips, hands_bench real; every 150, about 5 s, keeps hand-less footage
+  // near its budget). 0: stills only.
+  int wide_search_every = 150;
   TrackerConfig tracker;
   FitConfig fit;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(HandsConfig, default_fov_deg, max_hands, max_side,
-                                                backend, models, palm_every, tracker, fit)
+                                                backend, models, palm_every, wide_search_every,
+                                                tracker, fit)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const HandsConfig& c, const std::string& section);

@@ -174,6 +174,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   for (const auto& name : names) {
     stages[name] = stages::MakeStage(name, options.config);
     hashes[name] = ParamHash(stages[name]->Params());
+    stages[name]->Prepare();
   }
   RunWatch watch(options.db, worker, options);
   WorkerStats stats;

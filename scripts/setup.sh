@@ -28,6 +28,9 @@ PACKAGES=(
   # Videos of the labelled real footage (bench/real_footage_labels.tsv):
   # opencv-doc's sample videos (96 MB download, the only large one) and
   # imageio's two test videos; zlib reads opencv-doc's gzipped ones.
+  # opencv-doc's tutorial hand photos (handSrc.jpg, Histogram_Comparison_
+  # Source_*.jpg, Hull_Original_Image.jpg) are the real photos labelled by
+  # hand in bench/hand_labels/photos/ (the hands' still-image tests and bench).
   opencv-doc python3-imageio zlib1g-dev
 )
 

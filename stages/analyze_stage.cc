@@ -19,6 +19,14 @@ Json AnalyzeStage::Params() const {
   return params;
 }
 
+void AnalyzeStage::Prepare() {
+  const filters::LearnedDetectorConfig& learned = config_.learned_detector;
+  if (config_.use_builtin_detector && config_.hand_detector == "learned" &&
+      learned.backend == filters::kBackendNative) {
+    filters::PrepareHandModels(learned.models);  // a failure falls back on the first clip
+  }
+}
+
 StageResult AnalyzeStage::Run(const ClipContext& context) {
   DecoderOptions options;
   options.clip =

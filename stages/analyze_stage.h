@@ -28,6 +28,8 @@ class AnalyzeStage : public Stage {
   // the models run.
   Json Params() const override;
   StageResult Run(const ClipContext& context) override;
+  // Builds the learned detector's graphs (native runtime) before the first clip.
+  void Prepare() override;
 
  private:
   filters::AnalyzeConfig config_;

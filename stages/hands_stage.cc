@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/error_codes.h"
+#include "filters/hand_models.h"
 #include "filters/kept_shot.h"
 #include "filters/shot_boundary.h"
 #include "hands/hand_bundle_writer.h"
@@ -51,6 +52,11 @@ HandsStage::HandsStage(HandsConfig config) : config_(std::move(config)) {
 
 HandsStage::~HandsStage() = default;
 
+void HandsStage::Prepare() {
+  // A native runtime that cannot load falls back on the first clip, saying why.
+  if (config_.backend == filters::kBackendNative) filters::PrepareHandModels(config_.models);
+}
+
 Intrinsics ClipIntrinsics(const ClipContext& context, int width, int height,
                           double default_fov_deg) {
   const std::string clip = ClipName(context);
@@ -87,7 +93,7 @@ StageResult HandsStage::Run(const ClipContext& context) {
     landmarker_ = std::make_unique<filters::HandLandmarker>(filters::HandLandmarkerOptions{
         .max_hands = config_.max_hands, .max_side = config_.max_side, .clip = clip,
         .backend = config_.backend, .models = config_.models, .palm_every = config_.palm_every,
-        .lost_search = config_.palm_every});
+        .lost_search = config_.palm_every, .wide_every = config_.wide_search_every});
   }
   DetectedFrames detected;
   try {

@@ -46,6 +46,8 @@ class HandsStage : public Stage {
   std::string Name() const override { return hands::kHandsStageName; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override;
+  // Builds the hand models' graphs (native runtime) before the first clip.
+  void Prepare() override;
 
  private:
   hands::HandsConfig config_;

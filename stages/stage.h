@@ -26,6 +26,9 @@ class Stage {
   // Runs on one clip. Throws doasido::Error for bad input; the worker
   // records the message and retries up to the attempt limit.
   virtual StageResult Run(const ClipContext& context) = 0;
+  // Once per worker process, before its first clip: what every clip would
+  // otherwise pay on first use (the hand models' graphs). Default: nothing.
+  virtual void Prepare() {}
   // Re-decides a verdict from stored measurements (for re-thresholding).
   // Stages whose verdict is not a threshold return nullopt.
   virtual std::optional<StageResult> Redecide(const Json& measurements) const {

@@ -192,17 +192,19 @@ const std::map<std::string, std::vector<std::string>>& PipelinePresets() {
 
 std::vector<std::string> ExpandPipeline(const std::vector<std::string>& words) {
   std::vector<std::string> pipeline;
+  std::map<std::string, std::string> preset_of;  // stage -> the preset word that gave it
   for (const auto& word : words) {
     const auto preset = PipelinePresets().find(word);
-    const std::vector<std::string> stages =
-        preset != PipelinePresets().end() ? preset->second : std::vector<std::string>{word};
-    for (const auto& stage : stages) {
+    const bool is_preset = preset != PipelinePresets().end();
+    for (const auto& stage : is_preset ? preset->second : std::vector<std::string>{word}) {
       if (std::find(pipeline.begin(), pipeline.end(), stage) != pipeline.end()) {
+        const std::string holder = is_preset ? word : preset_of[stage];
         throw Error("bad_pipeline",
                     "stage '" + stage + "' is listed twice" +
-                        (preset != PipelinePresets().end() ? " (preset '" + word + "' holds it)" : ""),
+                        (holder.empty() ? "" : " (preset '" + holder + "' holds it)"),
                     {.field = "pipeline"});
       }
+      if (is_preset) preset_of[stage] = word;
       try {
         MakeStage(stage, Json::object());  // a known name, else unknown_stage listing them
       } catch (const Error& e) {

@@ -179,7 +179,9 @@ TEST(PipelinePresets, DefaultInitRunsTheWholeChainOnEightCleanClips) {
                                              " WHERE c.external_id = '" + clip +
                                              "' AND m.stage = 'retarget_kinematic'");
     const std::string hand = kinematic.empty() ? "-" : kinematic[0];
-    if (hand != "-" && side != "both") EXPECT_EQ(hand, side == "left" ? "left_mirrored" : "right") << clip;
+    if (hand != "-" && side != "both") {
+      EXPECT_EQ(hand, side == "left" ? "left_mirrored" : "right") << clip;
+    }
     mirrored += hand == "left_mirrored";
     const auto& last = runs.back();
     std::string outcome = "-", e_pos = "-";

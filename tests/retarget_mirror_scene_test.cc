@@ -59,11 +59,11 @@ TEST(MirrorScene, LeftHandOntoRightKeepsItsGripOnTheObject) {
   const int frames = 6;
   for (int t = 0; t < frames; ++t) {
     const Pose object = RandomPose(rng);
-    Joints21 left;
+    Keypoints21 left;
     for (int j = 0; j < 21; ++j) left.row(j) = (object * Vec3(n(rng), n(rng), 0.05 + n(rng))).transpose();
     r.left_joints.push_back(left);
     r.left_valid.push_back(t != 2);
-    r.right_joints.push_back(Joints21::Constant(std::nan("")));
+    r.right_joints.push_back(Keypoints21::Constant(std::nan("")));
     r.right_valid.push_back(false);
     r.object_poses.push_back(object);
     r.object_valid.push_back(true);

@@ -107,7 +107,10 @@ TEST(PipelinePresets, EveryDocumentedInitPipelineRunsAsWritten) {
                                  (dir / "chain.toml").string(), (dir / "synth/clips.csv").string()});
     ASSERT_EQ(run.exit_code, 0) << run.err;
     // The clip went through every stage of the pipeline, each run done.
-    const auto expanded = stages::ExpandPipeline({pipeline});
+    std::vector<std::string> words;
+    std::stringstream list(pipeline);
+    for (std::string w; std::getline(list, w, ',');) words.push_back(w);
+    const auto expanded = stages::ExpandPipeline(words);
     const auto runs = RunsByClip(db);
     ASSERT_EQ(runs.size(), 1u);
     const auto& clip_runs = runs.begin()->second;

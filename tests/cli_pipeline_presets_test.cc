@@ -8,6 +8,10 @@
 // dynamics preset: every stage runs, no clip is rejected for the side of its
 // hand (a lone left hand is mirrored with its object: `left_mirrored`), and
 // dynamics succeeds on at least three quarters of the clips that reach it.
+// Measured 2026-11-28 on the shared 2-core machine (8 engineers): 5 min 03 s
+// user + 3 s sys CPU for the whole test (synth 236 s and run 1040 s of wall
+// under that load); 7 of 7 clips with an object succeeded, 2 left hands
+// mirrored, one clip stops at interaction (no_interaction).
 #include <gtest/gtest.h>
 
 #include <chrono>

@@ -11,7 +11,7 @@
 //    60 frames unless given, where fixed costs weigh most; `doasido
 //    synth`'s own default is 640 x 480, 90 frames; rendered once per size
 //    and kept in the temporary folder for later runs) through the
-//    default pipeline with one `doasido run --jobs 2`, and the same clips
+//    `filters` pipeline with one `doasido run --jobs 2`, and the same clips
 //    sharded 4 ways, each shard run with --jobs 2 one after the other, and
 //    merged. Overhead = (shard + merge) / (sum of the shard runs).
 // 3. Through Slurm (as root, with Debian's slurm-wlm and munge; then again in
@@ -188,7 +188,7 @@ void ThroughSlurmInGroups(const std::filesystem::path& dir, const std::string& p
   const std::string bin = DOASIDO_BIN;
   const std::string parent = (dir / "slurm-groups/d.db").string();
   std::filesystem::create_directories(std::filesystem::path(parent).parent_path());
-  Run(bin + " init --db " + parent);
+  Run(bin + " init --pipeline filters --db " + parent);
   Run(bin + " ingest --db " + parent + " " + pool + "/Annotations");
   const auto stages =
       doasido::testing::QueryRows(parent, "SELECT stage FROM pipeline ORDER BY position");
@@ -235,7 +235,7 @@ void ThroughSlurm(const std::filesystem::path& dir, const std::string& pool, dou
   }
   const std::string parent = (dir / "slurm-parent/d.db").string();
   std::filesystem::create_directories(std::filesystem::path(parent).parent_path());
-  Run(bin + " init --db " + parent);
+  Run(bin + " init --pipeline filters --db " + parent);
   Run(bin + " ingest --db " + parent + " " + pool + "/Annotations");
   const auto t0 = Clock::now();
   const std::string out = doasido::testing::Shell(
@@ -299,7 +299,7 @@ double Overhead(const std::filesystem::path& dir, int clips, const ClipSize& siz
   const std::string parent = (dir / "parent/d.db").string();
   for (const auto& db : {single, parent}) {
     std::filesystem::create_directories(std::filesystem::path(db).parent_path());
-    Run(bin + " init --db " + db);
+    Run(bin + " init --pipeline filters --db " + db);
     Run(bin + " ingest --db " + db + " " + pool + "/Annotations");
   }
   const double one = Run(bin + " run --jobs 2 --db " + single);

@@ -150,11 +150,14 @@ void Show(const Options& o) {
               m.parent.empty() ? "-" : m.parent.c_str());
   std::printf("%zu episodes, %zu clips left out; database %s\n\n", m.episodes.size(),
               m.excluded.size(), m.database.c_str());
-  std::printf("%-12s %-24s %-6s %6s %-24s %s\n", "episode", "clip", "split", "frames", "task",
-              "verified by");
+  // kind: hand-object (a trajectory with object poses: dynamics when the
+  // trajectory stage is `retarget`) or hand-only.
+  std::printf("%-12s %-24s %-6s %6s %-11s %-24s %s\n", "episode", "clip", "split", "frames", "kind",
+              "task", "verified by");
   for (const Episode& e : m.episodes) {
-    std::printf("%-12s %-24.24s %-6s %6lld %-24.24s %s\n", e.id.c_str(), e.external_id.c_str(),
-                e.split.c_str(), static_cast<long long>(e.frames), e.task.c_str(),
+    std::printf("%-12s %-24.24s %-6s %6lld %-11s %-24.24s %s\n", e.id.c_str(),
+                e.external_id.c_str(), e.split.c_str(), static_cast<long long>(e.frames),
+                e.hand_only ? "hand-only" : "hand-object", e.task.c_str(),
                 e.verification ? e.verification->reviewer.c_str() : "-");
   }
   std::map<std::string, int> why;

@@ -24,11 +24,17 @@ void AddInitCommand(CLI::App& app) {
               entry.summary + " [limit " + limit_text + "]";
   }
   cmd->add_option("--pipeline", opt->pipeline,
-                  "Ordered stages every clip goes through (default: every stage marked default; "
-                  "the word `default` in the list stands for those, e.g. "
-                  "default,bundle,recon,retarget_kinematic)")
+                  "Ordered stages every clip goes through, or presets: `default` (the whole "
+                  "chain, what init gives without --pipeline), `filters` (the filtering job "
+                  "alone, for its report); a preset word in a list stands for its stages, e.g. "
+                  "filters,hands,bundle,recon,retarget_kinematic")
       ->delimiter(',');
-  cmd->footer("Stages:" + stages +
+  std::string presets;
+  for (const auto& [name, list] : stages::PipelinePresets()) {
+    presets += "\n  " + name + std::string(14 - std::min<size_t>(13, name.size()), ' ');
+    for (size_t i = 0; i < list.size(); ++i) presets += (i ? "," : "") + list[i];
+  }
+  cmd->footer("Stages:" + stages + "\n\nPresets:" + presets +
               "\n\nEach stage run has a wall-clock limit; a run past it fails as stage_timeout "
               "(not retried, except for download). A run that reports progress (frames "
               "decoded, solver iterations, a model command's log growing) and then stands still "
@@ -37,22 +43,17 @@ void AddInitCommand(CLI::App& app) {
               "  [timeouts]\n  probe = 30      # seconds\n  bundle = 14400\n"
               "  no_progress = 600"
               "\n\nExample:\n  doasido init --db work/doasido.db\n"
+              "  doasido init --db work/report-only.db --pipeline filters\n"
               "  doasido init --db work/queue-test.db --pipeline noop\n"
-              "  doasido init --db work/doasido.db --pipeline default,bundle,recon,retarget_kinematic");
+              "  doasido init --db work/kinematic.db --pipeline filters,hands,bundle,recon,retarget_kinematic");
   cmd->callback([opt] {
     LoadConfig(opt->db);  // a bad --config is refused before the database is touched
+    // So is a bad --pipeline.
+    std::vector<std::string> pipeline = stages::ExpandPipeline(
+        opt->pipeline.empty() ? std::vector<std::string>{stages::kPresetDefault} : opt->pipeline);
     std::filesystem::create_directories(
         std::filesystem::absolute(opt->db.db).parent_path());
     Database db(opt->db.db);
-    std::vector<std::string> pipeline;
-    for (const auto& name : opt->pipeline.empty() ? std::vector<std::string>{"default"} : opt->pipeline) {
-      if (name != "default") {
-        pipeline.push_back(name);
-        continue;
-      }
-      for (const auto& stage : stages::DefaultPipeline()) pipeline.push_back(stage);
-    }
-    for (const auto& name : pipeline) stages::MakeStage(name, Json::object());  // known names
     if (opt->pipeline.empty() && !db.Pipeline().empty()) {
       pipeline = db.Pipeline();  // re-running init keeps an existing pipeline
     }

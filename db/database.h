@@ -120,18 +120,18 @@ class Database {
   static int LatestSchemaVersion();
 
   // ---- Artifacts (db/database_artifacts.cc) ---------------------------------
-  // The folder of this database's artifacts, recorded in the database (meta
-  // key kArtifactRootKey, relative to the database folder) the first time it
-  // is opened: <database folder>/artifacts, unless that folder already
-  // belongs to another database, then <database folder>/<file stem>.artifacts.
-  // The folder holds kArtifactOwnerFile with the database's uuid; opening a
-  // database whose recorded folder belongs to another one throws
+  // The folder of this database's artifacts, decided, claimed and recorded
+  // (meta key kArtifactRootKey, relative to the database folder) when it is
+  // created: <database folder>/artifacts for the first doasido database in
+  // it, else <database folder>/<file stem>.artifacts (one that has a root
+  // keeps it). The folder holds kArtifactOwnerFile with the database's uuid;
+  // opening a database whose recorded folder belongs to another one throws
   // Error("foreign_artifacts") naming both. Stored artifact paths are
   // relative to it.
   static constexpr const char* kArtifactRootKey = "artifact_root";
   static constexpr const char* kArtifactOwnerFile = kArtifactRootMarker;
   const std::filesystem::path& ArtifactRoot() const { return artifact_root_; }
-  // Writes the owner file (creating the folder); before the first artifact.
+  // Writes the owner file (creating the folder) if missing; before the first artifact.
   void ClaimArtifactRoot();
   // <artifact root>/<clip>/<stage>/, the published output of the clip's
   // recorded run of `stage` (not created). The ONE place that computes it.

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
 
 #include "db/database.h"
@@ -53,6 +54,59 @@ void WriteOwnerFile(const fs::path& root, const std::string& uuid, const fs::pat
   }
 }
 
+// Makes `root` database `uuid`'s when no database owns it: the folder and
+// its owner file, created at once (link(2) refuses an existing name, so of
+// two databases created together one gets it). True when `uuid` owns it.
+bool TryClaim(const fs::path& root, const std::string& uuid, const fs::path& database) {
+  std::error_code ec;
+  fs::create_directories(root, ec);
+  const fs::path owner = root / Database::kArtifactOwnerFile;
+  const fs::path temp = owner.string() + ".claim-" + std::to_string(::getpid());
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << Json{{"uuid", uuid}, {"database", database.string()}}.dump() << "\n";
+    if (!out) throw Error("io", "cannot write the artifact folder's owner file", {.file = temp.string()});
+  }
+  ::link(temp.c_str(), owner.c_str());  // EEXIST: someone's already; read below
+  fs::remove(temp, ec);
+  return OwnerOf(root) == uuid;
+}
+
+// Whether `folder` holds a doasido database other than `self`: a SQLite
+// file (header "SQLite format 3") whose application_id (big-endian, bytes
+// 68-71 of the header) is doasido's. Such a database may record
+// "artifacts" as its root without having claimed it yet (made before roots
+// were claimed at creation), so a new neighbour does not take that name.
+bool HasOtherDatabase(const fs::path& folder, const fs::path& self) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    if (entry.path() == self || !entry.is_regular_file(ec)) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    unsigned char header[72] = {};
+    if (!in.read(reinterpret_cast<char*>(header), sizeof header)) continue;
+    if (std::string(reinterpret_cast<char*>(header), 15) != "SQLite format 3") continue;
+    const std::uint32_t id = (std::uint32_t{header[68]} << 24) | (std::uint32_t{header[69]} << 16) |
+                             (std::uint32_t{header[70]} << 8) | header[71];
+    if (id == static_cast<std::uint32_t>(Database::kApplicationId)) return true;
+  }
+  return false;
+}
+
+// Decided and claimed when the database is created, so that databases made
+// side by side never share a root whichever runs first: the folder's
+// `artifacts` for the first database in it, else the database's own
+// `<stem>.artifacts` (`<file name>.artifacts` when that too is taken).
+std::string ClaimNewArtifactRoot(const fs::path& root, const fs::path& database, const std::string& uuid) {
+  std::vector<std::string> candidates = {database.stem().string() + ".artifacts",
+                                         database.filename().string() + ".artifacts"};
+  if (!HasOtherDatabase(root, database)) candidates.insert(candidates.begin(), "artifacts");
+  for (const auto& candidate : candidates) {
+    if (TryClaim(root / candidate, uuid, database)) return candidate;
+  }
+  throw Error("foreign_artifacts", "every artifact folder this database could take (" + candidates.front() +
+                                       ", ...) belongs to another database; put the database in its own folder");
+}
+
 const std::string kWorkTag = ".run-";
 const std::string kAsideTag = ".old-";
 
@@ -62,10 +116,12 @@ void Database::OpenArtifactRoot() {
   std::optional<std::string> stored = GetMeta(kArtifactRootKey);
   const std::string uuid = Uuid();
   if (!stored) {
-    // A folder another database owns is never shared: this one gets its own.
-    const std::string owner = OwnerOf(root_ / "artifacts");
-    stored = owner.empty() || owner == uuid ? "artifacts" : path_.stem().string() + ".artifacts";
-    if (!read_only_) {  // a read-only database reads where it would have put it
+    if (read_only_) {
+      // A read-only database claims nothing: it reads where it would have put it.
+      const std::string owner = OwnerOf(root_ / "artifacts");
+      stored = owner.empty() || owner == uuid ? "artifacts" : path_.stem().string() + ".artifacts";
+    } else {
+      stored = ClaimNewArtifactRoot(root_, path_, uuid);
       Transaction tx(*this);
       SetMeta(kArtifactRootKey, *stored);
       tx.Commit();

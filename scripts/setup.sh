@@ -1,8 +1,14 @@
 #!/usr/bin/env bash
-# Installs every Debian package doasido builds, runs and tests with.
+# Installs the Debian and npm packages doasido builds and runs with (what
+# scripts/demo.sh needs); with --test also what the test suite alone uses
+# (headless Chromium for the browser tests, Slurm for the cluster tests,
+# clang's libFuzzer for the fuzz targets, hyparquet to read exports back):
+# scripts/test.sh passes it.
 # Idempotent: packages already present are left alone. Run as root or with sudo.
 set -euo pipefail
 
+# The main job: build (GoogleTest and Google Benchmark too: CMake's
+# configure step asks for them), run, export.
 PACKAGES=(
   build-essential cmake pkg-config git ccache
   libsqlite3-dev sqlite3
@@ -21,8 +27,12 @@ PACKAGES=(
   libcpp-httplib-dev libssl-dev
   libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  chromium chromium-driver
   nodejs
+  zlib1g-dev  # testing/real_footage.cc reads opencv-doc's gzipped videos
+)
+# The test command's alone.
+TEST_PACKAGES=(
+  chromium chromium-driver
   slurm-wlm munge
   clang libclang-rt-14-dev
   # Videos of the labelled real footage (bench/real_footage_labels.tsv):
@@ -31,21 +41,28 @@ PACKAGES=(
   # opencv-doc's tutorial hand photos (handSrc.jpg, Histogram_Comparison_
   # Source_*.jpg, Hull_Original_Image.jpg) are the real photos labelled by
   # hand in bench/hand_labels/photos/ (the hands' still-image tests and bench).
-  opencv-doc python3-imageio zlib1g-dev
+  opencv-doc python3-imageio
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js
 # for the review app's 3D view (served by review/verify_routes.cc), DuckDB's
 # C library for the Parquet files of the LeRobot export (linked by
 # cmake/Dependencies.cmake), and hyparquet, the independent Parquet reader
-# the tests read those files back with; MediaPipe Hands' models and the
+# the tests read those files back with (test set); MediaPipe Hands' models and the
 # TFLite WebAssembly runtime that runs them for the learned hand detector
 # (filters/hand_landmarker.h; tfjs-core at the version tfjs-tflite asks for);
 # MediaPipe Objectron's models for the objects stage (objects/objectron_models.h).
 # Nothing is fetched at build or run time.
-NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1 hyparquet@1.31.5
+NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1
   @mediapipe/hands@0.4.1675469240 @tensorflow/tfjs-tflite@0.0.1-alpha.10
   @tensorflow/tfjs-core@4.9.0 @tensorflow/tfjs-backend-cpu@4.9.0 @mediapipe/objectron@0.4.1675468480)
+TEST_NPM_PACKAGES=(hyparquet@1.31.5)
+
+case "${1:-}" in
+  --test) PACKAGES+=("${TEST_PACKAGES[@]}"); NPM_PACKAGES+=("${TEST_NPM_PACKAGES[@]}") ;;
+  "") ;;
+  *) echo "usage: scripts/setup.sh [--test]" >&2; exit 2 ;;
+esac
 install_npm() {
   local dir=${DOASIDO_NPM_DIR:-$HOME/.cache/doasido/npm}
   local todo=()

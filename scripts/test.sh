@@ -4,7 +4,7 @@
 # libFuzzer target for a short run (scripts/fuzz.sh; FUZZ_SECONDS, 0 skips).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 mkdir -p "${BUILD_DIR:-build}"
 BUILD_LOG=${BUILD_LOG:-$PWD/${BUILD_DIR:-build}/build.log} bash scripts/build.sh
 (cd "${BUILD_DIR:-build}" && ctest --output-on-failure -j"${JOBS:-$(nproc)}" --timeout 900)

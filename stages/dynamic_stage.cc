@@ -1,5 +1,6 @@
 #include "stages/dynamic_stage.h"
 
+#include <algorithm>
 #include <fstream>
 #include <functional>
 
@@ -8,6 +9,7 @@
 #include "core/error.h"
 #include "stages/clip_inputs.h"
 #include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/mirror_scene.h"
 #include "stages/kinematic_stage.h"
 
 namespace doasido::stages {
@@ -16,6 +18,35 @@ using namespace retarget;  // the algorithms this stage runs
 
 DynamicRetargetStage::DynamicRetargetStage(DynamicRetargetConfig config) : config_(std::move(config)) {
   CheckConfig(config_, kRetargetStageName);
+}
+
+StageResult DynamicRetargetStage::KeepKinematic(const ClipContext& context, StageResult result) const {
+  // Nothing to simulate without an object: the kinematic trajectory is the
+  // clip's trajectory, copied here because readers take the trajectory from
+  // this stage when the pipeline has it (robot/trajectory/format.h).
+  const std::filesystem::path kinematic = SiblingArtifactDir(context, kKinematicStageName);
+  if (!std::filesystem::is_regular_file(kinematic / kTrajectoryFile)) {
+    result.verdict = Verdict::kReject;  // no retarget_kinematic before this stage
+    result.reason = kReasonNoObject;
+    return result;
+  }
+  std::filesystem::create_directories(context.artifact_dir);
+  for (const char* file : {kTrajectoryFile, kTrajectoryCsvFile, kLeftTrajectoryFile}) {
+    if (!std::filesystem::is_regular_file(kinematic / file)) continue;
+    std::filesystem::copy_file(kinematic / file, context.artifact_dir / file,
+                               std::filesystem::copy_options::overwrite_existing);
+    result.artifacts.emplace_back(file == kTrajectoryFile      ? "trajectory"
+                                  : file == kTrajectoryCsvFile ? "trajectory_csv"
+                                                               : "trajectory_left",
+                                  file);
+  }
+  result.reason = kReasonHandOnlyKinematic;  // a pass that says why nothing was simulated
+  result.measurements[kMeasureTrajectorySource] = kKinematicStageName;
+  const HandTrajectory t = ReadTrajectoryJson(kinematic / kTrajectoryFile);
+  result.measurements["frames"] = t.qpos.size();
+  spdlog::info("{} {}: hand-only, keeps the {} trajectory", kRetargetStageName, ClipName(context),
+               kKinematicStageName);
+  return result;
 }
 
 StageResult DynamicRetargetStage::Run(const ClipContext& context) {
@@ -34,20 +65,28 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   }
   StageResult result;
   result.measurements["reconstruction"] = dir.string();
-  int hands = 0;
-  for (bool v : r.right_valid) hands += v;
-  if (hands == 0 || r.object_mesh.empty()) {
-    result.verdict = Verdict::kReject;
-    // A hand-only reconstruction says no_object whichever hands it has.
-    result.reason = r.object_mesh.empty() ? kReasonNoObject : kReasonNoRightHand;
-    return result;
+  if (r.object_mesh.empty()) return KeepKinematic(context, std::move(result));
+  const auto any = [](const std::vector<bool>& v) {
+    return std::find(v.begin(), v.end(), true) != v.end();
+  };
+  const bool left_seen = any(r.left_valid);
+  if (!any(r.right_valid)) {
+    if (!left_seen) {  // recon rejects a clip without hands; a file may still say so
+      result.verdict = Verdict::kReject;
+      result.reason = kReasonNoHands;
+      return result;
+    }
+    // A lone left hand: the whole scene mirrored onto the right robot hand
+    // (retarget/mirror_scene.h), as retarget_kinematic does.
+    r = MirrorLeftOntoRight(std::move(r));
+    mesh = MirrorMesh(std::move(mesh));
   }
+  result.measurements[kMeasureRetargetedHand] = !any(r.left_valid) && left_seen ? kHandLeftMirrored
+                                                                                : kHandRight;
   const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;
   std::filesystem::create_directories(context.artifact_dir);
-  bool left_seen = false;
-  for (bool v : r.left_valid) left_seen |= v;
   Json& m = result.measurements;
-  const bool bimanual = !config_.left_hand.empty() && left_seen;
+  const bool bimanual = !config_.left_hand.empty() && any(r.left_valid);
   // One rung's run: the one-hand run, or the two-hand run in its fields
   // with the left hand's extras.
   struct ClipRun {

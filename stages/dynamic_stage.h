@@ -23,9 +23,14 @@
 // kinematic_reference.json is the right hand's and
 // kinematic_reference_left.json the left's; measurements add
 // left_wrist_error, right_wrist_error (m) and left_in_hand_frames.
+// A lone left hand is retargeted with the whole scene mirrored onto `hand`
+// (retarget/mirror_scene.h; measurement retargeted_hand "left_mirrored", else
+// "right"), both hands with config.left_hand set take the two-hand scene.
+// A hand-only reconstruction keeps the retarget_kinematic trajectory (pass,
+// kReasonHandOnlyKinematic; reject kReasonNoObject when the pipeline has no
+// retarget_kinematic before this stage).
 // Verdict: pass on success (E_pos < 0.1 m and E_rot < 0.5 rad); reject with
-// kReasonTrackingFailed otherwise, kReasonNoRightHand / kReasonNoObject when
-// there is nothing to retarget. Errors (the clip fails, the batch goes on):
+// kReasonTrackingFailed otherwise, kReasonNoHands without any hand. Errors (the clip fails, the batch goes on):
 // bad_reconstruction / bad_reference (NaN frames), bad_mesh (decomposition
 // failed), unstable_simulation (NaN state).
 #pragma once
@@ -45,7 +50,11 @@ namespace doasido::stages {
 // Reason codes of the stage's verdicts (and kReasonNoObject,
 // stages/shared_reasons.h).
 inline constexpr const char* kReasonTrackingFailed = "tracking_failed";
-inline constexpr const char* kReasonNoRightHand = "no_right_hand";
+// A pass: a hand-only clip (no object to simulate) keeps its
+// retarget_kinematic trajectory, copied into this stage's folder
+// (measurement kMeasureTrajectorySource names the stage it came from).
+inline constexpr const char* kReasonHandOnlyKinematic = "hand_only_kinematic";
+inline constexpr const char* kMeasureTrajectorySource = "trajectory_source";
 
 class DynamicRetargetStage : public Stage {
  public:
@@ -56,6 +65,7 @@ class DynamicRetargetStage : public Stage {
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 
  private:
+  StageResult KeepKinematic(const ClipContext& context, StageResult result) const;
   retarget::DynamicRetargetConfig config_;
 };
 

@@ -17,6 +17,7 @@
 #include "stages/recon_stage.h"
 #include "recon/reconstruction.h"
 #include "stages/dynamic_stage.h"
+#include "retarget/mirror_scene.h"
 #include "robot/embodiment.h"
 
 namespace doasido::stages {
@@ -136,13 +137,6 @@ StageInput LoadInput(const ClipContext& context, const std::string& clip) {
 }
 
 
-// The left hand reflected through the world's x = 0 plane: a right hand
-// moving as the left did in a mirror, for the right robot hand.
-std::vector<Keypoints21> Mirrored(std::vector<Keypoints21> left) {
-  for (Keypoints21& k : left) k.col(0) *= -1;
-  return left;
-}
-
 }  // namespace
 
 HandTrajectory KinematicStage::RetargetHand(const std::string& hand, const std::string& robots,
@@ -171,27 +165,25 @@ StageResult KinematicStage::Run(const ClipContext& context) {
     result.reason = kReasonNoHand;
     return result;
   }
-  if (!in.has_right_hand && !in.object_world.empty()) {
-    // A mirrored hand would no longer hold the (unmirrored) object.
-    result.verdict = Verdict::kReject;
-    result.reason = kReasonNoRightHand;
-    return result;
-  }
-  // trajectory.json: the right hand, else the left one mirrored, on `hand`;
-  // one robot for every episode of a dataset.
-  const std::vector<Keypoints21> human = in.has_right_hand ? in.human : Mirrored(in.left);
-  const std::vector<bool>& valid = in.has_right_hand ? in.valid : in.left_valid;
-  const std::vector<Pose>& object_world = in.object_world;
+  // trajectory.json: the right hand, else the left one mirrored with the
+  // whole scene (object mesh and poses, retarget/mirror_scene.h) onto
+  // `hand`: one robot for every episode of a dataset.
+  const bool mirrored = !in.has_right_hand;
+  const std::vector<Keypoints21> human = mirrored ? MirrorKeypoints(in.left) : in.human;
+  const std::vector<bool>& valid = mirrored ? in.left_valid : in.valid;
+  const std::vector<Pose> object_world = mirrored ? MirrorPoses(in.object_world) : in.object_world;
+  std::optional<TriMesh> object_mesh = in.object_mesh;
+  if (mirrored && object_mesh) object_mesh = MirrorMesh(*object_mesh);
   const size_t frames = human.size();
 
   const std::string robots = config_.robots_dir.empty() ? DefaultRobotsDir() : config_.robots_dir;
   std::filesystem::create_directories(context.artifact_dir);
   SceneFiles scene;
-  if (in.object_mesh && !object_world.empty()) {
+  if (object_mesh && !object_world.empty()) {
     scene.dir = context.artifact_dir / kSceneFolder;
     SceneConfig scene_config = config_.scene;
     scene_config.place_on_floor = false;  // the floor is already under the object
-    const ObjectScene built = BuildObjectScene(*in.object_mesh, object_world[0], scene_config, scene.dir);
+    const ObjectScene built = BuildObjectScene(*object_mesh, object_world[0], scene_config, scene.dir);
     scene.xml = TryReadFile(built.xml_path).value_or("");
     m["object_mass"] = built.mass;
     m["object_hulls"] = built.hull_files.size();
@@ -210,7 +202,7 @@ StageResult KinematicStage::Run(const ClipContext& context) {
   result.artifacts.emplace_back("trajectory_csv", kTrajectoryCsvFile);
 
   const FingertipErrorStats error = SummarizeFingertipError(trajectory.fingertip_error);
-  m[kMeasureRetargetedHand] = in.has_right_hand ? kHandRight : kHandLeftMirrored;
+  m[kMeasureRetargetedHand] = mirrored ? kHandLeftMirrored : kHandRight;
   m["embodiment"] = trajectory.embodiment;
   m["frames"] = frames;
   m["valid_frames"] = error.frames;

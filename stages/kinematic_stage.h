@@ -11,10 +11,11 @@
 // camera's -y) with the floor z = 0 touching the object's lowest point in
 // the first frame (or 5 cm below the lowest hand keypoint without object).
 //
-// Hands: trajectory.json is the right hand on `hand`; a hand-only clip whose
-// only hand is the left has it mirrored (x -> -x in the world frame) onto
-// `hand` (with an object it is rejected "no_right_hand"), so
-// that every episode of a dataset has one robot (measurement
+// Hands: trajectory.json is the right hand on `hand`; a clip whose only
+// hand is the left has it mirrored (x -> -x in the world frame) onto `hand`
+// with the whole scene, object mesh and poses included
+// (retarget/mirror_scene.h), so that every episode of a dataset has one
+// robot (measurement
 // retargeted_hand "right" or "left_mirrored"). When both hands are seen and
 // `left_hand` is set, the left hand is also retargeted onto `left_hand`
 // into trajectory_left.json (measurements left_*).

@@ -26,13 +26,13 @@ namespace {
 // `name`.
 template <typename StageT, typename ConfigT>
 StageEntry Entry(const std::string& name, std::string summary, std::vector<StageReason> reasons,
-                 bool in_default_pipeline, double timeout_s,
+                 bool in_filters_preset, double timeout_s,
                  bool decides_from_measurements = false) {
   static_assert(HasConfigCheck<ConfigT>, "every stage config states its valid ranges");
   return {.name = name,
           .summary = std::move(summary),
           .reasons = std::move(reasons),
-          .in_default_pipeline = in_default_pipeline,
+          .in_filters_preset = in_filters_preset,
           .make = [name](const Json& config) -> std::unique_ptr<Stage> {
             ConfigT c;
             ReadCheckedSection(config, name, c);
@@ -107,8 +107,6 @@ const std::vector<StageEntry>& StageTable() {
           "MediaPipe hand tracking on every kept frame, metric 3D by PnP and a Ceres skeleton "
           "fit: the hand part of a clip bundle",
           {{kReasonNoHands, "no hands found"}},
-          // Not in `doasido init`'s default list yet: it costs ~0.1-0.3 s a frame,
-          // and suites run the default list on hundreds of synthetic clips.
           false, kHour),
       Entry<ObjectsStage, objects::ObjectsConfig>(
           objects::kObjectsStageName,
@@ -139,9 +137,9 @@ const std::vector<StageEntry>& StageTable() {
           false, 30 * kMinute),
       Entry<KinematicStage, KinematicStageConfig>(
           retarget::kKinematicStageName,
-          "fingertip retargeting of the reconstructed right hand onto a robot hand (MuJoCo)",
+          "fingertip retargeting of the reconstructed hands onto robot hands (MuJoCo); a lone "
+          "left hand with its scene mirrored onto the right one",
           {{kReasonNoHand, "no hand to retarget"},
-           {kReasonNoRightHand, "no right hand (with an object)"},
            {kReasonKinematicError, "large fingertip error"}},
           false, 30 * kMinute),
       Entry<DynamicRetargetStage, retarget::DynamicRetargetConfig>(
@@ -149,8 +147,9 @@ const std::vector<StageEntry>& StageTable() {
           "dynamics-aware retargeting of the recon artifact: annealed sampling in MuJoCo (seed "
           "3.2)",
           {{kReasonTrackingFailed, "the robot does not track the motion"},
-           {kReasonNoRightHand, "no right hand (with an object)"},
-           {kReasonNoObject, "no object"}},
+           {kReasonNoObject, "no object"},
+           {kReasonNoHands, "no hands found"},
+           {kReasonHandOnlyKinematic, "hand-only: keeps its kinematic trajectory"}},
           false, 2 * kHour),
       Entry<NoopStage, NoopConfig>(kNoopStageName,
                                    "does nothing for work_ms milliseconds (queue diagnostics)", {},
@@ -172,12 +171,59 @@ std::unique_ptr<Stage> MakeStage(const std::string& name, const Json& config) {
               {.field = "stage"});
 }
 
-std::vector<std::string> DefaultPipeline() {
+std::vector<std::string> FiltersPipeline() {
   std::vector<std::string> names;
   for (const auto& entry : StageTable()) {
-    if (entry.in_default_pipeline) names.push_back(entry.name);
+    if (entry.in_filters_preset) names.push_back(entry.name);
   }
   return names;
+}
+
+std::vector<std::string> DefaultPipeline() {
+  std::vector<std::string> names = FiltersPipeline();
+  // The method's chain after the filters (seed sections 3.1 and 3.2).
+  // The objects stage sits between hands and bundle: the bundle stage joins
+  // its object to the hands stage's hands when no list row or model names one.
+  for (const char* stage : {hands::kHandsStageName, objects::kObjectsStageName, recon::kBundleStageName,
+                            recon::kReconStageName, retarget::kKinematicStageName,
+                            retarget::kRetargetStageName}) {
+    names.push_back(stage);
+  }
+  return names;
+}
+
+const std::map<std::string, std::vector<std::string>>& PipelinePresets() {
+  static const std::map<std::string, std::vector<std::string>> kPresets = {
+      {kPresetDefault, DefaultPipeline()}, {kPresetFilters, FiltersPipeline()}};
+  return kPresets;
+}
+
+std::vector<std::string> ExpandPipeline(const std::vector<std::string>& words) {
+  std::vector<std::string> pipeline;
+  std::map<std::string, std::string> preset_of;  // stage -> the preset word that gave it
+  for (const auto& word : words) {
+    const auto preset = PipelinePresets().find(word);
+    const bool is_preset = preset != PipelinePresets().end();
+    for (const auto& stage : is_preset ? preset->second : std::vector<std::string>{word}) {
+      if (std::find(pipeline.begin(), pipeline.end(), stage) != pipeline.end()) {
+        const std::string holder = is_preset ? word : preset_of[stage];
+        throw Error("bad_pipeline",
+                    "stage '" + stage + "' is listed twice" +
+                        (holder.empty() ? "" : " (preset '" + holder + "' holds it)"),
+                    {.field = "pipeline"});
+      }
+      if (is_preset) preset_of[stage] = word;
+      try {
+        MakeStage(stage, Json::object());  // a known name, else unknown_stage listing them
+      } catch (const Error& e) {
+        if (e.code() != "unknown_stage") throw;
+        throw Error(e.code(), e.message() + "; presets: " + kPresetDefault + ", " + kPresetFilters,
+                    e.site());
+      }
+      pipeline.push_back(stage);
+    }
+  }
+  return pipeline;
 }
 
 std::vector<StageReason> StageReasons() {

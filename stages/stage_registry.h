@@ -28,7 +28,7 @@ struct StageEntry {
   // Every reason code the stage can give, its reject reason first (the one
   // a reviewer's rejection of a clip it flagged takes by default).
   std::vector<StageReason> reasons;
-  bool in_default_pipeline;
+  bool in_filters_preset;  // one of the filtering job's stages (preset `filters`)
   // Builds the stage from the whole config (the stage reads and checks its
   // section).
   std::function<std::unique_ptr<Stage>(const Json& config)> make;
@@ -49,7 +49,20 @@ struct StageEntry {
 const std::vector<StageEntry>& StageTable();
 // Throws Error("unknown_stage") listing the known names.
 std::unique_ptr<Stage> MakeStage(const std::string& name, const Json& config);
+// Named pipelines, words `doasido init --pipeline` expands: `default`, the
+// whole chain (filters -> hands -> bundle -> recon -> retarget_kinematic ->
+// retarget; what init and ingest give a database without a pipeline), and
+// `filters`, the filtering job alone (download .. camera_motion: the
+// report-only use).
+inline constexpr const char* kPresetDefault = "default";
+inline constexpr const char* kPresetFilters = "filters";
 std::vector<std::string> DefaultPipeline();
+std::vector<std::string> FiltersPipeline();
+const std::map<std::string, std::vector<std::string>>& PipelinePresets();
+// A --pipeline list with each preset word replaced by its stages. Throws
+// Error("unknown_stage") for a name that is neither, Error("bad_pipeline")
+// for a stage listed twice (naming the preset that holds it).
+std::vector<std::string> ExpandPipeline(const std::vector<std::string>& words);
 // Every reason code of the table, each once: the stages that decide from
 // stored measurements (the filters) first, then the others, in table order
 // (the review page's list).

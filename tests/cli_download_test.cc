@@ -192,7 +192,7 @@ TEST(Download, TwentyUrlsFromALocalServerDownloadResumeTimeOutAndFilter) {
   const std::string db = (dir / "work" / "d.db").string();
   const std::string config = (dir / "config.json").string();
 
-  ASSERT_EQ(RunDoasido({"init", "--db", db}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "filters"}).exit_code, 0);
   const auto ingest = RunDoasido({"ingest", "--db", db, (dir / "urls.csv").string()});
   ASSERT_EQ(ingest.exit_code, 0) << ingest.err;
   const auto work = RunDoasido({"worker", "--db", db, "--config", config, "--until-empty",

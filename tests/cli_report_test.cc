@@ -35,7 +35,7 @@ class CliReport : public ::testing::Test {
          "static=0.125"});
     ASSERT_EQ(synth.exit_code, 0) << synth.err;
     db_ = (*dir_ / "work" / "d.db").string();
-    ASSERT_EQ(RunDoasido({"init", "--db", db_}).exit_code, 0);
+    ASSERT_EQ(RunDoasido({"init", "--db", db_, "--pipeline", "filters"}).exit_code, 0);
     const auto run = RunDoasido({"run", "--db", db_, (*dir_ / "synth").string(), "--jobs", "2"});
     ASSERT_EQ(run.exit_code, 0) << run.err;
   }

@@ -29,7 +29,7 @@ TEST(Rethreshold, RedecidesFromStoredMeasurementsWithoutTheVideos) {
                 .exit_code,
             0);
   const std::string db_path = (dir / "d.db").string();
-  ASSERT_EQ(RunDoasido({"init", "--db", db_path}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"init", "--db", db_path, "--pipeline", "filters"}).exit_code, 0);
   const auto run = RunDoasido({"run", "--db", db_path, out + "/Annotations"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
 
@@ -197,7 +197,7 @@ TEST(LeaseWaits, RunTakesOverDeadWorkersAndNamesLiveLeases) {
 TEST(Rethreshold, UnknownStageIsRefused) {
   TempDir dir;
   const std::string db_path = (dir / "d.db").string();
-  ASSERT_EQ(RunDoasido({"init", "--db", db_path}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"init", "--db", db_path, "--pipeline", "filters"}).exit_code, 0);
   const auto r = RunDoasido({"rethreshold", "--db", db_path, "--stages", "probe"});
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("probe"), std::string::npos) << r.err;

@@ -348,7 +348,7 @@ TEST_F(BrowserTest, ReportPageRendersItsCharts) {
   }
   Synth("clean=0.4,cut=0.2,pan=0.2,no_contact=0.2", 8);
   const auto db_path = dir_ / "work" / "d.db";
-  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string()}).exit_code, 0);
+  ASSERT_EQ(RunDoasido({"init", "--db", db_path.string(), "--pipeline", "filters"}).exit_code, 0);
   const auto run = RunDoasido({"run", "--db", db_path.string(), "--jobs", "2",
                                (dir_ / "synth" / "clips.csv").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;

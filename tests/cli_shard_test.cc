@@ -46,7 +46,7 @@ class ShardTest : public ::testing::Test {
   std::filesystem::path Ingested(const std::string& name) {
     const auto db = dir_ / name / "doasido.db";
     std::filesystem::create_directories(db.parent_path());
-    EXPECT_EQ(RunDoasido({"init", "--db", db.string()}).exit_code, 0);
+    EXPECT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", "filters"}).exit_code, 0);
     const auto r = RunDoasido({"ingest", "--db", db.string(), pool_ + "/Annotations"});
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return db;
@@ -111,6 +111,55 @@ TEST_F(ShardTest, ShardedRunEqualsOneMachineAndMergingTwiceChangesNothing) {
   EXPECT_EQ(AllRows(parent), once);
   const auto status = RunDoasido({"status", "--db", parent.string()});
   EXPECT_NE(status.out.find("shard-002"), std::string::npos) << status.out;
+}
+
+// Two databases made in one folder before either runs: each decided and
+// claimed its artifact root at creation, so the second made runs, shards
+// and merges first and the first made after it, and each ends with what one
+// machine's run gives (issue 53: the second used to be locked out of every
+// command by foreign_artifacts).
+TEST_F(ShardTest, TwoDatabasesMadeInOneFolderBeforeEitherRunsBothRunShardAndMerge) {
+  const auto single = Ingested("single");
+  Run(single);
+  const auto folder = dir_ / "both";
+  std::filesystem::create_directories(folder);
+  const auto a = folder / "a.db", b = folder / "b.db";
+  for (const auto& db : {a, b}) {
+    ASSERT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", "filters"}).exit_code, 0);
+  }
+  EXPECT_EQ(QueryRows(a, "SELECT value FROM meta WHERE key = 'artifact_root'"),
+            std::vector<std::string>{"artifacts"});
+  EXPECT_EQ(QueryRows(b, "SELECT value FROM meta WHERE key = 'artifact_root'"),
+            std::vector<std::string>{"b.artifacts"});
+  for (const auto& db : {b, a}) {  // the one made second goes first
+    const std::string name = db.stem().string();
+    ASSERT_EQ(RunDoasido({"ingest", "--db", db.string(), pool_ + "/Annotations"}).exit_code, 0);
+    ASSERT_EQ(RunDoasido({"status", "--db", db.string()}).exit_code, 0);
+    const auto shard = RunDoasido({"shard", "--db", db.string(), "--shards", "2", "--out",
+                                   (folder / (name + "-shards")).string()});
+    ASSERT_EQ(shard.exit_code, 0) << shard.err;
+    std::vector<std::filesystem::path> shards;
+    for (const auto& row : QueryRows(db, "SELECT name FROM shards ORDER BY id")) {
+      shards.push_back(folder / (name + "-shards") / row / "doasido.db");
+    }
+    ASSERT_EQ(shards.size(), 2u);
+    for (const auto& s : shards) Run(s);
+    const auto merged = Merge(db, shards);
+    ASSERT_EQ(merged.exit_code, 0) << merged.err;
+    EXPECT_EQ(ResultTables(db), ResultTables(single)) << db;
+  }
+  for (const auto& [db, root] : {std::pair{a, "artifacts"}, std::pair{b, "b.artifacts"}}) {
+    for (const auto& path : QueryRows(db, "SELECT path FROM artifacts")) {
+      EXPECT_TRUE(std::filesystem::exists(folder / root / path)) << path;
+    }
+    // Each root is its own database's (its owner file names the uuid).
+    const std::string owner = testing::ReadFile(folder / root / ".doasido-database");
+    EXPECT_NE(owner.find(QueryRows(db, "SELECT value FROM meta WHERE key = 'uuid'").at(0)),
+              std::string::npos) << owner;
+    // Work on each afterwards, in the other order too: nothing locks it out.
+    const auto status = RunDoasido({"status", "--db", db.string()});
+    EXPECT_EQ(status.exit_code, 0) << status.err;
+  }
 }
 
 TEST_F(ShardTest, APartlyDoneShardMergesItsDonePart) {

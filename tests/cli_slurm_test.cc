@@ -62,7 +62,7 @@ TEST(Slurm, ArrayAndMergeEqualOneMachineAfterACancelledTaskIsResumed) {
   auto ingested = [&](const std::string& name) {
     const auto db = dir / name / "doasido.db";
     std::filesystem::create_directories(db.parent_path());
-    EXPECT_EQ(RunDoasido({"init", "--db", db.string()}).exit_code, 0);
+    EXPECT_EQ(RunDoasido({"init", "--db", db.string(), "--pipeline", "filters"}).exit_code, 0);
     EXPECT_EQ(RunDoasido({"ingest", "--db", db.string(), pool + "/Annotations"}).exit_code, 0);
     return db;
   };

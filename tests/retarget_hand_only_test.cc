@@ -3,7 +3,8 @@
 // is retargeted by retarget_kinematic onto the default hands -- the right
 // hand into trajectory.json, the left one into trajectory_left.json, a lone
 // left hand mirrored onto the right robot hand -- with a small fingertip
-// error and no object; the dynamics `retarget` stage says no_object.
+// error and no object; the dynamics `retarget` stage keeps that kinematic
+// trajectory (pass, hand_only_kinematic), or says no_object without one.
 #include <gtest/gtest.h>
 
 #include "stages/clip_inputs.h"
@@ -76,12 +77,25 @@ TEST(HandOnlyRetarget, BothHandsOntoTheDefaultHandsWithoutObject) {
   const Eigen::Vector3d lw(left.qpos[20][0], left.qpos[20][1], left.qpos[20][2]);
   EXPECT_NEAR((rw - lw).norm(), 0.25, 0.05);
 
-  // The dynamics-aware stage has nothing to manipulate.
+  // The dynamics-aware stage has nothing to manipulate: it keeps the
+  // kinematic trajectory, both hands', byte for byte, and says so.
   DynamicRetargetConfig dynamic;
   dynamic.robots_dir = FastConfig().robots_dir;
-  const StageResult d = stages::DynamicRetargetStage(dynamic).Run(Context(root, kRetargetStageName));
-  EXPECT_EQ(d.verdict, Verdict::kReject);
-  EXPECT_EQ(d.reason, stages::kReasonNoObject);
+  const auto dynamic_context = Context(root, kRetargetStageName);
+  const StageResult d = stages::DynamicRetargetStage(dynamic).Run(dynamic_context);
+  EXPECT_EQ(d.verdict, Verdict::kPass);
+  EXPECT_EQ(d.reason, stages::kReasonHandOnlyKinematic);
+  EXPECT_EQ(d.measurements[stages::kMeasureTrajectorySource], kKinematicStageName);
+  for (const char* file : {kTrajectoryFile, kTrajectoryCsvFile, stages::kLeftTrajectoryFile}) {
+    EXPECT_FALSE(testing::ReadFile(dir / file).empty()) << file;
+    EXPECT_EQ(testing::ReadFile(dynamic_context.artifact_dir / file), testing::ReadFile(dir / file))
+        << file;
+  }
+  // Without retarget_kinematic before it there is no trajectory to keep.
+  std::filesystem::remove_all(dir);
+  const StageResult none = stages::DynamicRetargetStage(dynamic).Run(Context(root, kRetargetStageName));
+  EXPECT_EQ(none.verdict, Verdict::kReject);
+  EXPECT_EQ(none.reason, stages::kReasonNoObject);
 }
 
 TEST(HandOnlyRetarget, ALoneLeftHandIsMirroredOntoTheRightRobotHand) {

@@ -81,13 +81,11 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   if (builtin) out.builtin_detections = detector.detections();
   if (deferred) {
     ShotSpan kept;
-    const std::string rejected =
-        CheapVerdictRejection(out.measurements, verdicts, options.clip, &kept);
-    if (rejected.empty()) {
+    const auto rejected = CheapVerdictRejection(out.measurements, verdicts, options.clip, &kept);
+    if (!rejected) {
       RunHandModelsOnKeptShot(keeper, kept, g, config, options.clip, &out);
     } else {
-      out.measurements["clip"]["detector_note"] =
-          "hand models not run: the clip is rejected by " + rejected;
+      MarkHandSectionsNotMeasured(*rejected, &out.measurements);
     }
   }
   return out;

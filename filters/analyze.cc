@@ -86,6 +86,10 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
       RunHandModelsOnKeptShot(keeper, kept, g, config, options.clip, &out);
     } else {
       MarkHandSectionsNotMeasured(*rejected, &out.measurements);
+      // The built-in boxes only masked the hands for camera motion: they
+      // are no hand evidence, and stored they would be read as the clip's
+      // own boxes when the clip is measured again (rethreshold).
+      out.builtin_detections.clear();
     }
   }
   return out;

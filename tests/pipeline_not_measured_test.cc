@@ -122,7 +122,7 @@ TEST(NotMeasured, ACameraMotionRejectLeavesTheHandStagesUnmeasuredUntilARethresh
   const auto remeasured = db.GetMeasurements(clip, kAnalyzeStageName);
   ASSERT_TRUE(remeasured);
   EXPECT_FALSE(remeasured->contains(kNotMeasuredKey)) << remeasured->at("clip").dump();
-  EXPECT_TRUE(remeasured->contains(kHandsMeasurement));
+  EXPECT_TRUE(remeasured->contains(kHandsMeasurement)) << remeasured->at("clip").dump();
   ASSERT_EQ(runs.count(kInteractionStageName), 1u);
   EXPECT_EQ(runs.at(kInteractionStageName).state, RunState::kDone);
   EXPECT_NE(runs.at(kInteractionStageName).verdict, ToString(Verdict::kNotMeasured));

@@ -1,6 +1,7 @@
 // `doasido status --clips`: one line per clip saying where it stopped in the
 // pipeline and why (a reject, a failure, a flag waiting for review, or still
-// queued), the table the demo ends with.
+// queued), the table the demo ends with. Stages the deciding verdict left
+// unmeasured (verdict not_measured) are named after the reason.
 #include <cstdio>
 #include <map>
 
@@ -29,7 +30,7 @@ void PrintClipTable(Database& db) {
   }
   std::printf("%-6s %-24s %-20s %-8s %s\n", "clip", "id", "stopped at", "outcome", "why");
   for (const auto& [clip, by_stage] : runs) {
-    std::string stage = "(not started)", outcome, why, flagged;
+    std::string stage = "(not started)", outcome, why, flagged, unmeasured;
     bool stopped = false;
     for (const std::string& name : pipeline) {
       const auto it = by_stage.find(name);
@@ -41,7 +42,13 @@ void PrintClipTable(Database& db) {
       stopped = r.state != RunState::kDone || r.verdict == "reject";
       if (stopped) break;
       if (r.verdict == "flag" && flagged.empty()) flagged = name + ": " + r.reason;
+      // A stage whose measurement the deciding verdict made unnecessary
+      // neither passed nor stopped the clip: said beside the reason.
+      if (r.state == RunState::kDone && r.verdict == ToString(Verdict::kNotMeasured)) {
+        unmeasured += (unmeasured.empty() ? "" : ", ") + name;
+      }
     }
+    if (stopped && !unmeasured.empty()) why += " (not measured: " + unmeasured + ")";
     if (!stopped && stage == pipeline.back()) {
       if (why.empty()) why = "went through every stage";
     } else if (!stopped && !flagged.empty()) {

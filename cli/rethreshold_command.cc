@@ -31,7 +31,9 @@ void AddRethresholdCommand(CLI::App& app) {
       "thresholds of --config, and stores the new verdict (history source 'rethreshold').\n"
       "A changed verdict re-queues the clip's later stages and judges them at once when they\n"
       "too decide from measurements; verdicts given by a person are kept. Later `doasido run`\n"
-      "with the same --config has nothing left to redo.\n\n"
+      "with the same --config has nothing left to redo. A clip that a verdict no longer\n"
+      "rejects, whose other stages were not measured because of it (not_measured), goes back\n"
+      "to the stage that measures (filters_analyze) for `doasido run`.\n\n"
       "Example (reject clips with less than 30% of active frames instead of 10%):\n"
       "  printf '[activity]\\nmin_active_fraction = 0.3\\n' > strict.toml\n"
       "  doasido rethreshold --db work/doasido.db --config strict.toml --dry-run\n"
@@ -50,6 +52,10 @@ void AddRethresholdCommand(CLI::App& app) {
                   static_cast<long long>(t.human_kept), static_cast<long long>(t.rerun));
       for (const auto& [what, n] : t.transitions) {
         std::printf("%-16s   %-48s %lld\n", "", what.c_str(), static_cast<long long>(n));
+      }
+      if (t.remeasure > 0) {
+        std::printf("%-16s   %lld clips sent back for the measurement they lack (not_measured "
+                    "runs named this stage)\n", "", static_cast<long long>(t.remeasure));
       }
       if (t.downstream > 0) {
         std::printf("%-16s   %lld later runs queued again on the new verdicts\n", "",

@@ -10,8 +10,10 @@ void PrintStatusTable(Database& db) {
   const auto counts = db.Counts();
   std::printf("%lld clips from %lld videos\n\n", static_cast<long long>(db.CountClips()),
               static_cast<long long>(db.CountVideos()));
-  std::printf("%-20s %8s %8s %8s %8s %8s %8s\n", "stage", "pending", "running", "pass", "reject",
-              "flag", "failed");
+  // not_meas: runs whose measurement an earlier verdict made unnecessary
+  // (their reason names it; core/records.h).
+  std::printf("%-20s %8s %8s %8s %8s %8s %8s %8s\n", "stage", "pending", "running", "pass",
+              "reject", "flag", "not_meas", "failed");
   std::vector<std::string> order;
   std::map<std::string, std::map<std::string, long long>> cells;
   std::map<std::string, std::map<std::string, long long>> reasons;
@@ -25,8 +27,9 @@ void PrintStatusTable(Database& db) {
   }
   for (const auto& stage : order) {
     auto& row = cells[stage];
-    std::printf("%-20s %8lld %8lld %8lld %8lld %8lld %8lld\n", stage.c_str(), row["pending"],
-                row["running"], row["pass"], row["reject"], row["flag"], row["failed"]);
+    std::printf("%-20s %8lld %8lld %8lld %8lld %8lld %8lld %8lld\n", stage.c_str(),
+                row["pending"], row["running"], row["pass"], row["reject"], row["flag"],
+                row[ToString(Verdict::kNotMeasured)], row["failed"]);
     for (const auto& [reason, n] : reasons[stage]) {
       std::printf("%-20s   %-40s %lld\n", "", reason.c_str(), n);
     }

@@ -9,6 +9,7 @@ const char* ToString(Verdict v) {
     case Verdict::kPass: return "pass";
     case Verdict::kReject: return "reject";
     case Verdict::kFlag: return "flag";
+    case Verdict::kNotMeasured: return "not_measured";
   }
   return "?";
 }
@@ -17,7 +18,9 @@ Verdict VerdictFromString(const std::string& s) {
   if (s == "pass") return Verdict::kPass;
   if (s == "reject") return Verdict::kReject;
   if (s == "flag") return Verdict::kFlag;
-  throw Error("bad_verdict", "verdict must be pass, reject or flag, not '" + s + "'");
+  if (s == "not_measured") return Verdict::kNotMeasured;
+  throw Error("bad_verdict",
+              "verdict must be pass, reject, flag or not_measured, not '" + s + "'");
 }
 
 }  // namespace doasido

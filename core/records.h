@@ -62,7 +62,13 @@ struct Detection {
   std::string source;  // "100doh_voc", "synth", "detector:<name>", ...
 };
 
-enum class Verdict { kPass, kReject, kFlag };
+// kNotMeasured: the stage's measurement did not run for the clip because an
+// earlier verdict in the order the evidence is taken (a cheap one, taken
+// before the costly measurement) removed it; the run's reason names that
+// verdict's stage. It moves the clip on like pass but judges nothing: it is
+// never counted as passed, flagged or rejected (filters/README.md, "Not
+// measured").
+enum class Verdict { kPass, kReject, kFlag, kNotMeasured };
 const char* ToString(Verdict v);
 Verdict VerdictFromString(const std::string& s);  // throws Error
 

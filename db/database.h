@@ -313,6 +313,11 @@ class Database {
   // to run again on the new result (RequeueDownstream, then MoveOn).
   bool StoreRedecision(ClipId clip, const std::string& stage, const std::string& param_hash,
                        const StageResult& result, bool changed, std::int64_t* requeued = nullptr);
+  // The clip's stored measurements, by stage, whose JSON value at
+  // `json_path` (SQLite's json_extract, e.g. "$.not_measured.stage")
+  // equals `value`.
+  std::map<std::string, Json> MeasurementsWhere(ClipId clip, const std::string& json_path,
+                                                const std::string& value);
 
   // ---- Reports --------------------------------------------------------------
   // Bulk reads for `doasido report` (db/database_reports.cc). Read-only.

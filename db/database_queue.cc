@@ -323,7 +323,9 @@ void Database::Release(ClipId clip) {
   const std::string verdict = found ? q.Text(2) : "";
   const bool held = found && q.Int(3) > 0;
   q.Reset();
-  if (found && !held && state == "done" && verdict == "pass") QueueNextStage(clip, stage);
+  const bool moves_on = verdict == ToString(Verdict::kPass) ||
+                        verdict == ToString(Verdict::kNotMeasured);
+  if (found && !held && state == "done" && moves_on) QueueNextStage(clip, stage);
 }
 
 void Database::DropLaterStages(ClipId clip, const std::string& stage) {

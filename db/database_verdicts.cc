@@ -100,4 +100,15 @@ bool Database::StoreRedecision(ClipId clip, const std::string& stage,
   return true;
 }
 
+std::map<std::string, Json> Database::MeasurementsWhere(ClipId clip, const std::string& json_path,
+                                                       const std::string& value) {
+  auto& q = Prepare("SELECT stage, data FROM measurements WHERE clip_id = ?"
+                    " AND json_valid(data) AND json_extract(data, ?) = ?");
+  q.Bind(1, clip).Bind(2, json_path).Bind(3, value);
+  std::map<std::string, Json> out;
+  while (q.Step()) out[q.Text(0)] = Json::parse(q.Text(1), nullptr, false);
+  q.Reset();
+  return out;
+}
+
 }  // namespace doasido

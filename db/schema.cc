@@ -230,6 +230,54 @@ INSERT OR IGNORE INTO meta (key, value)
 ALTER TABLE reviews ADD COLUMN artifact_sha256 TEXT;
 ALTER TABLE reviews ADD COLUMN param_hash TEXT;
 )sql",
+      // 9: a run whose measurement did not run for the clip (an earlier
+      // verdict in the order the evidence is taken removed it) records
+      // verdict 'not_measured', its reason naming that verdict's stage
+      // (core/records.h). SQLite cannot change a CHECK constraint: both
+      // tables are rebuilt with their rows.
+      R"sql(
+CREATE TABLE stage_runs_v9 (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  position INTEGER NOT NULL,
+  state TEXT NOT NULL CHECK (state IN ('pending', 'running', 'done', 'failed')),
+  attempts INTEGER NOT NULL DEFAULT 0,
+  lease_owner TEXT, lease_expires REAL,
+  param_hash TEXT,
+  verdict TEXT CHECK (verdict IN ('pass', 'reject', 'flag', 'not_measured')),
+  reason TEXT,
+  started_at REAL, finished_at REAL, duration_s REAL,
+  error TEXT,
+  inputs TEXT,
+  requeued_by TEXT,
+  UNIQUE (clip_id, stage)
+);
+INSERT INTO stage_runs_v9 (id, clip_id, stage, position, state, attempts, lease_owner,
+  lease_expires, param_hash, verdict, reason, started_at, finished_at, duration_s, error, inputs,
+  requeued_by)
+  SELECT id, clip_id, stage, position, state, attempts, lease_owner, lease_expires, param_hash,
+  verdict, reason, started_at, finished_at, duration_s, error, inputs, requeued_by FROM stage_runs;
+DROP TABLE stage_runs;
+ALTER TABLE stage_runs_v9 RENAME TO stage_runs;
+CREATE INDEX stage_runs_open ON stage_runs(id) WHERE state IN ('pending', 'running');
+
+CREATE TABLE verdicts_v9 (
+  id INTEGER PRIMARY KEY,
+  clip_id INTEGER NOT NULL REFERENCES clips(id) ON DELETE CASCADE,
+  stage TEXT NOT NULL,
+  verdict TEXT NOT NULL CHECK (verdict IN ('pass', 'reject', 'flag', 'not_measured')),
+  reason TEXT,
+  source TEXT NOT NULL,
+  param_hash TEXT,
+  created_at REAL NOT NULL
+);
+INSERT INTO verdicts_v9 (id, clip_id, stage, verdict, reason, source, param_hash, created_at)
+  SELECT id, clip_id, stage, verdict, reason, source, param_hash, created_at FROM verdicts;
+DROP TABLE verdicts;
+ALTER TABLE verdicts_v9 RENAME TO verdicts;
+CREATE INDEX verdicts_clip ON verdicts(clip_id, stage);
+)sql",
   };
   return kMigrations;
 }

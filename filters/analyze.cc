@@ -81,13 +81,15 @@ ClipAnalysis AnalyzeClip(const std::filesystem::path& video, const DecoderOption
   if (builtin) out.builtin_detections = detector.detections();
   if (deferred) {
     ShotSpan kept;
-    const std::string rejected =
-        CheapVerdictRejection(out.measurements, verdicts, options.clip, &kept);
-    if (rejected.empty()) {
+    const auto rejected = CheapVerdictRejection(out.measurements, verdicts, options.clip, &kept);
+    if (!rejected) {
       RunHandModelsOnKeptShot(keeper, kept, g, config, options.clip, &out);
     } else {
-      out.measurements["clip"]["detector_note"] =
-          "hand models not run: the clip is rejected by " + rejected;
+      MarkHandSectionsNotMeasured(*rejected, &out.measurements);
+      // The built-in boxes only masked the hands for camera motion: they
+      // are no hand evidence, and stored they would be read as the clip's
+      // own boxes when the clip is measured again (rethreshold).
+      out.builtin_detections.clear();
     }
   }
   return out;

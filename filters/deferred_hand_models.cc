@@ -30,8 +30,9 @@ void SampleKeeper::Consume(FrameContext& context) {
   kept.bgr = context.frame->bgr.clone();  // the decoder reuses its buffer
 }
 
-std::string CheapVerdictRejection(const Json& analysis, const CheapVerdictConfigs& verdicts,
-                                  const std::string& clip, ShotSpan* kept) {
+std::optional<CheapRejection> CheapVerdictRejection(const Json& analysis,
+                                                    const CheapVerdictConfigs& verdicts,
+                                                    const std::string& clip, ShotSpan* kept) {
   // As the verdict stages judge the clip: the shot boundary first, then
   // camera motion on the shot it keeps.
   const auto input = [&](const char* section, const Json* shot_verdict) {
@@ -40,16 +41,29 @@ std::string CheapVerdictRejection(const Json& analysis, const CheapVerdictConfig
     return VerdictInput(analysis, section, shot_verdict, site);
   };
   const FilterVerdict shot = DecideShots(input(kShotBoundaryStageName, nullptr), verdicts.shot);
-  if (shot.verdict == Verdict::kReject) {
-    return std::string(kShotBoundaryStageName) + " (" + shot.reason + ")";
-  }
+  if (shot.verdict == Verdict::kReject) return CheapRejection{kShotBoundaryStageName, shot.reason};
   const FilterVerdict camera =
       DecideCameraMotion(input(kCameraMotionStageName, &shot.measurements), verdicts.camera_motion);
   if (camera.verdict == Verdict::kReject) {
-    return std::string(kCameraMotionStageName) + " (" + camera.reason + ")";
+    return CheapRejection{kCameraMotionStageName, camera.reason};
   }
   *kept = SpanOf(camera.measurements, analysis.at("clip").at("frames").get<std::int64_t>());
-  return "";
+  return std::nullopt;
+}
+
+void MarkHandSectionsNotMeasured(const CheapRejection& rejection, Json* measurements) {
+  Json sections = Json::array();
+  for (const char* section : {kInteractionStageName, kOutOfFrameStageName, kActivityStageName}) {
+    measurements->erase(section);
+    sections.push_back(section);
+  }
+  (*measurements)[kNotMeasuredKey] = {{"stage", rejection.stage},
+                                      {"reason", rejection.reason},
+                                      {"sections", sections},
+                                      {"measured_by", kAnalyzeStageName}};
+  (*measurements)["clip"]["detector_note"] =
+      "hand models not run: the clip is rejected by " + rejection.stage + " (" +
+      rejection.reason + ")";
 }
 
 void RunHandModelsOnKeptShot(const SampleKeeper& keeper, const ShotSpan& kept,

@@ -8,8 +8,11 @@
 // the cheap verdicts judge those signals with their stages' configs: shot
 // boundary (no boxes involved) and camera motion (boxes only mask the
 // hands out of the background). A clip one of them rejects is done: it
-// cost what it cost without the models, and clip.detector_note says why
-// they did not run. A clip they keep gets the models on the samples of its
+// cost what it cost without the models, clip.detector_note says why they
+// did not run, and the signals that need the hands are absent
+// (MarkHandSectionsNotMeasured): their stages record not_measured naming
+// that verdict, and the clip stops at it with its reason, as it would with
+// the models on every clip when the verdicts are taken in this order. A clip they keep gets the models on the samples of its
 // kept shot only, and the signals that depend on where the hands are
 // (interaction, out-of-frame, activity) are rebuilt from the learned boxes
 // frame by frame as the decode would have (a sample's hands held until the
@@ -24,6 +27,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 
 #include "filters/analyze.h"
@@ -51,11 +55,24 @@ class SampleKeeper : public FrameConsumer {
   bool grays_overflow_ = false;
 };
 
-// The cheap verdicts on the analysis measurements `analysis`: empty when
-// they keep the clip (then `kept` is its kept shot), else "<stage>
-// (<reason>)" of the first that rejects it.
-std::string CheapVerdictRejection(const Json& analysis, const CheapVerdictConfigs& verdicts,
-                                  const std::string& clip, ShotSpan* kept);
+// The first cheap verdict that rejects a clip: its stage and reason code.
+struct CheapRejection {
+  std::string stage, reason;
+};
+
+// The cheap verdicts on the analysis measurements `analysis`: nullopt when
+// they keep the clip (then `kept` is its kept shot), else the first that
+// rejects it.
+std::optional<CheapRejection> CheapVerdictRejection(const Json& analysis,
+                                                    const CheapVerdictConfigs& verdicts,
+                                                    const std::string& clip, ShotSpan* kept);
+
+// The sections the hand models measure (interaction, out_of_frame,
+// activity): a clip `rejection` removed before the models ran has none of
+// them in `measurements`, which name them under kNotMeasuredKey instead,
+// so that their stages record not_measured rather than judge the built-in
+// detector's boxes (filters/verdict.h).
+void MarkHandSectionsNotMeasured(const CheapRejection& rejection, Json* measurements);
 
 // Runs the learned detector on `keeper`'s samples inside `kept` and
 // replaces the interaction, out-of-frame and activity signals, the

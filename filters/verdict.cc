@@ -11,6 +11,14 @@ namespace doasido::filters {
 
 Json VerdictInput(const Json& analysis, const std::string& section, const Json* shot_verdict,
                   const ErrorSite& site) {
+  if (analysis.is_object() && analysis.contains("clip") && !analysis.contains(section) &&
+      analysis.contains(kNotMeasuredKey)) {
+    const Json& marker = analysis.at(kNotMeasuredKey);
+    const Json sections = marker.value("sections", Json::array());
+    if (std::find(sections.begin(), sections.end(), section) != sections.end()) {
+      return {{"clip", analysis.at("clip")}, {kNotMeasuredKey, marker}};
+    }
+  }
   if (!analysis.is_object() || !analysis.contains("clip") || !analysis.contains(section)) {
     throw Error("missing_measurements", "the analysis measurements lack this section", site);
   }
@@ -18,6 +26,20 @@ Json VerdictInput(const Json& analysis, const std::string& section, const Json* 
   if (shot_verdict != nullptr) {
     if (const auto kept = ReadKeptShot(*shot_verdict)) out["shot"] = ToJson(*kept);
   }
+  return out;
+}
+
+std::optional<FilterVerdict> NotMeasured(const Json& input) {
+  if (!input.is_object() || !input.contains(kNotMeasuredKey)) return std::nullopt;
+  const Json& marker = input.at(kNotMeasuredKey);
+  if (!marker.is_object() || !marker.contains("stage") || !marker.at("stage").is_string()) {
+    throw Error("bad_measurements", "\"not_measured\" lacks the stage that decided the clip",
+                {.field = kNotMeasuredKey});
+  }
+  FilterVerdict out;
+  out.verdict = Verdict::kNotMeasured;
+  out.reason = marker.at("stage").get<std::string>();
+  out.measurements = input;
   return out;
 }
 

@@ -35,6 +35,15 @@ inline constexpr const char* kHandsMeasurement = "hands";
 // out_of_frame): flag, the clip has none to judge by.
 inline constexpr const char* kReasonNoDetections = "no_detections";
 
+// The analysis's section naming the sections it did not measure because a
+// cheap verdict removed the clip before their measurement ran
+// (filters/deferred_hand_models.h): {"stage": the verdict's stage,
+// "reason": its reason code, "sections": [...], "measured_by":
+// kAnalyzeStageName, the stage to run again for them}. A verdict stage
+// whose section is among them records Verdict::kNotMeasured with reason
+// "stage", never pass, reject or flag (NotMeasured below).
+inline constexpr const char* kNotMeasuredKey = "not_measured";
+
 // What a verdict rule decides: pass, reject or flag with a reason code, and
 // the measurements it decided from with its "summary" added.
 struct FilterVerdict {
@@ -46,11 +55,18 @@ struct FilterVerdict {
 // {"clip": analysis["clip"], "signals": analysis[section], "shot": ...}:
 // the input of the rule of stage `section` from the analysis stage's
 // measurements `analysis`, with the shot the shot-boundary verdict kept
-// when its measurements `shot_verdict` are given. Throws
-// Error("missing_measurements") at `site` when `analysis` lacks "clip" or
-// `section`.
+// when its measurements `shot_verdict` are given; {"clip", "not_measured":
+// analysis["not_measured"]} when the analysis names `section` among those
+// it did not measure. Throws Error("missing_measurements") at `site` when
+// `analysis` lacks "clip" or `section` otherwise.
 Json VerdictInput(const Json& analysis, const std::string& section, const Json* shot_verdict,
                   const ErrorSite& site);
+
+// The verdict of a stage on `input` (a rule's input or its stored
+// measurements) when its measurement did not run: not_measured, the reason
+// the stage of the verdict that made it unnecessary, the measurements
+// `input` itself. nullopt when `input` holds a measurement to decide from.
+std::optional<FilterVerdict> NotMeasured(const Json& input);
 
 // The frames a verdict judges, as 0-based positions in the analysed span:
 // the shot-boundary trim when there is one, else every frame; `boundaries`

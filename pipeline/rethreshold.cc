@@ -10,6 +10,7 @@
 
 #include "stages/stage_registry.h"
 #include "pipeline/stage_run.h"
+#include "stages/verdict_stages.h"
 
 namespace doasido::pipeline {
 namespace {
@@ -30,6 +31,14 @@ std::string Outcome(const std::string& verdict, const std::string& reason) {
 bool HumanVerdict(Database& db, ClipId clip, const std::string& stage) {
   const auto history = db.VerdictHistory(clip, stage);
   return !history.empty() && history.back().source == kHumanVerdictSource;
+}
+
+// The clip goes back for the measurements that `stage`'s verdict had made
+// unnecessary (now that it keeps the clip). Returns the stages re-queued.
+std::int64_t Remeasure(Database& db, ClipId clip, const std::string& stage) {
+  const std::set<std::string> measuring = stages::MeasuringStages(db, clip, stage);
+  for (const std::string& by : measuring) db.Reset(by, clip);
+  return static_cast<std::int64_t>(measuring.size());
 }
 
 // Re-decides the finished runs of `stage` (in batches of one transaction).
@@ -55,6 +64,10 @@ void RedecideFinished(Database& db, const stages::Stage& stage, const std::strin
                                 : !db.StoreRedecision(run.clip_id, name, hash, *result, changed,
                                                       &requeued);
       tally.downstream += requeued;
+      if (!dry_run && !kept && run.verdict == ToString(Verdict::kReject) &&
+          result->verdict != Verdict::kReject) {
+        tally.remeasure += Remeasure(db, run.clip_id, name) > 0;
+      }
       if (kept) {
         ++tally.human_kept;
         continue;

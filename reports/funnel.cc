@@ -1,6 +1,7 @@
 #include "reports/funnel.h"
 
 #include <algorithm>
+#include <set>
 
 namespace doasido::reports {
 namespace {
@@ -23,10 +24,15 @@ const char* ToString(Outcome o) {
 }
 
 std::vector<std::string> FunnelOrder(const std::vector<std::string>& pipeline,
-                                     const std::vector<Database::ReportRun>& runs) {
+                                     const std::vector<Database::ReportRun>& runs,
+                                     std::vector<std::string>* taken_first) {
   std::vector<std::string> order = pipeline;
   std::map<std::string, int> extra;  // stage -> smallest position
+  std::map<std::string, std::set<std::string>> decided_before;  // stage -> earlier evidence
   for (const auto& r : runs) {
+    if (r.state == "done" && r.verdict == ToString(Verdict::kNotMeasured) && !r.reason.empty()) {
+      decided_before[r.stage].insert(r.reason);
+    }
     if (std::find(pipeline.begin(), pipeline.end(), r.stage) != pipeline.end()) continue;
     auto it = extra.find(r.stage);
     if (it == extra.end() || r.position < it->second) extra[r.stage] = r.position;
@@ -35,14 +41,29 @@ std::vector<std::string> FunnelOrder(const std::vector<std::string>& pipeline,
   for (const auto& [stage, position] : extra) sorted.emplace_back(position, stage);
   std::sort(sorted.begin(), sorted.end());
   for (const auto& [position, stage] : sorted) order.push_back(stage);
-  return order;
+  // Evidence order: a deciding stage goes just before the first stage it
+  // left unmeasured.
+  std::vector<std::string> out;
+  const auto emitted = [&](const std::string& s) {
+    return std::find(out.begin(), out.end(), s) != out.end();
+  };
+  for (const std::string& stage : order) {
+    if (emitted(stage)) continue;
+    for (const std::string& first : decided_before[stage]) {
+      if (emitted(first) || std::find(order.begin(), order.end(), first) == order.end()) continue;
+      out.push_back(first);
+      if (taken_first) taken_first->push_back(first);
+    }
+    out.push_back(stage);
+  }
+  return out;
 }
 
 Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
                      const std::vector<Database::ReportRun>& runs, std::int64_t clips) {
   Funnel funnel;
   funnel.pool = clips;
-  const auto order = FunnelOrder(pipeline, runs);
+  const auto order = FunnelOrder(pipeline, runs, &funnel.taken_first);
   std::map<std::string, size_t> index;
   for (const auto& stage : order) {
     index[stage] = funnel.stages.size();
@@ -65,6 +86,9 @@ Funnel ComputeFunnel(const std::vector<std::string>& pipeline,
       } else if (r.verdict == "reject") {
         ++s.rejected;
         ++s.rejected_by_reason[ReasonKey(r.reason)];
+      } else if (r.verdict == ToString(Verdict::kNotMeasured)) {
+        ++s.not_measured;
+        ++s.not_measured_by[ReasonKey(r.reason)];
       } else {
         ++s.flagged;
         ++s.flagged_by_reason[ReasonKey(r.reason)];

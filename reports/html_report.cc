@@ -30,6 +30,7 @@ const char kReject[] = "#c62828";
 const char kFlag[] = "#ef8f00";
 const char kFail[] = "#5d2b2b";
 const char kPending[] = "#9e9e9e";
+const char kNotMeasured[] = "#d7ccc8";
 
 std::string E(const std::string& s) { return HtmlEscape(s); }
 std::string N(std::int64_t v) { return std::to_string(v); }
@@ -56,7 +57,7 @@ std::string Key() {
   std::string s = "<div class=\"key\">";
   for (auto [colour, label] : {std::pair{kPass, "passed on"}, {kReject, "rejected"},
                                {kFlag, "flagged (review)"}, {kFail, "failed"},
-                               {kPending, "pending"}}) {
+                               {kPending, "pending"}, {kNotMeasured, "not measured"}}) {
     s += std::string("<span style=\"background:") + colour + "\"></span>" + label;
   }
   return s + "</div>";
@@ -76,6 +77,20 @@ void FunnelSection(const ReportData& d, std::string& h) {
     }
   }
   h += "</p>";
+  // Which order the rows are in: the reader compares it with the paper's.
+  if (f.taken_first.empty()) {
+    h += "<p id=\"funnel-order\">Stages in pipeline order: every stage measured every clip it "
+         "judged.</p>";
+  } else {
+    std::string first;
+    for (const auto& s : f.taken_first) first += (first.empty() ? "" : ", ") + E(s);
+    h += "<p id=\"funnel-order\">Counted in the order the evidence was taken: " + first +
+         " judged each clip before the costlier measurement of the stages after it (the hand "
+         "models run only on clips the cheap verdicts keep), so a clip " + first +
+         " removed is counted there, and the later stages list it as <i>not measured</i> (it "
+         "moved on without being judged). With <code>learned_detector.after_cheap_verdicts = "
+         "false</code> every stage measures every clip and the rows follow the pipeline.</p>";
+  }
   std::vector<BarRow> rows;
   rows.push_back({"pool", {{"clips", f.pool, "#607d8b"}}, N(f.pool) + " clips"});
   for (const auto& s : f.stages) {
@@ -84,8 +99,10 @@ void FunnelSection(const ReportData& d, std::string& h) {
                      {"flagged", s.flagged, kFlag},
                      {"rejected", s.rejected, kReject},
                      {"failed", s.failed, kFail},
-                     {"pending", s.pending, kPending}},
+                     {"pending", s.pending, kPending},
+                     {"not measured", s.not_measured, kNotMeasured}},
                     N(s.entering) + " in, " + N(s.passed) + " on, −" + N(s.rejected) +
+                        (s.not_measured ? ", " + N(s.not_measured) + " not measured" : "") +
                         (s.flagged ? ", " + N(s.flagged) + " flagged" : "") +
                         (s.failed ? ", " + N(s.failed) + " failed" : "")});
   }
@@ -96,7 +113,7 @@ void FunnelSection(const ReportData& d, std::string& h) {
   h += "<table id=\"funnel-table\"><tr><th class=\"l\">stage</th><th>entering</th>"
        "<th>% of pool</th><th>rejected</th><th class=\"l\">rejected by reason</th>"
        "<th>flagged</th><th class=\"l\">flagged by reason</th><th>failed</th><th>pending</th>"
-       "<th>passed on</th><th>% of pool</th><th>human verdicts</th></tr>";
+       "<th>passed on</th><th>% of pool</th><th>not measured</th><th>human verdicts</th></tr>";
   for (const auto& s : f.stages) {
     std::int64_t human = 0;
     for (const auto& [v, n] : s.human_by_verdict) human += n;
@@ -105,11 +122,13 @@ void FunnelSection(const ReportData& d, std::string& h) {
          "</td><td class=\"reasons\">" + ReasonList(s.rejected_by_reason) + "</td><td>" +
          N(s.flagged) + "</td><td class=\"reasons\">" + ReasonList(s.flagged_by_reason) +
          "</td><td>" + N(s.failed) + "</td><td>" + N(s.pending) + "</td><td>" + N(s.passed) +
-         "</td><td>" + Pct(s.passed, f.pool) + "</td><td>" + N(human) + "</td></tr>";
+         "</td><td>" + Pct(s.passed, f.pool) + "</td><td class=\"reasons\">" +
+         N(s.not_measured) + (s.not_measured ? "<br>after " + ReasonList(s.not_measured_by) : "") +
+         "</td><td>" + N(human) + "</td></tr>";
   }
   h += "<tr class=\"survivors\"><td class=\"l\"><b>survivors</b></td><td colspan=\"8\"></td>"
        "<td><b>" + N(f.survivors) + "</b></td><td><b>" + Pct(f.survivors, f.pool) +
-       "</b></td><td></td></tr>";
+       "</b></td><td></td><td></td></tr>";
   h += "</table>";
   // The removals in the paper's words: −n per reason, with both shares.
   h += "<h3>Removed by reason</h3><table id=\"reasons-table\"><tr><th class=\"l\">stage</th>"

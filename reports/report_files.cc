@@ -75,6 +75,8 @@ Json FunnelToJson(const Funnel& f) {
                       {"flagged", s.flagged},
                       {"failed", s.failed},
                       {"pending", s.pending},
+                      {"not_measured", s.not_measured},
+                      {"not_measured_by", s.not_measured_by},
                       {"rejected_by_reason", s.rejected_by_reason},
                       {"flagged_by_reason", s.flagged_by_reason},
                       {"passed_by_reason", s.passed_by_reason},
@@ -191,14 +193,15 @@ Json ThumbnailsToJson(const std::vector<ThumbnailStrip>& all) {
 void WriteFunnelCsv(const Funnel& f, const std::filesystem::path& dir,
                     std::vector<std::filesystem::path>& written) {
   std::string funnel = "kind,stage,entering,passed,rejected,flagged,failed,pending,entering_pct,"
-                       "passed_pct\n";
+                       "passed_pct,not_measured\n";
   const double all = f.pool > 0 ? 100.0 : 0.0;
   funnel += Row("pool", "", f.pool, f.pool, std::int64_t{0}, std::int64_t{0}, std::int64_t{0},
-                std::int64_t{0}, all, all);
+                std::int64_t{0}, all, all, std::int64_t{0});
   std::string reasons = "stage,verdict,reason,clips,pct_pool,pct_entering\n";
   for (const auto& s : f.stages) {
     funnel += Row("stage", s.stage, s.entering, s.passed, s.rejected, s.flagged, s.failed,
-                  s.pending, Percent(s.entering, f.pool), Percent(s.passed, f.pool));
+                  s.pending, Percent(s.entering, f.pool), Percent(s.passed, f.pool),
+                  s.not_measured);
     for (const auto& [reason, n] : s.rejected_by_reason) {
       reasons += Row(s.stage, "reject", reason, n, Percent(n, f.pool), Percent(n, s.entering));
     }
@@ -208,7 +211,7 @@ void WriteFunnelCsv(const Funnel& f, const std::filesystem::path& dir,
   }
   funnel += Row("survivors", "", f.survivors, f.survivors, std::int64_t{0},
                 std::int64_t{0}, std::int64_t{0}, std::int64_t{0},
-                Percent(f.survivors, f.pool), Percent(f.survivors, f.pool));
+                Percent(f.survivors, f.pool), Percent(f.survivors, f.pool), std::int64_t{0});
   Write(dir / "funnel.csv", funnel, written);
   Write(dir / "reasons.csv", reasons, written);
 }

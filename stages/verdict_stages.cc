@@ -28,6 +28,15 @@ StageResult ToStageResult(filters::FilterVerdict verdict) {
   return result;
 }
 
+std::set<std::string> MeasuringStages(Database& db, ClipId clip, const std::string& decided_by) {
+  std::set<std::string> out;
+  const std::string path = std::string("$.") + filters::kNotMeasuredKey + ".stage";
+  for (const auto& [stage, m] : db.MeasurementsWhere(clip, path, decided_by)) {
+    out.insert(m.at(filters::kNotMeasuredKey).value("measured_by", filters::kAnalyzeStageName));
+  }
+  return out;
+}
+
 ShotBoundaryStage::ShotBoundaryStage(filters::ShotBoundaryConfig config)
     : MeasuredVerdictStage(filters::kShotBoundaryStageName, std::move(config),
                            filters::DecideShots) {}

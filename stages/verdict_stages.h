@@ -6,10 +6,12 @@
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 
 #include "core/config.h"
+#include "db/database.h"
 #include "filters/activity.h"
 #include "filters/camera_motion.h"
 #include "filters/interaction.h"
@@ -30,11 +32,19 @@ Json CopyAnalysis(const ClipContext& context, const std::string& section);
 // A filter's verdict as the queue records it.
 StageResult ToStageResult(filters::FilterVerdict verdict);
 
+// The stages to run again for the clip's measurements that the verdict of
+// stage `decided_by` made unnecessary (the analysis's, and its
+// not_measured runs', filters::kNotMeasuredKey naming `decided_by`): their
+// "measured_by". Empty when that verdict left nothing unmeasured.
+std::set<std::string> MeasuringStages(Database& db, ClipId clip, const std::string& decided_by);
+
 // A verdict stage that decides from the analysis stage's measurements only
 // (never decodes): Run copies the stage's section of them, with the kept
 // shot, and applies `rule`; Redecide applies `rule` to stored measurements,
 // so `doasido rethreshold` re-derives the verdict without the video. The
-// stage's name is also its section in the analysis measurements.
+// stage's name is also its section in the analysis measurements. When the
+// analysis did not measure that section (filters::kNotMeasuredKey), both
+// record not_measured instead, naming the verdict that decided the clip.
 template <typename Config>
 class MeasuredVerdictStage : public Stage {
  public:
@@ -44,13 +54,19 @@ class MeasuredVerdictStage : public Stage {
   std::string Name() const override { return name_; }
   Json Params() const override { return config_; }
   StageResult Run(const ClipContext& context) override {
-    return ToStageResult(rule_(CopyAnalysis(context, name_), config_));
+    return Decide(CopyAnalysis(context, name_));
   }
   std::optional<StageResult> Redecide(const Json& measurements) const override {
-    return ToStageResult(rule_(measurements, config_));
+    return Decide(measurements);
   }
 
  private:
+  // Never a verdict from a measurement that did not run (not_measured).
+  StageResult Decide(const Json& input) const {
+    if (auto unmeasured = filters::NotMeasured(input)) return ToStageResult(std::move(*unmeasured));
+    return ToStageResult(rule_(input, config_));
+  }
+
   std::string name_;
   Config config_;
   Rule rule_;

@@ -1,6 +1,7 @@
 // The hand models only where they decide (filters/deferred_hand_models.h),
-// on real footage: a clip the camera-motion verdict rejects gets exactly
-// the analysis it got before the learned detector existed; a kept one gets
+// on real footage: a clip the camera-motion verdict rejects gets the cheap
+// signals it got before the learned detector existed and no hand signals
+// (its hand stages record not_measured); a kept one gets
 // exactly the learned signals the models in the decode gave; a clip across
 // a cut gets the models on its kept shot only.
 #include <gtest/gtest.h>
@@ -48,15 +49,33 @@ TEST_F(DeferredModels, ACameraMotionRejectCostsWhatItDidWithoutTheModels) {
   EXPECT_NE(deferred.at("clip").at("detector_note").get<std::string>().find("camera_motion"),
             std::string::npos);
   EXPECT_FALSE(deferred.contains(kHandsMeasurement));
-  // (The built-in detector's own boxes are not repeatable from one run to
-  // the next in one process, so interaction and out-of-frame, which are
-  // made of them alone, are compared by the frames they cover.)
-  for (const char* section : {kShotBoundaryStageName, kActivityStageName, kCameraMotionStageName}) {
+  for (const char* section : {kShotBoundaryStageName, kCameraMotionStageName}) {
     EXPECT_EQ(deferred.at(section), builtin.at(section)) << section;
   }
-  for (const char* section : {kInteractionStageName, kOutOfFrameStageName}) {
-    EXPECT_EQ(deferred.at(section).at("covered"), builtin.at(section).at("covered")) << section;
+  // No hand evidence: the sections the models measure are absent, named
+  // under not_measured with the verdict that made them unnecessary, and
+  // their stages record not_measured (never a verdict on the built-in
+  // detector's boxes).
+  ASSERT_TRUE(deferred.contains(kNotMeasuredKey));
+  EXPECT_EQ(deferred.at(kNotMeasuredKey).at("stage"), kCameraMotionStageName);
+  EXPECT_EQ(deferred.at(kNotMeasuredKey).at("measured_by"), kAnalyzeStageName);
+  ClipContext context;
+  context.measurements[kAnalyzeStageName] = deferred;
+  for (const char* section : {kInteractionStageName, kOutOfFrameStageName, kActivityStageName}) {
+    EXPECT_FALSE(deferred.contains(section)) << section;
+    EXPECT_TRUE(builtin.contains(section)) << section;
   }
+  const StageResult interaction = InteractionStage().Run(context);
+  EXPECT_EQ(interaction.verdict, Verdict::kNotMeasured);
+  EXPECT_EQ(interaction.reason, kCameraMotionStageName);
+  // Re-deciding its stored measurements under any thresholds: the same.
+  InteractionConfig lenient;
+  lenient.min_interaction_fraction = 0;
+  lenient.min_covered_fraction = 0;
+  const auto again = InteractionStage(lenient).Redecide(interaction.measurements);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->verdict, Verdict::kNotMeasured);
+  EXPECT_EQ(CameraMotionStage().Run(context).verdict, Verdict::kReject);
 }
 
 TEST_F(DeferredModels, AKeptClipGetsTheSignalsTheModelsInTheDecodeGave) {

@@ -507,5 +507,43 @@ TEST(ReportsOutcomes, FirstRejectElseFirstFlag) {
   EXPECT_EQ(funnel.survivors, 1);
 }
 
+// A stage whose verdict left later-listed stages not_measured was taken
+// first: the funnel lists it before them, counts their not_measured apart
+// (neither passed nor rejected nor flagged), and the clip where it was
+// rejected.
+TEST(ReportsOutcomes, NotMeasuredIsCountedApartInEvidenceOrder) {
+  const std::vector<std::string> pipeline = {"shot", "hand", "camera"};
+  Database::ReportRun unmeasured = DoneRun(1, "hand", 1, "not_measured");
+  unmeasured.reason = "camera";
+  const std::vector<Database::ReportRun> runs = {
+      DoneRun(1, "shot", 0, "pass"), unmeasured, DoneRun(1, "camera", 2, "reject"),
+      DoneRun(2, "shot", 0, "pass"), DoneRun(2, "hand", 1, "reject"),
+      DoneRun(3, "shot", 0, "pass"), DoneRun(3, "hand", 1, "pass"),
+      DoneRun(3, "camera", 2, "pass")};
+  std::vector<std::string> taken_first;
+  EXPECT_EQ(FunnelOrder(pipeline, runs, &taken_first),
+            (std::vector<std::string>{"shot", "camera", "hand"}));
+  EXPECT_EQ(taken_first, std::vector<std::string>{"camera"});
+  const Funnel funnel = ComputeFunnel(pipeline, runs, 3);
+  ASSERT_EQ(funnel.stages.size(), 3u);
+  const FunnelStage& hand = funnel.stages[2];
+  EXPECT_EQ(hand.stage, "hand");
+  EXPECT_EQ(hand.entering, 3);
+  EXPECT_EQ(hand.not_measured, 1);
+  EXPECT_EQ(hand.not_measured_by.at("camera"), 1);
+  EXPECT_EQ(hand.passed, 1);
+  EXPECT_EQ(hand.rejected, 1);
+  EXPECT_EQ(hand.flagged, 0);
+  EXPECT_EQ(funnel.stages[1].rejected_by_reason.at("why_camera"), 1);
+  const auto outcomes = ComputeOutcomes(pipeline, runs);
+  EXPECT_EQ(outcomes.at(1).outcome, Outcome::kRejected);
+  EXPECT_EQ(outcomes.at(1).stage, "camera");
+  EXPECT_EQ(funnel.survivors, 1);
+  // Without not_measured runs: the pipeline's order.
+  taken_first.clear();
+  EXPECT_EQ(FunnelOrder(pipeline, {runs.begin() + 3, runs.end()}, &taken_first), pipeline);
+  EXPECT_TRUE(taken_first.empty());
+}
+
 }  // namespace
 }  // namespace doasido::reports

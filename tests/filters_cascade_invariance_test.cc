@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "filters/analyze.h"
+#include "testing/real_footage.h"
 #include "filters/hand_landmarker.h"
 #include "filters/verdict.h"
 #include "stages/verdict_stages.h"
@@ -116,12 +117,14 @@ std::vector<Clip> RealClips() {
     line = line.substr(0, line.find('#'));
     line.erase(line.find_last_not_of(" \t\r") + 1);
     if (line.empty()) continue;
-    const std::filesystem::path p = std::filesystem::path(line).is_absolute() ? std::filesystem::path(line) : source / line;
-    if (!std::filesystem::exists(p)) {
+    const std::filesystem::path named = std::filesystem::path(line).is_absolute() ? std::filesystem::path(line) : source / line;
+    if (!std::filesystem::exists(named)) {
       ADD_FAILURE() << "bench/cascade_invariance_clips.txt names a missing file: " << line;
       continue;
     }
-    out.push_back({line, p});
+    // A package's gzipped video is decoded from its decompressed copy.
+    out.push_back({line, testing::ResolveRealFootage(named.string(), testing::SharedData(),
+                                                     std::filesystem::temp_directory_path() / "doasido-cascade-videos")});
   }
   std::sort(out.begin(), out.end(), [](const Clip& a, const Clip& b) { return a.name < b.name; });
   return out;

@@ -200,7 +200,7 @@ ExportSummary ExportRobomimic(const fs::path& version_dir, const fs::path& out_f
       throw Error("bad_trajectory", "the trajectory has no frames",
                   {.clip = e.external_id, .file = path.string(), .field = "qpos"});
     }
-    const Mismatch mixed = TrajectoryMismatch(t, trajectories.front());
+    const Mismatch mixed = TrajectoryMismatch(t, trajectories.front(), m.episodes.front().external_id);
     if (!mixed.field.empty()) {
       throw Error(kMixedTrajectories,
                   mixed.why + " (a robomimic file holds one robot and one set of observations)",

@@ -3,19 +3,20 @@
 namespace doasido::dataset {
 
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
-                            const retarget::HandTrajectory& first, bool object_poses_may_differ) {
+                            const retarget::HandTrajectory& first, const std::string& first_clip,
+                            bool object_poses_may_differ) {
+  const std::string first_ones = "the first episode's (clip " + first_clip;
   if (t.embodiment != first.embodiment) {
-    return {"embodiment", "robot " + t.embodiment + " differs from the first episode's (" +
-                              first.embodiment + ")"};
+    return {"embodiment", "robot " + t.embodiment + " differs from " + first_ones + ", " + first.embodiment + ")"};
   }
   if (t.fps != first.fps) {
-    return {"fps", "fps " + std::to_string(t.fps) + " differs from the first episode's (" +
+    return {"fps", "fps " + std::to_string(t.fps) + " differs from " + first_ones + ", " +
                        std::to_string(first.fps) + ")"};
   }
   if (t.qpos_names != first.qpos_names)
-    return {"qpos_names", "joints differ from the first episode's"};
+    return {"qpos_names", "joints differ from " + first_ones + ")"};
   if (t.ctrl_names != first.ctrl_names || t.ctrl.empty() != first.ctrl.empty()) {
-    return {"ctrl_names", "actuators differ from the first episode's"};
+    return {"ctrl_names", "actuators differ from " + first_ones + ")"};
   }
   if (!object_poses_may_differ && t.object_poses.empty() != first.object_poses.empty()) {
     return {"object_poses", "object poses are present in one episode and not the other"};

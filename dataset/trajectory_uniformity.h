@@ -14,7 +14,9 @@ inline constexpr const char* kMixedTrajectories = "mixed_trajectories";
 
 // The field in which `t` differs from `first` ("embodiment", "fps",
 // "qpos_names", "ctrl_names", "object_poses", "reference_keypoints") with a
-// sentence saying how, or {"", ""} when they agree. With
+// sentence saying how, or {"", ""} when they agree. The sentence names
+// `first_clip`, the first episode's clip, so that both clips of the pair are
+// named whatever order the export reads them in. With
 // `object_poses_may_differ` (the LeRobot export, which leaves the object
 // feature out when any episode is hand-only) object poses are not compared.
 struct Mismatch {
@@ -23,6 +25,7 @@ struct Mismatch {
 };
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
                             const retarget::HandTrajectory& first,
+                            const std::string& first_clip,
                             bool object_poses_may_differ = false);
 
 }  // namespace doasido::dataset

@@ -239,6 +239,25 @@ void SourcesSection(const ReportData& d, std::string& h) {
   }
 }
 
+// The ladder of sampler presets: what each rung cost and what it saved.
+void RetargetSection(const RetargetLadderStats& r, std::string& h) {
+  if (r.empty()) return;
+  h += "<p id=\"retarget\"><b>Retargeting</b>: " + N(r.simulated) + " clips simulated, " +
+       N(r.succeeded) + " succeeded (" + Pct(r.succeeded, r.simulated) + "); " +
+       N(r.not_simulated) + " done without simulation (hand-only: the kinematic trajectory "
+       "kept). A clip runs the next rung only when the one before did not succeed.</p>";
+  if (r.rungs.empty()) return;
+  h += "<table id=\"rungs-table\"><tr><th class=\"l\">rung</th><th>clips run</th>"
+       "<th>succeeded there</th><th>kept</th><th>total s</th><th>mean s</th><th>max s</th></tr>";
+  for (const RungStats& s : r.rungs) {
+    h += "<tr><td class=\"l\">" + E(s.rung) + "</td><td>" + N(s.ran) + "</td><td>" +
+         N(s.succeeded) + "</td><td>" + N(s.kept) + "</td><td>" + Secs(s.seconds.total_s) +
+         "</td><td>" + Secs(s.seconds.mean_s) + "</td><td>" + Secs(s.seconds.max_s) +
+         "</td></tr>";
+  }
+  h += "</table>";
+}
+
 void RunsSection(const ReportData& d, std::string& h) {
   h += "<h2 id=\"runs\">Run statistics</h2><table id=\"runs-table\"><tr><th class=\"l\">stage"
        "</th><th>runs</th><th>done</th><th>failed</th><th>pending</th><th>running</th>"
@@ -266,6 +285,7 @@ void RunsSection(const ReportData& d, std::string& h) {
          N(dl.reused) + " reused, " + N(dl.local) + " local, " + N(dl.failed) + " failed " +
          ReasonList(dl.failures_by_reason) + "</p>";
   }
+  RetargetSection(d.retarget, h);
   bool any = false;
   for (const auto& s : d.runs) {
     if (s.failures.empty() && s.errors.empty()) continue;

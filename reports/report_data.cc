@@ -23,6 +23,7 @@ ReportData CollectReport(Database& db, const ReportOptions& options) {
   data.runs = ComputeRunStats(order, runs, db.CountEvents(), db.ListEvents({"retry", "failed"}, 0),
                               options.max_failures);
   data.downloads = ComputeDownloadStats(db, runs);
+  data.retarget = ComputeRetargetLadder(db, runs);
 
   ScoreCollector collector;
   for (const auto& stage : order) {

@@ -13,6 +13,7 @@
 #include "db/database.h"
 #include "reports/download_stats.h"
 #include "reports/funnel.h"
+#include "reports/retarget_ladder_stats.h"
 #include "reports/run_stats.h"
 #include "reports/score_histogram.h"
 #include "reports/source_breakdown.h"
@@ -52,6 +53,7 @@ struct ReportData {
   std::vector<SourceBreakdown> sources;
   std::vector<StageRunStats> runs;
   DownloadStats downloads;
+  RetargetLadderStats retarget;  // empty without done `retarget` runs
   std::map<ClipId, ClipOutcome> outcomes;
   std::vector<ClipRecord> clips;
   std::map<ClipId, std::string> videos;  // clip -> video path

@@ -303,6 +303,7 @@ Json ReportToJson(const ReportData& d) {
           {"sources", SourcesToJson(d.sources)},
           {"runs", RunsToJson(d.runs)},
           {"downloads", d.downloads.ToJson()},
+          {"retarget", d.retarget.ToJson()},
           {"thumbnails", ThumbnailsToJson(d.thumbnails)},
           {"notes", d.notes}};
 }

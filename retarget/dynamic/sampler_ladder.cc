@@ -6,10 +6,6 @@
 
 namespace doasido::retarget {
 
-std::string RungMeasurementKey(const std::string& rung, const std::string& what) {
-  return "rung_" + rung + "_" + what;
-}
-
 bool BetterTracking(const TrackingMetrics& a, const TrackingMetrics& b) {
   if (a.success != b.success) return a.success;
   const double ea = a.e_pos / kSuccessPosition + a.e_rot / kSuccessRotation;
@@ -21,7 +17,9 @@ bool BetterTracking(const TrackingMetrics& a, const TrackingMetrics& b) {
 void WriteLadderMeasurements(const std::vector<RungOutcome>& rungs, int best_rung, Json& m) {
   m[kMeasurementRung] = best_rung >= 0 ? rungs[best_rung].name : "";
   m[kMeasurementRungsRun] = rungs.size();
+  m[kMeasurementRungs] = Json::array();
   for (const RungOutcome& r : rungs) {
+    m[kMeasurementRungs].push_back(r.name);
     m[RungMeasurementKey(r.name, kRungSeconds)] = r.seconds;
     m[RungMeasurementKey(r.name, kMetricPositionError)] = r.metrics.e_pos;
     m[RungMeasurementKey(r.name, kMetricRotationError)] = r.metrics.e_rot;

@@ -15,6 +15,7 @@
 #include "core/config.h"
 #include "retarget/dynamic/annealed_sampler.h"
 #include "retarget/dynamic/retarget_metrics.h"
+#include "robot/trajectory/format.h"
 
 namespace doasido::retarget {
 
@@ -23,14 +24,8 @@ namespace doasido::retarget {
 inline constexpr const char* kLadderPreset = "ladder";
 inline constexpr const char* kSamplerRung = "sampler";
 
-// Measurement keys of the ladder (the `retarget` stage's): the rung whose
-// run was kept, how many rungs ran, and per rung that ran
-// RungMeasurementKey(rung, kRung...): its wall seconds, E_pos, E_rot, success.
-inline constexpr const char* kMeasurementRung = "rung";
-inline constexpr const char* kMeasurementRungsRun = "rungs_run";
-inline constexpr const char* kRungSeconds = "seconds";
-// "rung_<name>_<what>", what = kRungSeconds or a kMetric... key (format.h).
-std::string RungMeasurementKey(const std::string& rung, const std::string& what);
+// The ladder's measurement keys are in robot/trajectory/format.h (the
+// report reads them).
 
 struct RungOutcome {
   std::string name;

@@ -52,6 +52,19 @@ inline constexpr const char* kMetricPositionError = "e_pos";
 inline constexpr const char* kMetricRotationError = "e_rot";
 inline constexpr const char* kMetricSuccess = "success";
 
+// Measurement keys of the `retarget` stage's ladder of sampler presets
+// (retarget/dynamic/sampler_ladder.h): the rung whose run was kept, the
+// rungs that ran (names, in order) and how many, and per rung that ran
+// RungMeasurementKey(rung, what) with what = kRungSeconds (its wall time)
+// or a kMetric... key above.
+inline constexpr const char* kMeasurementRung = "rung";
+inline constexpr const char* kMeasurementRungs = "rungs";
+inline constexpr const char* kMeasurementRungsRun = "rungs_run";
+inline constexpr const char* kRungSeconds = "seconds";
+inline std::string RungMeasurementKey(const std::string& rung, const std::string& what) {
+  return "rung_" + rung + "_" + what;
+}
+
 using Keypoints21 = Eigen::Matrix<double, 21, 3, Eigen::RowMajor>;
 
 // The reference the dynamics-aware optimiser tracks.

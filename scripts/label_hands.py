@@ -31,7 +31,11 @@ Needs numpy and ffmpeg/ffprobe only (no OpenCV or PIL on the Debian image).
           percentile, in px and in hand boxes, per hand and over all pairs.
 
 Coordinates are pixels of the video as displayed (ffmpeg applies the
-rotation), frame numbers the decoded frame index from 0.
+rotation), frame numbers the decoded frame index from 0. VIDEO (and a label
+file's "video") is a file, a path under ../shared/data, "npm:<package>/<path>"
+in the npm folder or "<file>.rcc:/<path>", an entry of a Qt resource file
+(a photo, frame 0; hands/packaged_image.h reads the same); a cut-out
+picture's transparent pixels are shown over white.
 """
 import argparse
 import json

@@ -703,16 +703,19 @@ void PrintStills(const std::string& name, const StillScores& s) {
 }
 
 // The package a labelled photo comes from: an npm package's name, else the
-// folder the Debian package installed under /usr/share (or /usr/share/doc).
+// folder the Debian package installed under /usr/share (or /usr/share/doc),
+// and a Qt resource file's name (GCompris: one per activity).
 std::string PhotoSource(const std::string& video) {
   if (video.rfind("npm:", 0) == 0) return "npm " + video.substr(4, video.find('/', 4) - 4);
-  const std::filesystem::path path(video.substr(0, video.find(".rcc:")));
+  const auto rcc = video.find(".rcc:");
+  const std::filesystem::path path(video.substr(0, rcc == std::string::npos ? rcc : rcc + 4));
+  const std::string file = rcc == std::string::npos ? "" : " " + path.stem().string();
   bool next = false;
   for (const auto& part : path) {
-    if (next && part != "doc") return part.string();
+    if (next && part != "doc") return part.string() + file;
     next = next || part == "share";
   }
-  return path.parent_path().string();
+  return path.parent_path().string() + file;
 }
 
 // The photos labelled by hand (bench/hand_labels/photos/*.json) and their

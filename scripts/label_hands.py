@@ -31,7 +31,11 @@ Needs numpy and ffmpeg/ffprobe only (no OpenCV or PIL on the Debian image).
           percentile, in px and in hand boxes, per hand and over all pairs.
 
 Coordinates are pixels of the video as displayed (ffmpeg applies the
-rotation), frame numbers the decoded frame index from 0.
+rotation), frame numbers the decoded frame index from 0. VIDEO (and a label
+file's "video") is a file, a path under ../shared/data, "npm:<package>/<path>"
+in the npm folder or "<file>.rcc:/<path>", an entry of a Qt resource file
+(a photo, frame 0; hands/packaged_image.h reads the same); a cut-out
+picture's transparent pixels are shown over white.
 """
 import argparse
 import json
@@ -97,15 +101,19 @@ def read_frames(path, frames):
     expr = "+".join(f"eq(n\\,{f})" for f in want)
     out = subprocess.run(
         ["ffmpeg", "-v", "error", "-i", path, "-vf", f"select={expr}", "-fps_mode", "passthrough",
-         "-f", "rawvideo", "-pix_fmt", "rgb24", "-"], capture_output=True)
+         "-f", "rawvideo", "-pix_fmt", "rgba", "-"], capture_output=True)
     if out.returncode != 0:
         fail(f"{path}: ffmpeg cannot decode it: {out.stderr.decode().strip()}")
-    size = w * h * 3
+    size = w * h * 4
     got = len(out.stdout) // size
     if got != len(want):
         fail(f"{path}: asked for frames {want}, decoded {got} (past the end?)")
-    arr = np.frombuffer(out.stdout, np.uint8).reshape(got, h, w, 3)
-    return {f: arr[i].copy() for i, f in enumerate(want)}
+    arr = np.frombuffer(out.stdout, np.uint8).reshape(got, h, w, 4).astype(np.uint32)
+    # A cut-out photo's transparent pixels hold anything: over white, as shown
+    # (hands/packaged_image.h does the same).
+    a = arr[..., 3:]
+    rgb = ((arr[..., :3] * a + 255 * (255 - a) + 127) // 255).astype(np.uint8)
+    return {f: rgb[i].copy() for i, f in enumerate(want)}
 
 
 def write_png(path, img):
@@ -214,7 +222,50 @@ def shrink(img, factor):
 
 # ---------------------------------------------------------------- commands
 
+def npm_dir():
+    return os.environ.get("DOASIDO_NPM_DIR") or os.path.expanduser("~/.cache/doasido/npm")
+
+
+def rcc_entry(file, path):
+    """The bytes of entry `path` of a Qt resource file (hands/packaged_image.cc
+    reads the same format: big-endian header, tree, data and names)."""
+    with open(file, "rb") as f:
+        b = f.read()
+    if b[:4] != b"qres":
+        fail(f"{file}: not a Qt resource file")
+    version, tree, data, names = struct.unpack(">IIII", b[4:20])
+    size = 22 if version >= 2 else 14
+
+    def name(i):
+        o = names + struct.unpack(">I", b[tree + i * size:tree + i * size + 4])[0]
+        n = struct.unpack(">H", b[o:o + 2])[0]
+        return b[o + 6:o + 6 + 2 * n].decode("utf-16-be")
+    node = 0
+    for part in [p for p in path.split("/") if p]:
+        o = tree + node * size
+        count, first = struct.unpack(">II", b[o + 6:o + 14])
+        node = next((c for c in range(first, first + count) if name(c) == part), None)
+        if node is None:
+            fail(f"{file}: no entry {path}")
+    o = tree + node * size
+    if struct.unpack(">H", b[o + 4:o + 6])[0] & 7:
+        fail(f"{file}: {path} is a directory or compressed")
+    d = data + struct.unpack(">I", b[o + 10:o + 14])[0]
+    return b[d + 4:d + 4 + struct.unpack(">I", b[d:d + 4])[0]]
+
+
 def resolve_video(video):
+    """A path ffmpeg reads: a file, one under ../shared/data, "npm:<package>/<path>"
+    in the npm folder, or "<file>.rcc:/<path>" copied out of a Qt resource file."""
+    if video.startswith("npm:"):
+        return os.path.join(npm_dir(), "node_modules", video[4:])
+    if ".rcc:" in video:
+        file, path = video.split(".rcc:", 1)
+        out = os.path.join("/tmp", "label_hands_rcc", path.lstrip("/"))
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        with open(out, "wb") as f:
+            f.write(rcc_entry(file + ".rcc", path))
+        return out
     return video if os.path.exists(video) else os.path.join(DATA, video)
 
 
@@ -341,9 +392,9 @@ def check_file(file, a):
         if field not in labels:
             print(f"error: {file}: field {field} is missing")
             return False
-    path = os.path.join(DATA, labels["video"])
+    path = resolve_video(labels["video"])
     if not os.path.exists(path):
-        print(f"error: {file}: video {labels['video']} is not in {DATA}")
+        print(f"error: {file}: video {labels['video']} is not in {DATA} (or not installed)")
         return False
     w, h = video_size(path)
     errors, warnings = [], []

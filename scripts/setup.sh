@@ -40,8 +40,10 @@ TEST_PACKAGES=(
   # imageio's two test videos; zlib reads opencv-doc's gzipped ones.
   # opencv-doc's tutorial hand photos (handSrc.jpg, Histogram_Comparison_
   # Source_*.jpg, Hull_Original_Image.jpg) are the real photos labelled by
-  # hand in bench/hand_labels/photos/ (the hands' still-image tests and bench).
-  opencv-doc python3-imageio
+  # hand in bench/hand_labels/photos/ (the hands' still-image tests and bench),
+  # with GCompris's left/right hand pictures (gcompris-qt-data, 44 MB; read
+  # out of its Qt resource file, hands/packaged_image.h).
+  opencv-doc python3-imageio gcompris-qt-data
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js
@@ -51,12 +53,13 @@ TEST_PACKAGES=(
 # the tests read those files back with (test set); MediaPipe Hands' models and the
 # TFLite WebAssembly runtime that runs them for the learned hand detector
 # (filters/hand_landmarker.h; tfjs-core at the version tfjs-tflite asks for);
-# MediaPipe Objectron's models for the objects stage (objects/objectron_models.h).
+# MediaPipe Objectron's models for the objects stage (objects/objectron_models.h);
+# fingerpose's three photos of a hand (test set; bench/hand_labels/photos/).
 # Nothing is fetched at build or run time.
 NPM_PACKAGES=(three@0.160.0 @duckdb/node-bindings-linux-x64@1.5.6-r.1
   @mediapipe/hands@0.4.1675469240 @tensorflow/tfjs-tflite@0.0.1-alpha.10
   @tensorflow/tfjs-core@4.9.0 @tensorflow/tfjs-backend-cpu@4.9.0 @mediapipe/objectron@0.4.1675468480)
-TEST_NPM_PACKAGES=(hyparquet@1.31.5)
+TEST_NPM_PACKAGES=(hyparquet@1.31.5 fingerpose@0.1.0)
 
 case "${1:-}" in
   --test) PACKAGES+=("${TEST_PACKAGES[@]}"); NPM_PACKAGES+=("${TEST_NPM_PACKAGES[@]}") ;;

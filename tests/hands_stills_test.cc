@@ -1,7 +1,7 @@
 // Hands in still images (issue 54): a close-up where the hand fills most
 // of the frame and grayscale images are found, with the side and the
-// keypoints of their hand-made labels (bench/hand_labels/: a real photo
-// from Debian's opencv-doc, and a close-up crop of a labelled real video
+// keypoints of their hand-made labels (bench/hand_labels/: real photos
+// from Debian's opencv-doc and gcompris-qt-data and npm's fingerpose, and a close-up crop of a labelled real video
 // frame with its labels moved by the crop, hands/labelled_stills.h); and
 // the hand models' graphs are built once per process, not per landmarker
 // or thread (filters/hand_models.h: the start-up tax).
@@ -68,6 +68,19 @@ TEST_F(HandStills, RealCloseUpPhotoAndGrayPhotoAreFound) {
   const auto open = PhotoStills(photos / "Histogram_Comparison_Source_0.json");
   ASSERT_EQ(open.at(1).image.channels(), 1);
   ExpectFound(open.at(1), 0.8);
+}
+
+// Photos that packages install elsewhere (hands/packaged_image.h):
+// GCompris's back of a left hand, cut out on white inside a Qt resource
+// file (gcompris-qt-data), in gray (the palm detector alone misses it), and
+// fingerpose's right hand pointing up, the other fingers curled (npm). In
+// gray the models call fingerpose's hand left (docs/benchmarks.md).
+TEST_F(HandStills, PackagedPhotosAreFound) {
+  const fs::path photos = testing::SourceDir() / "bench/hand_labels/photos";
+  const auto gcompris = PhotoStills(photos / "gcompris_main_gauche_dessus_0.json");
+  ASSERT_EQ(gcompris.at(1).image.channels(), 1);
+  ExpectFound(gcompris.at(1), 0.8);
+  ExpectFound(PhotoStills(photos / "fingerpose_nocurl.json").at(0), 0.8);
 }
 
 // asl_hand frame 0 (one right hand, labelled) cropped so that the hand's

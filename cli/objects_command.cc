@@ -14,8 +14,12 @@
 #include "core/error.h"
 #include "core/whole_output.h"
 #include "core/progress.h"
-#include "objects/box_keypoints_json.h"
+#include "filters/hand_landmarker.h"
+#include "hands/hand_detection.h"
+#include "hands/hand_intrinsics.h"
+#include "hands/hands_config.h"
 #include "objects/box_overlay.h"
+#include "objects/objects_file.h"
 #include "objects/objects_in_video.h"
 #include "video/mp4_writer.h"
 
@@ -30,8 +34,30 @@ struct ObjectsOptions {
   std::string out;
   bool overlay = false;
   std::vector<std::string> seeds;  // FRAME:X,Y,W,H[:CATEGORY]
-  BoxKeypointsConfig config;
+  bool near_hands = false;
+  double fov_deg = hands::HandsConfig{}.default_fov_deg;
+  ObjectsConfig lifting;  // its `models` is the tracker's configuration
+  BoxKeypointsConfig& config = lifting.models;
 };
+
+// The hand landmarker's hands of every frame of a video (or of an image),
+// for the boxes tried beside the fingers.
+HandsByFrame FindHands(const fs::path& input, const cv::Mat* still) {
+  filters::HandLandmarker landmarker({.max_hands = 2, .clip = input.stem().string()});
+  const hands::DetectedFrames found =
+      still ? hands::DetectImage(*still, landmarker)
+            : hands::DetectVideo(input, DecoderOptions{.clip = input.stem().string()}, 640, landmarker);
+  HandsByFrame out;
+  for (std::size_t i = 0; i < found.frames.size(); ++i) {
+    auto& list = out[found.first_frame + static_cast<std::int64_t>(i)];
+    for (const hands::HandObservation& h : found.frames[i]) {
+      HandPoints2d p;
+      for (int k = 0; k < kHandPoints; ++k) p[k] = h.uv[k];
+      list.push_back(p);
+    }
+  }
+  return out;
+}
 
 // "FRAME:X,Y,W,H[:CATEGORY]" (pixels of the input as displayed).
 SeedBox ParseSeed(const std::string& text) {
@@ -79,18 +105,18 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<Se
   if (image) {
     still = cv::imread(input.string(), cv::IMREAD_COLOR);
     if (still.empty()) throw Error("image_unreadable", "cannot decode the image", {.file = input.string()});
-    detected = ObjectsInImage(still, tracker, seeds);
+  }
+  const HandsByFrame hands = o.near_hands ? FindHands(input, image ? &still : nullptr) : HandsByFrame{};
+  if (image) {
+    detected = ObjectsInImage(still, tracker, seeds, o.near_hands ? &hands : nullptr);
   } else {
     Progress progress(stem, 0);
     detected = ObjectsInVideo(input, DecoderOptions{.clip = stem}, o.config.max_side, tracker,
                               [&](std::int64_t done) { progress.Set(static_cast<std::uint64_t>(done)); },
-                              seeds);
+                              seeds, o.near_hands ? &hands : nullptr);
   }
-  Json objects = ObjectsJson(detected);
-  // The one place the 3D lifting plugs in (issue 52's geometry half: EPnP on
-  // the corners, metric scale from the hand or a category prior): it adds
-  // center_camera, rotation_camera, size_m and scale_assumed to each entry
-  // of objects["frames"][i]["objects"]. Until then the file holds 2D only.
+  Json objects =
+      ObjectsFileJson(detected, hands::KFromFov(detected.width, detected.height, o.fov_deg), o.lifting);
   objects["input"] = fs::absolute(input).string();
   const fs::path json_path = fs::path(o.out) / (stem + ".json");
   WriteFileWhole(json_path, objects.dump() + "\n");
@@ -118,7 +144,7 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<Se
 }
 
 void RunObjects(const ObjectsOptions& o) {
-  CheckConfig(o.config, "objects");
+  CheckConfig(o.lifting, "objects");
   std::map<std::string, std::string> seen;  // two inputs with one stem would write one file
   for (const std::string& input : o.inputs) {
     auto [it, fresh] = seen.emplace(fs::path(input).stem().string(), input);
@@ -168,6 +194,12 @@ void AddObjectsCommand(CLI::App& app) {
   cmd->add_option("--seed", o->seeds,
                   "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given): an object the detector may\n"
                   "miss, boxed by hand on one frame (pixels of the input); tracked from there");
+  cmd->add_flag("--near-hands", o->near_hands,
+                "Also find the hands (MediaPipe Hands) and try boxes beside their fingers with the\n"
+                "box-landmark models: finds held objects the 2D detector misses (02_cups' cups)");
+  cmd->add_option("--fov", o->fov_deg, "Horizontal field of view of the camera, degrees (for the 3D lifting)")
+      ->check(CLI::Range(1.0, 179.0))
+      ->capture_default_str();
   cmd->add_flag("--overlay", o->overlay,
                 "Also draw the boxes: <stem>.overlay.mp4 for a video, <stem>.overlay.png for an image");
   cmd->footer(

@@ -36,10 +36,20 @@ struct BoxKeypointsConfig {
   // enlarged this much and squared on its long side.
   double crop_scale = 1.5;
   int max_side = 640;  // frames are decoded at most this large for the models
+  // Boxes beside a hand's fingers (objects/hand_proposals.h), tried with
+  // the box-landmark model of each category when hands are given
+  // (BoxTracker::NearHands), every hand_proposal_every-th frame while that
+  // hand holds no tracked object: for the objects the detector misses.
+  bool hand_proposals = true;
+  int hand_proposal_every = 10;
+  std::vector<double> hand_proposal_sizes = {1.6, 2.4};  // box sides, palm lengths
+  double hand_proposal_offset = 0.5;                     // grid step, palm lengths
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,
-                                                same_object_iou, min_presence, crop_scale, max_side)
+                                                same_object_iou, min_presence, crop_scale, max_side,
+                                                hand_proposals, hand_proposal_every, hand_proposal_sizes,
+                                                hand_proposal_offset)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);

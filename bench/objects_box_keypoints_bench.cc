@@ -223,8 +223,8 @@ int Find(const std::filesystem::path& path, int held_from, const std::vector<dou
   objects::ObjectronModels models({"cup"}, video.stem().string());
   Tally det[2][3], alone[2], tracked[2];
   const double thresholds[3] = {0.5, 0.2, 0.05};
-  std::vector<float> scores;  // each labelled cup's best detector score
   int near_hand[2] = {0, 0};
+  config.hand_proposals = true;
   config.hand_proposal_every = 1;
   objects::BoxTracker single(config, video.stem().string());
   for (const Json& frame : labels.at("frames")) {

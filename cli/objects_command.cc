@@ -1,5 +1,6 @@
-// doasido objects: the objects' 2D box keypoints on files, no database. Each
-// video or still image gets <out>/<stem>.json (objects/box_keypoints_json.h)
+// doasido objects: the objects on files, no database. Each video or still
+// image gets <out>/<stem>.json (objects/objects_file.h: the box keypoints and
+// the lifted pose and size)
 // and, with --overlay, <stem>.overlay.mp4 or <stem>.overlay.png with the
 // boxes drawn. A bad input is reported by name and the others still run.
 #include <cstdio>
@@ -143,7 +144,8 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<Se
   std::fflush(stdout);
 }
 
-void RunObjects(const ObjectsOptions& o) {
+void RunObjects(ObjectsOptions& o) {
+  o.config.hand_proposals = o.near_hands;
   CheckConfig(o.lifting, "objects");
   std::map<std::string, std::string> seen;  // two inputs with one stem would write one file
   for (const std::string& input : o.inputs) {
@@ -181,7 +183,8 @@ void AddObjectsCommand(CLI::App& app) {
       "Find objects in videos or still images without a database: MediaPipe Objectron's 2D\n"
       "detector (SSD MobileNetV2, Open Images) and its box-landmark models for cups and mugs,\n"
       "shoes, chairs and cameras, run natively; one track per object with a fixed category,\n"
-      "the 9 keypoints of its 3D bounding box in the image. Writes <out>/<stem>.json per input.");
+      "the 9 keypoints of its 3D bounding box in the image, lifted to a pose and size in the\n"
+      "camera frame. Writes <out>/<stem>.json per input.");
   cmd->add_option("inputs", o->inputs, "Videos (any format ffmpeg reads) or images (PNG, JPEG, ...)")
       ->required();
   cmd->add_option("--out", o->out, "Output folder (created)")->required();
@@ -203,19 +206,25 @@ void AddObjectsCommand(CLI::App& app) {
   cmd->add_flag("--overlay", o->overlay,
                 "Also draw the boxes: <stem>.overlay.mp4 for a video, <stem>.overlay.png for an image");
   cmd->footer(
-      "The JSON: {\"frames\": [{\"frame\": i, \"objects\": [{\"category\", \"score\", \"track\",\n"
-      "\"keypoints_2d\": [[x, y] x 9]}]}]}, keypoint 0 the box centre and 1-8 its corners in the\n"
-      "order of MediaPipe's objectron.py (1 back-bottom-left, 2 front-bottom-left, 3 back-top-left,\n"
-      "4 front-top-left, 5-8 the same on the right), pixels of the input as displayed; score is\n"
-      "the box-landmark model's presence (a box is kept at >= 0.99). 2D only for now: the 3D\n"
-      "fields (center_camera, rotation_camera, size_m, scale_assumed) come with the lifting.\n"
+      "The JSON: {\"width\", \"height\", \"fps\", \"first_frame\", \"K\", \"tracks\", \"frames\": [{\"frame\": i,\n"
+      "\"objects\": [{\"category\", \"score\", \"track\", \"keypoints_2d\": [[x, y] x 9], \"center_camera\":\n"
+      "[x, y, z], \"rotation_camera\": [[3 x 3]], \"size_m\": [x, y, z], \"scale_assumed\", ...}]}]},\n"
+      "keypoint 0 the box centre and 1-8 its corners in the order of MediaPipe's objectron.py\n"
+      "(1 back-bottom-left, 2 front-bottom-left, 3 back-top-left, 4 front-top-left, 5-8 the same\n"
+      "on the right), pixels of the input as displayed; score is the box-landmark model's presence\n"
+      "(a box is kept at >= 0.99). The 3D fields: EPnP on the corners, one smoothing per track, in\n"
+      "the camera frame (x right, y down, z forward; metres) of a camera of --fov; with no hands\n"
+      "in 3D here the size is the category's prior (scale_assumed true; the objects stage sizes\n"
+      "it by the touching hand). Frames the fit filled have keypoints_2d null (docs/objects.md).\n"
       "The models are the npm package @mediapipe/objectron (scripts/setup.sh installs it).\n"
       "The 2D detector does not find every object of its categories (02_cups' red plastic cups:\n"
-      "no cup score above 0.2): --seed starts a track where a person boxed the object.\n\n"
+      "no cup score above 0.2): --seed starts a track where a person boxed the object;\n"
+      "--near-hands tries boxes beside the fingers (rough boxes, and hands alone can pass).\n\n"
       "Example:\n"
       "  doasido objects clips/cups.mp4 photos/mug.jpg --out work/objects --overlay\n"
       "  # work/objects/cups.json, cups.overlay.mp4, mug.json, mug.overlay.png\n"
-      "  doasido objects clips/cups.mp4 --seed 0:570,290,170,255 --out work/objects");
+      "  doasido objects clips/cups.mp4 --seed 0:570,290,170,255 --out work/objects\n"
+      "  doasido objects clips/held_cup.mp4 --near-hands --fov 60 --out work/objects");
   cmd->callback([o] { RunObjects(*o); });
 }
 

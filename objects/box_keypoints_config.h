@@ -47,12 +47,17 @@ struct BoxKeypointsConfig {
   int hand_proposal_every = 10;
   std::vector<double> hand_proposal_sizes = {1.6, 2.4};  // box sides, palm lengths
   double hand_proposal_offset = 0.5;                     // grid step, palm lengths
+  // A box found beside a hand continues the track of that category lost
+  // within this many frames whose last box's centre it lies near (within
+  // the lost box enlarged twice): a held object stays one track while the
+  // model loses and finds it again.
+  int hand_rejoin_frames = 30;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,
                                                 same_object_iou, min_presence, crop_scale, max_side,
                                                 hand_proposals, hand_proposal_every, hand_proposal_sizes,
-                                                hand_proposal_offset)
+                                                hand_proposal_offset, hand_rejoin_frames)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);

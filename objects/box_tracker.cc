@@ -77,6 +77,7 @@ void BoxTracker::Reset() {
   tracks_.clear();
   seeds_.clear();
   hands_.clear();
+  lost_.clear();
   since_detection_ = -1;
   since_proposals_ = -1;
 }
@@ -84,11 +85,28 @@ void BoxTracker::Reset() {
 void BoxTracker::NearHands(std::vector<HandPoints2d> hands) { hands_ = std::move(hands); }
 
 void BoxTracker::Adopt(ObjectObservation seen, std::vector<Tracked>* kept,
-                       std::vector<ObjectObservation>* found) {
-  seen.track = next_id_++;
+                       std::vector<ObjectObservation>* found, int id) {
+  seen.track = id >= 0 ? id : next_id_++;
   kept->push_back({seen.track, seen.category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
                    Extent(seen.keypoints_2d)});
   found->push_back(seen);
+}
+
+int BoxTracker::Rejoin(const ObjectObservation& seen) {
+  const cv::Rect2d e = Extent(seen.keypoints_2d);
+  const cv::Point2d c(e.x + e.width / 2, e.y + e.height / 2);
+  for (auto it = lost_.begin(); it != lost_.end(); ++it) {
+    const cv::Rect2d near(it->extent.x - it->extent.width / 2, it->extent.y - it->extent.height / 2,
+                          2 * it->extent.width, 2 * it->extent.height);
+    if (it->category != seen.category || seen.frame - it->frame > config_.hand_rejoin_frames ||
+        !near.contains(c)) {
+      continue;
+    }
+    const int id = it->id;
+    lost_.erase(it);
+    return id;
+  }
+  return -1;
 }
 
 void BoxTracker::ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
@@ -120,7 +138,7 @@ void BoxTracker::ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tra
     }
     bool duplicate = false;
     for (const Tracked& t : *kept) duplicate |= BoxIoU(t.extent, Extent(best.keypoints_2d)) > config_.same_object_iou;
-    if (!duplicate) Adopt(best, kept, found);
+    if (!duplicate) Adopt(best, kept, found, Rejoin(best));
   }
 }
 
@@ -194,6 +212,7 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
   } else {
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   }
+  std::erase_if(lost_, [&](const Lost& l) { return frame - l.frame > config_.hand_rejoin_frames; });
   std::vector<ObjectObservation> found;
   std::vector<Tracked> kept;
   bool lost = false;
@@ -201,6 +220,7 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
     ObjectObservation seen{.frame = frame, .track = t.id};
     if (!Landmarks(rgb, t.category, t.next, &seen)) {
       lost = true;
+      lost_.push_back({t.id, t.category, t.extent, frame});
       continue;
     }
     const cv::Rect2d extent = Extent(seen.keypoints_2d);

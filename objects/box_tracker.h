@@ -105,8 +105,12 @@ class BoxTracker {
   // Tries the boxes beside each of hands_ (pixels of `rgb`).
   void ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
                         std::vector<ObjectObservation>* found);
-  // Starts a track from an observation the model already made on a crop.
-  void Adopt(ObjectObservation seen, std::vector<Tracked>* kept, std::vector<ObjectObservation>* found);
+  // Starts a track from an observation the model already made on a crop,
+  // as track `id` (< 0: a new one).
+  void Adopt(ObjectObservation seen, std::vector<Tracked>* kept, std::vector<ObjectObservation>* found,
+             int id = -1);
+  // The lost track a box beside a hand continues (hand_rejoin_frames), or -1.
+  int Rejoin(const ObjectObservation& seen);
 
   BoxKeypointsConfig config_;
   std::string clip_;
@@ -117,6 +121,13 @@ class BoxTracker {
   int since_detection_ = -1;  // frames since the detector ran; -1: not yet (it runs first)
   std::vector<HandPoints2d> hands_;  // for the next Track(), pixels of the (shrunk) frame
   int since_proposals_ = -1;         // frames since boxes were tried beside hands; -1: not yet
+  struct Lost {
+    int id = 0;
+    std::string category;
+    cv::Rect2d extent;  // its last box, pixels of the (shrunk) frame
+    int frame = 0;
+  };
+  std::vector<Lost> lost_;  // tracks lost within hand_rejoin_frames
   std::vector<float> input_;
 };
 

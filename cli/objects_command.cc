@@ -199,7 +199,8 @@ void AddObjectsCommand(CLI::App& app) {
                   "miss, boxed by hand on one frame (pixels of the input); tracked from there");
   cmd->add_flag("--near-hands", o->near_hands,
                 "Also find the hands (MediaPipe Hands) and try boxes beside their fingers with the\n"
-                "box-landmark models: finds held objects the 2D detector misses (02_cups' cups)");
+                "box-landmark models: some held objects the 2D detector misses, as rough boxes; a bare\n"
+                "hand can pass as a cup (docs/object_models.md)");
   cmd->add_option("--fov", o->fov_deg, "Horizontal field of view of the camera, degrees (for the 3D lifting)")
       ->check(CLI::Range(1.0, 179.0))
       ->capture_default_str();

@@ -50,8 +50,10 @@ struct BoxKeypointsConfig {
   // A box found beside a hand continues the track of that category lost
   // within this many frames whose last box's centre it lies near (within
   // the lost box enlarged twice): a held object stays one track while the
-  // model loses and finds it again.
-  int hand_rejoin_frames = 30;
+  // model loses and finds it again. 0 (off) by default: on cup.mp4 30 made
+  // one 60-frame track of the rough boxes, and dynamics retargeting did
+  // worse on it than on the 35-frame one (docs/objects.md).
+  int hand_rejoin_frames = 0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,

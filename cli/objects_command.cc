@@ -1,5 +1,6 @@
-// doasido objects: the objects' 2D box keypoints on files, no database. Each
-// video or still image gets <out>/<stem>.json (objects/box_keypoints_json.h)
+// doasido objects: the objects on files, no database. Each video or still
+// image gets <out>/<stem>.json (objects/objects_file.h: the box keypoints and
+// the lifted pose and size)
 // and, with --overlay, <stem>.overlay.mp4 or <stem>.overlay.png with the
 // boxes drawn. A bad input is reported by name and the others still run.
 #include <cstdio>
@@ -14,8 +15,12 @@
 #include "core/error.h"
 #include "core/whole_output.h"
 #include "core/progress.h"
-#include "objects/box_keypoints_json.h"
+#include "filters/hand_landmarker.h"
+#include "hands/hand_detection.h"
+#include "hands/hand_intrinsics.h"
+#include "hands/hands_config.h"
 #include "objects/box_overlay.h"
+#include "objects/objects_file.h"
 #include "objects/objects_in_video.h"
 #include "video/mp4_writer.h"
 
@@ -30,8 +35,30 @@ struct ObjectsOptions {
   std::string out;
   bool overlay = false;
   std::vector<std::string> seeds;  // FRAME:X,Y,W,H[:CATEGORY]
-  BoxKeypointsConfig config;
+  bool near_hands = false;
+  double fov_deg = hands::HandsConfig{}.default_fov_deg;
+  ObjectsConfig lifting;  // its `models` is the tracker's configuration
+  BoxKeypointsConfig& config = lifting.models;
 };
+
+// The hand landmarker's hands of every frame of a video (or of an image),
+// for the boxes tried beside the fingers.
+HandsByFrame FindHands(const fs::path& input, const cv::Mat* still) {
+  filters::HandLandmarker landmarker({.max_hands = 2, .clip = input.stem().string()});
+  const hands::DetectedFrames found =
+      still ? hands::DetectImage(*still, landmarker)
+            : hands::DetectVideo(input, DecoderOptions{.clip = input.stem().string()}, 640, landmarker);
+  HandsByFrame out;
+  for (std::size_t i = 0; i < found.frames.size(); ++i) {
+    auto& list = out[found.first_frame + static_cast<std::int64_t>(i)];
+    for (const hands::HandObservation& h : found.frames[i]) {
+      HandPoints2d p;
+      for (int k = 0; k < kHandPoints; ++k) p[k] = h.uv[k];
+      list.push_back(p);
+    }
+  }
+  return out;
+}
 
 // "FRAME:X,Y,W,H[:CATEGORY]" (pixels of the input as displayed).
 SeedBox ParseSeed(const std::string& text) {
@@ -79,18 +106,18 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<Se
   if (image) {
     still = cv::imread(input.string(), cv::IMREAD_COLOR);
     if (still.empty()) throw Error("image_unreadable", "cannot decode the image", {.file = input.string()});
-    detected = ObjectsInImage(still, tracker, seeds);
+  }
+  const HandsByFrame hands = o.near_hands ? FindHands(input, image ? &still : nullptr) : HandsByFrame{};
+  if (image) {
+    detected = ObjectsInImage(still, tracker, seeds, o.near_hands ? &hands : nullptr);
   } else {
     Progress progress(stem, 0);
     detected = ObjectsInVideo(input, DecoderOptions{.clip = stem}, o.config.max_side, tracker,
                               [&](std::int64_t done) { progress.Set(static_cast<std::uint64_t>(done)); },
-                              seeds);
+                              seeds, o.near_hands ? &hands : nullptr);
   }
-  Json objects = ObjectsJson(detected);
-  // The one place the 3D lifting plugs in (issue 52's geometry half: EPnP on
-  // the corners, metric scale from the hand or a category prior): it adds
-  // center_camera, rotation_camera, size_m and scale_assumed to each entry
-  // of objects["frames"][i]["objects"]. Until then the file holds 2D only.
+  Json objects =
+      ObjectsFileJson(detected, hands::KFromFov(detected.width, detected.height, o.fov_deg), o.lifting);
   objects["input"] = fs::absolute(input).string();
   const fs::path json_path = fs::path(o.out) / (stem + ".json");
   WriteFileWhole(json_path, objects.dump() + "\n");
@@ -117,8 +144,9 @@ void RunOne(const fs::path& input, const ObjectsOptions& o, const std::vector<Se
   std::fflush(stdout);
 }
 
-void RunObjects(const ObjectsOptions& o) {
-  CheckConfig(o.config, "objects");
+void RunObjects(ObjectsOptions& o) {
+  o.config.hand_proposals = o.near_hands;
+  CheckConfig(o.lifting, "objects");
   std::map<std::string, std::string> seen;  // two inputs with one stem would write one file
   for (const std::string& input : o.inputs) {
     auto [it, fresh] = seen.emplace(fs::path(input).stem().string(), input);
@@ -155,7 +183,8 @@ void AddObjectsCommand(CLI::App& app) {
       "Find objects in videos or still images without a database: MediaPipe Objectron's 2D\n"
       "detector (SSD MobileNetV2, Open Images) and its box-landmark models for cups and mugs,\n"
       "shoes, chairs and cameras, run natively; one track per object with a fixed category,\n"
-      "the 9 keypoints of its 3D bounding box in the image. Writes <out>/<stem>.json per input.");
+      "the 9 keypoints of its 3D bounding box in the image, lifted to a pose and size in the\n"
+      "camera frame. Writes <out>/<stem>.json per input.");
   cmd->add_option("inputs", o->inputs, "Videos (any format ffmpeg reads) or images (PNG, JPEG, ...)")
       ->required();
   cmd->add_option("--out", o->out, "Output folder (created)")->required();
@@ -168,22 +197,35 @@ void AddObjectsCommand(CLI::App& app) {
   cmd->add_option("--seed", o->seeds,
                   "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given): an object the detector may\n"
                   "miss, boxed by hand on one frame (pixels of the input); tracked from there");
+  cmd->add_flag("--near-hands", o->near_hands,
+                "Also find the hands (MediaPipe Hands) and try boxes beside their fingers with the\n"
+                "box-landmark models: some held objects the 2D detector misses, as rough boxes; a bare\n"
+                "hand can pass as a cup (docs/object_models.md)");
+  cmd->add_option("--fov", o->fov_deg, "Horizontal field of view of the camera, degrees (for the 3D lifting)")
+      ->check(CLI::Range(1.0, 179.0))
+      ->capture_default_str();
   cmd->add_flag("--overlay", o->overlay,
                 "Also draw the boxes: <stem>.overlay.mp4 for a video, <stem>.overlay.png for an image");
   cmd->footer(
-      "The JSON: {\"frames\": [{\"frame\": i, \"objects\": [{\"category\", \"score\", \"track\",\n"
-      "\"keypoints_2d\": [[x, y] x 9]}]}]}, keypoint 0 the box centre and 1-8 its corners in the\n"
-      "order of MediaPipe's objectron.py (1 back-bottom-left, 2 front-bottom-left, 3 back-top-left,\n"
-      "4 front-top-left, 5-8 the same on the right), pixels of the input as displayed; score is\n"
-      "the box-landmark model's presence (a box is kept at >= 0.99). 2D only for now: the 3D\n"
-      "fields (center_camera, rotation_camera, size_m, scale_assumed) come with the lifting.\n"
+      "The JSON: {\"width\", \"height\", \"fps\", \"first_frame\", \"K\", \"tracks\", \"frames\": [{\"frame\": i,\n"
+      "\"objects\": [{\"category\", \"score\", \"track\", \"keypoints_2d\": [[x, y] x 9], \"center_camera\":\n"
+      "[x, y, z], \"rotation_camera\": [[3 x 3]], \"size_m\": [x, y, z], \"scale_assumed\", ...}]}]},\n"
+      "keypoint 0 the box centre and 1-8 its corners in the order of MediaPipe's objectron.py\n"
+      "(1 back-bottom-left, 2 front-bottom-left, 3 back-top-left, 4 front-top-left, 5-8 the same\n"
+      "on the right), pixels of the input as displayed; score is the box-landmark model's presence\n"
+      "(a box is kept at >= 0.99). The 3D fields: EPnP on the corners, one smoothing per track, in\n"
+      "the camera frame (x right, y down, z forward; metres) of a camera of --fov; with no hands\n"
+      "in 3D here the size is the category's prior (scale_assumed true; the objects stage sizes\n"
+      "it by the touching hand). Frames the fit filled have keypoints_2d null (docs/objects.md).\n"
       "The models are the npm package @mediapipe/objectron (scripts/setup.sh installs it).\n"
       "The 2D detector does not find every object of its categories (02_cups' red plastic cups:\n"
-      "no cup score above 0.2): --seed starts a track where a person boxed the object.\n\n"
+      "no cup score above 0.2): --seed starts a track where a person boxed the object;\n"
+      "--near-hands tries boxes beside the fingers (rough boxes, and hands alone can pass).\n\n"
       "Example:\n"
       "  doasido objects clips/cups.mp4 photos/mug.jpg --out work/objects --overlay\n"
       "  # work/objects/cups.json, cups.overlay.mp4, mug.json, mug.overlay.png\n"
-      "  doasido objects clips/cups.mp4 --seed 0:570,290,170,255 --out work/objects");
+      "  doasido objects clips/cups.mp4 --seed 0:570,290,170,255 --out work/objects\n"
+      "  doasido objects clips/held_cup.mp4 --near-hands --fov 60 --out work/objects");
   cmd->callback([o] { RunObjects(*o); });
 }
 

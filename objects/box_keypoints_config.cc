@@ -22,6 +22,14 @@ void CheckConfig(const BoxKeypointsConfig& c, const std::string& section) {
   RequireInRange(section, "min_presence", c.min_presence, 0, 1);
   RequireInRange(section, "crop_scale", c.crop_scale, 1, 4);
   RequireInRange(section, "max_side", c.max_side, 128, 4096);
+  RequireInRange(section, "hand_proposal_every", c.hand_proposal_every, 1, 1000);
+  RequireInRange(section, "hand_proposal_offset", c.hand_proposal_offset, 0, 2);
+  RequireInRange(section, "hand_rejoin_frames", c.hand_rejoin_frames, 0, 1000);
+  if (c.hand_proposal_sizes.empty()) {
+    throw Error("bad_config", section + ".hand_proposal_sizes must hold at least one size",
+                {.field = section + ".hand_proposal_sizes"});
+  }
+  for (double size : c.hand_proposal_sizes) RequireInRange(section, "hand_proposal_sizes", size, 0.5, 8.0);
 }
 
 }  // namespace doasido::objects

@@ -36,10 +36,30 @@ struct BoxKeypointsConfig {
   // enlarged this much and squared on its long side.
   double crop_scale = 1.5;
   int max_side = 640;  // frames are decoded at most this large for the models
+  // Boxes beside a hand's fingers (objects/hand_proposals.h), tried with
+  // the box-landmark model of each category when hands are given
+  // (BoxTracker::NearHands), every hand_proposal_every-th frame while that
+  // hand holds no tracked object: for the objects the detector misses.
+  // Off by default: the cup model's presence passes 0.99 on hands too (on
+  // asl_hand, no cup in sight, 32 short "cup" tracks), and on 02_cups and
+  // cup.mp4 the box it keeps is rough (docs/object_models.md).
+  bool hand_proposals = false;
+  int hand_proposal_every = 10;
+  std::vector<double> hand_proposal_sizes = {1.6, 2.4};  // box sides, palm lengths
+  double hand_proposal_offset = 0.5;                     // grid step, palm lengths
+  // A box found beside a hand continues the track of that category lost
+  // within this many frames whose last box's centre it lies near (within
+  // the lost box enlarged twice): a held object stays one track while the
+  // model loses and finds it again. 0 (off) by default: on cup.mp4 30 made
+  // one 60-frame track of the rough boxes, and dynamics retargeting did
+  // worse on it than on the 35-frame one (docs/objects.md).
+  int hand_rejoin_frames = 0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,
-                                                same_object_iou, min_presence, crop_scale, max_side)
+                                                same_object_iou, min_presence, crop_scale, max_side,
+                                                hand_proposals, hand_proposal_every, hand_proposal_sizes,
+                                                hand_proposal_offset, hand_rejoin_frames)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);

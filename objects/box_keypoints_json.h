@@ -5,9 +5,8 @@
 //    "frames": [{"frame": i, "objects": [{"category", "score", "track",
 //                                          "keypoints_2d": [[x, y] x 9]}]}]}
 // keypoint 0 the box centre, 1-8 the corners (objects/box_keypoints.h),
-// pixels of the input as displayed. The 3D fields of an object
-// (center_camera, rotation_camera, size_m, scale_assumed) are the lifting's
-// to add to each object's entry.
+// pixels of the input as displayed. `doasido objects` writes these beside
+// the lifted 3D fields (objects/objects_file.h).
 #pragma once
 
 #include "core/config.h"

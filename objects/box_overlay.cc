@@ -24,6 +24,7 @@ void DrawObjects(cv::Mat& bgr, const Json& frame_entry, int width, int height) {
   const double sx = static_cast<double>(bgr.cols) / width, sy = static_cast<double>(bgr.rows) / height;
   const int thick = std::max(1, static_cast<int>(std::lround(std::max(bgr.cols, bgr.rows) / 500.0)));
   for (const Json& object : frame_entry.at("objects")) {
+    if (object.contains(kKeypoints2dKey) && object.at(kKeypoints2dKey).is_null()) continue;  // filled, not seen
     const ObjectObservation o = ObservationFromJson(object, 0);
     const cv::Scalar colour = kTrackColours[o.track % std::size(kTrackColours)];
     std::vector<cv::Point> p;

@@ -76,7 +76,70 @@ BoxTracker::BoxTracker(BoxKeypointsConfig config, std::string clip)
 void BoxTracker::Reset() {
   tracks_.clear();
   seeds_.clear();
+  hands_.clear();
+  lost_.clear();
   since_detection_ = -1;
+  since_proposals_ = -1;
+}
+
+void BoxTracker::NearHands(std::vector<HandPoints2d> hands) { hands_ = std::move(hands); }
+
+void BoxTracker::Adopt(ObjectObservation seen, std::vector<Tracked>* kept,
+                       std::vector<ObjectObservation>* found, int id) {
+  seen.track = id >= 0 ? id : next_id_++;
+  kept->push_back({seen.track, seen.category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
+                   Extent(seen.keypoints_2d)});
+  found->push_back(seen);
+}
+
+int BoxTracker::Rejoin(const ObjectObservation& seen) {
+  const cv::Rect2d e = Extent(seen.keypoints_2d);
+  const cv::Point2d c(e.x + e.width / 2, e.y + e.height / 2);
+  for (auto it = lost_.begin(); it != lost_.end(); ++it) {
+    const cv::Rect2d near(it->extent.x - it->extent.width / 2, it->extent.y - it->extent.height / 2,
+                          2 * it->extent.width, 2 * it->extent.height);
+    if (it->category != seen.category || seen.frame - it->frame > config_.hand_rejoin_frames ||
+        !near.contains(c)) {
+      continue;
+    }
+    const int id = it->id;
+    lost_.erase(it);
+    return id;
+  }
+  return -1;
+}
+
+void BoxTracker::ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
+                                  std::vector<ObjectObservation>* found) {
+  const HandProposalConfig proposal{.sizes = config_.hand_proposal_sizes,
+                                    .offset = config_.hand_proposal_offset};
+  for (const HandPoints2d& hand : hands_) {
+    if (static_cast<int>(kept->size()) >= config_.max_objects) return;
+    const Eigen::Vector2d grasp = (hand[4] + hand[8] + hand[12]) / 3.0;
+    bool held = false;  // the hand's object is tracked already
+    for (const Tracked& t : *kept) held |= t.extent.contains(cv::Point2d(grasp.x(), grasp.y()));
+    if (held) continue;
+    ObjectObservation best{.frame = frame};
+    for (const cv::Rect2d& box : HandProposals(hand, proposal)) {
+      const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
+                                       box.height, 0.0, config_.crop_scale);
+      for (const std::string& category : config_.categories) {
+        ObjectObservation seen{.frame = frame};
+        if (Landmarks(rgb, category, crop, &seen) && seen.score > best.score) best = seen;
+      }
+    }
+    if (best.score <= 0) continue;
+    // The model's box on a guessed crop is rough; on the crop its own
+    // keypoints give (the one tracking would use next) it is as on a
+    // tracked frame, so that second reading is kept when it holds.
+    ObjectObservation again{.frame = frame};
+    if (Landmarks(rgb, best.category, CropFromKeypoints(best.keypoints_2d, config_.crop_scale), &again)) {
+      best = again;
+    }
+    bool duplicate = false;
+    for (const Tracked& t : *kept) duplicate |= BoxIoU(t.extent, Extent(best.keypoints_2d)) > config_.same_object_iou;
+    if (!duplicate) Adopt(best, kept, found, Rejoin(best));
+  }
 }
 
 bool BoxTracker::Landmarks(const cv::Mat& rgb, const std::string& category, const BoxCrop& crop,
@@ -121,11 +184,7 @@ void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& ca
   const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
                                    box.height, 0.0, config_.crop_scale);
   ObjectObservation seen{.frame = frame};
-  if (!Landmarks(rgb, category, crop, &seen)) return;
-  seen.track = next_id_++;
-  kept->push_back({seen.track, category, CropFromKeypoints(seen.keypoints_2d, config_.crop_scale),
-                   Extent(seen.keypoints_2d)});
-  found->push_back(seen);
+  if (Landmarks(rgb, category, crop, &seen)) Adopt(seen, kept, found);
 }
 
 void BoxTracker::Seed(const std::string& category, const cv::Rect2d& box) {
@@ -153,6 +212,7 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
   } else {
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   }
+  std::erase_if(lost_, [&](const Lost& l) { return frame - l.frame > config_.hand_rejoin_frames; });
   std::vector<ObjectObservation> found;
   std::vector<Tracked> kept;
   bool lost = false;
@@ -160,6 +220,7 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
     ObjectObservation seen{.frame = frame, .track = t.id};
     if (!Landmarks(rgb, t.category, t.next, &seen)) {
       lost = true;
+      lost_.push_back({t.id, t.category, t.extent, frame});
       continue;
     }
     const cv::Rect2d extent = Extent(seen.keypoints_2d);
@@ -176,6 +237,18 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
                &kept, &found);
   }
   seeds_.clear();
+  if (config_.hand_proposals && !hands_.empty()) {
+    if (since_proposals_ < 0 || since_proposals_ + 1 >= config_.hand_proposal_every) {
+      since_proposals_ = 0;
+      for (HandPoints2d& hand : hands_) {
+        for (Eigen::Vector2d& p : hand) p /= to_input;
+      }
+      ProposeNearHands(rgb, frame, &kept, &found);
+    } else {
+      ++since_proposals_;
+    }
+  }
+  hands_.clear();
   const int every = kept.empty() ? config_.idle_detect_every : config_.detect_every;
   const bool due = lost || since_detection_ < 0 || since_detection_ + 1 >= every;
   if (due && static_cast<int>(kept.size()) < config_.max_objects) {

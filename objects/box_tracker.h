@@ -29,6 +29,7 @@
 #include "objects/box_detector.h"
 #include "objects/box_keypoints.h"
 #include "objects/box_keypoints_config.h"
+#include "objects/hand_proposals.h"
 #include "objects/objectron_models.h"
 
 namespace doasido::objects {
@@ -74,6 +75,13 @@ class BoxTracker {
   // (the box enlarged, the box-landmark model, its presence threshold);
   // for objects the 2D detector misses, such as 02_cups' red plastic cups.
   void Seed(const std::string& category, const cv::Rect2d& box);
+  // The hands of the next Track()'s frame (keypoints in the pixels Track()
+  // reports). With hand_proposals on, every hand_proposal_every-th frame
+  // (and the first) each hand whose grasp point lies in no tracked object
+  // has boxes beside its fingers tried (objects/hand_proposals.h) with every
+  // loaded category's model; the most present box at or above min_presence
+  // starts a track.
+  void NearHands(std::vector<HandPoints2d> hands);
   void Reset();
   const ObjectronModels& models() const { return *models_; }
 
@@ -94,6 +102,16 @@ class BoxTracker {
   void StartTrack(const cv::Mat& rgb, int frame, const std::string& category, const cv::Rect2d& box,
                   std::vector<Tracked>* kept, std::vector<ObjectObservation>* found);
 
+  // Tries the boxes beside each of hands_ (pixels of `rgb`).
+  void ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tracked>* kept,
+                        std::vector<ObjectObservation>* found);
+  // Starts a track from an observation the model already made on a crop,
+  // as track `id` (< 0: a new one).
+  void Adopt(ObjectObservation seen, std::vector<Tracked>* kept, std::vector<ObjectObservation>* found,
+             int id = -1);
+  // The lost track a box beside a hand continues (hand_rejoin_frames), or -1.
+  int Rejoin(const ObjectObservation& seen);
+
   BoxKeypointsConfig config_;
   std::string clip_;
   std::unique_ptr<ObjectronModels> models_;
@@ -101,6 +119,15 @@ class BoxTracker {
   std::vector<std::pair<std::string, cv::Rect2d>> seeds_;  // for the next Track()
   int next_id_ = 0;
   int since_detection_ = -1;  // frames since the detector ran; -1: not yet (it runs first)
+  std::vector<HandPoints2d> hands_;  // for the next Track(), pixels of the (shrunk) frame
+  int since_proposals_ = -1;         // frames since boxes were tried beside hands; -1: not yet
+  struct Lost {
+    int id = 0;
+    std::string category;
+    cv::Rect2d extent;  // its last box, pixels of the (shrunk) frame
+    int frame = 0;
+  };
+  std::vector<Lost> lost_;  // tracks lost within hand_rejoin_frames
   std::vector<float> input_;
 };
 

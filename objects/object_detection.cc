@@ -66,12 +66,12 @@ namespace {
 
 // The category models on every frame of the span; frames counted from its start.
 std::vector<ObjectObservation> RunModels(const std::filesystem::path& video, const FrameSpan& span,
-                                         const BoxKeypointsConfig& config) {
+                                         const BoxKeypointsConfig& config, const HandsByFrame* hands) {
   BoxTracker tracker(config, video.stem().string());
   DecoderOptions options{.clip = video.stem().string()};
   options.first_frame = span.first_frame;
   options.last_frame = span.first_frame + span.frames - 1;
-  const DetectedObjects detected = ObjectsInVideo(video, options, config.max_side, tracker);
+  const DetectedObjects detected = ObjectsInVideo(video, options, config.max_side, tracker, {}, {}, hands);
   std::vector<ObjectObservation> out;
   for (const auto& frame : detected.frames) {
     for (ObjectObservation o : frame) {
@@ -85,8 +85,8 @@ std::vector<ObjectObservation> RunModels(const std::filesystem::path& video, con
 }  // namespace
 
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
-                                             const ObjectsConfig& config) {
-  if (config.observations_dir.empty()) return RunModels(video, span, config.models);
+                                             const ObjectsConfig& config, const HandsByFrame* hands) {
+  if (config.observations_dir.empty()) return RunModels(video, span, config.models, hands);
   const auto file = std::filesystem::path(config.observations_dir) / (video.stem().string() + ".json");
   if (!std::filesystem::is_regular_file(file)) {
     throw Error(kErrorObservationsMissing, "no observations for video " + video.string(),
@@ -99,6 +99,28 @@ std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video,
     throw Error(kBadObservations, e.what(), {.file = file.string()});
   }
   return ObservationsFromJson(json, span, file.string());
+}
+
+HandsByFrame HandsFromBundle(const recon::ClipBundle& hands, int first_frame) {
+  HandsByFrame out;
+  if (hands.K.empty()) return out;
+  for (const auto* side : {&hands.hand_left, &hands.hand_right}) {
+    if (!side->has_value()) continue;
+    const recon::HandTrack& h = **side;
+    for (size_t t = 0; t < h.valid.size() && t < h.joints.size(); ++t) {
+      if (!h.valid[t]) continue;
+      const Mat3& K = hands.KAt(static_cast<int>(t));
+      HandPoints2d p;
+      bool ok = true;
+      for (int k = 0; k < kHandPoints && ok; ++k) {
+        const Vec3 uv = K * h.joints[t].row(k).transpose();
+        ok = uv.allFinite() && uv.z() > 0;
+        if (ok) p[k] = uv.head<2>() / uv.z() + Vec2(0.5, 0.5);  // K's pixel centres are integers
+      }
+      if (ok) out[first_frame + static_cast<std::int64_t>(t)].push_back(p);
+    }
+  }
+  return out;
 }
 
 }  // namespace doasido::objects

@@ -15,6 +15,8 @@
 #include "core/config.h"
 #include "objects/box_keypoints.h"
 #include "objects/objects_config.h"
+#include "objects/objects_in_video.h"
+#include "recon/bundle/bundle.h"
 
 namespace doasido::objects {
 
@@ -30,9 +32,17 @@ struct FrameSpan {
 
 // The observations of the span, frame 0 = span.first_frame (frames outside
 // the span left out): the models' keypoints, or the observations file's.
-// Errors name the clip's video, the file and the field.
+// `hands` (may be null; file frames) is where the models also look beside
+// the fingers ([objects.models] hand_proposals). Errors name the clip's
+// video, the file and the field.
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
-                                             const ObjectsConfig& config);
+                                             const ObjectsConfig& config,
+                                             const HandsByFrame* hands = nullptr);
+
+// The hands of a hands-stage bundle (its metric joints projected by its K)
+// as 2D keypoints per file frame (frame t of the bundle is file frame
+// first_frame + t), pixels with the origin at the top-left pixel's corner.
+HandsByFrame HandsFromBundle(const recon::ClipBundle& hands, int first_frame);
 
 // The observations in `json` (the format above) within `span`. Throws
 // Error("bad_observations") naming the file and the field.

@@ -31,7 +31,7 @@ struct ModelClock {
 DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOptions span,
                                int max_side, BoxTracker& tracker,
                                const std::function<void(std::int64_t)>& progress,
-                               const std::vector<SeedBox>& seeds) {
+                               const std::vector<SeedBox>& seeds, const HandsByFrame* hands) {
   const auto start = std::chrono::steady_clock::now();
   const ModelClock clock(tracker.models());
   span.analysis_size = max_side;
@@ -48,6 +48,10 @@ DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOption
     for (const SeedBox& seed : seeds) {
       if (seed.frame == frame.index) tracker.Seed(seed.category, seed.box);
     }
+    if (hands != nullptr) {
+      const auto it = hands->find(frame.index);
+      if (it != hands->end()) tracker.NearHands(it->second);
+    }
     out.frames.push_back(tracker.Track(frame.bgr, static_cast<int>(frame.index), scale));
     if (progress) progress(static_cast<std::int64_t>(out.frames.size()));
   }
@@ -57,7 +61,7 @@ DetectedObjects ObjectsInVideo(const std::filesystem::path& video, DecoderOption
 }
 
 DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker,
-                               const std::vector<SeedBox>& seeds) {
+                               const std::vector<SeedBox>& seeds, const HandsByFrame* hands) {
   const auto start = std::chrono::steady_clock::now();
   const ModelClock clock(tracker.models());
   DetectedObjects out{.width = bgr.cols, .height = bgr.rows};
@@ -65,6 +69,7 @@ DetectedObjects ObjectsInImage(const cv::Mat& bgr, BoxTracker& tracker,
   for (const SeedBox& seed : seeds) {
     if (seed.frame == 0) tracker.Seed(seed.category, seed.box);
   }
+  if (hands != nullptr && hands->count(0)) tracker.NearHands(hands->at(0));
   out.frames.push_back(tracker.Track(bgr, 0));
   clock.Into(&out);
   out.seconds = Since(start);

@@ -79,7 +79,8 @@ StageResult ObjectsStage::Run(const ClipContext& context) {
   std::vector<ObjectObservation> observations;
   ObjectsResult result;
   try {
-    observations = DetectObjects(context.video.path, span, config_);
+    const HandsByFrame near = HandsFromBundle(hands, span.first_frame);
+    observations = DetectObjects(context.video.path, span, config_, &near);
     result = ReconstructObjects(observations, hands, config_);
   } catch (const Error& e) {
     ErrorSite site = e.site();

@@ -7,6 +7,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cmath>
+
+#include <Eigen/Dense>
+
 #include "core/config.h"
 #include "objects/objectron_models.h"
 #include "test_util.h"
@@ -51,6 +55,27 @@ TEST(CliObjects, WritesTheSeededCupsKeypointsForAClipAndAnImage) {
     ASSERT_EQ(cup.at("keypoints_2d").size(), 9u);
     EXPECT_NEAR(cup.at("keypoints_2d").at(0).at(0).get<double>(), 655, 25) << stem;
     EXPECT_NEAR(cup.at("keypoints_2d").at(0).at(1).get<double>(), 415, 25) << stem;
+    // Lifted: in front of the camera, a rotation, the cup prior's scale
+    // (no hands in 3D here), and its centre on keypoint 0's ray.
+    ASSERT_EQ(cup.at("center_camera").size(), 3u) << stem;
+    const Eigen::Vector3d c(cup["center_camera"][0], cup["center_camera"][1], cup["center_camera"][2]);
+    EXPECT_GT(c.z(), 0.1) << stem;
+    Eigen::Matrix3d R;
+    for (int row = 0; row < 3; ++row) {
+      for (int k = 0; k < 3; ++k) R(row, k) = cup["rotation_camera"][row][k];
+    }
+    EXPECT_NEAR((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 0, 1e-6) << stem;
+    EXPECT_NEAR(R.determinant(), 1, 1e-6) << stem;
+    EXPECT_TRUE(cup.at("scale_assumed").get<bool>()) << stem;
+    ASSERT_EQ(cup.at("size_m").size(), 3u);
+    // The prior's scale (an 11 oz mug) on the lifted proportions: measured
+    // 0.142 m tall (a red plastic cup is about 0.12 m).
+    EXPECT_GT(cup["size_m"][1].get<double>(), 0.06) << stem;
+    EXPECT_LT(cup["size_m"][1].get<double>(), 0.2) << stem;
+    const double f = 0.5 * 1280 / std::tan(0.5 * 65 * M_PI / 180);   // --fov's default
+    const double u = f * c.x() / c.z() + 639.5 + 0.5, v = f * c.y() / c.z() + 359.5 + 0.5;
+    EXPECT_NEAR(u, cup["keypoints_2d"][0][0].get<double>(), 30) << stem;
+    EXPECT_NEAR(v, cup["keypoints_2d"][0][1].get<double>(), 30) << stem;
   }
   const cv::Mat overlay = cv::imread((tmp / "out/still.overlay.png").string());
   EXPECT_EQ(overlay.cols, 1280);

@@ -17,6 +17,8 @@
 #include "eval/mug_mesh.h"
 #include "objects/box_detector.h"
 #include "objects/box_tracker.h"
+#include "objects/hand_proposals.h"
+#include "objects/objects_file.h"
 #include "objects/objects_in_video.h"
 #include "synth/render.h"
 #include "test_util.h"
@@ -327,6 +329,58 @@ TEST(BoxTracker, TracksTheSeededRedCupsOf02CupsOntoTheHandMadeLabels) {
   EXPECT_LT(top / n, 0.15 * height / n);
 }
 
+// One render of the built-in mug standing on the table, seen from the side
+// `view` (0-3), with its true box: the mesh's bounds (handle included), and
+// the camera.
+struct MugView {
+  synth::FrameState st;
+  synth::RenderedFrame r;
+  std::array<Eigen::Vector2d, kBoxKeypoints> truth;  // the bounds' 9 keypoints, pixel-corner origin
+  Eigen::Vector3d lo, hi;                            // the bounds, mug frame (axis +z)
+};
+
+MugView RenderMugView(int view) {
+  static const TriMesh mug = retarget::MakeMug();
+  MugView v;
+  v.lo = mug.Min();
+  v.hi = mug.Max();
+  synth::World world;
+  world.style = synth::RandomStyle(3);
+  v.st.camera = {640, 480, 560, 560, 319.5, 239.5};
+  const double a = view * M_PI / 2 + 0.4;
+  v.st.camera_from_world = synth::LookAt(Vec3(0.3 * std::sin(a), -0.3 * std::cos(a), 0.22), Vec3(0, 0, 0.045));
+  v.st.object_pose = Pose::Identity();
+  v.r = synth::RenderFrame(world, mug, v.st);
+  const auto project = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector2d(v.st.camera.Project(v.st.camera_from_world * (v.st.object_pose * p)) +
+                           Eigen::Vector2d(0.5, 0.5));  // to pixel-corner coordinates
+  };
+  v.truth[0] = project((v.lo + v.hi) / 2);
+  for (int k = 1; k < kBoxKeypoints; ++k) {
+    const int b = k - 1;  // (x, up, front) bits; the mug's up is its +z
+    v.truth[k] = project({b & 4 ? v.hi.x() : v.lo.x(), b & 1 ? v.hi.y() : v.lo.y(), b & 2 ? v.hi.z() : v.lo.z()});
+  }
+  return v;
+}
+
+// The model's box on a mug view: the detector's, else a seed of the true
+// box's extent, as a person would draw it. Empty when the model sees none.
+std::vector<ObjectObservation> MugBox(BoxTracker& tracker, const MugView& v, bool* detected) {
+  tracker.Reset();
+  std::vector<ObjectObservation> seen = tracker.Track(v.r.bgr, 0);
+  *detected = !seen.empty();
+  if (seen.empty()) {
+    double x1 = 1e9, y1 = 1e9, x2 = -1e9, y2 = -1e9;
+    for (const Eigen::Vector2d& p : v.truth) {
+      x1 = std::min(x1, p.x()), y1 = std::min(y1, p.y()), x2 = std::max(x2, p.x()), y2 = std::max(y2, p.y());
+    }
+    tracker.Reset();
+    tracker.Seed("cup", cv::Rect2d(x1, y1, x2 - x1, y2 - y1));
+    seen = tracker.Track(v.r.bgr, 0);
+  }
+  return seen;
+}
+
 // Renders of the built-in mug (eval/mug_mesh.h) standing on the table,
 // seen from four sides: the true box (the mesh's bounds, handle included)
 // projected; the model's keypoints against it: the centre, and the corners
@@ -335,44 +389,17 @@ TEST(BoxTracker, TracksTheSeededRedCupsOf02CupsOntoTheHandMadeLabels) {
 TEST(BoxTracker, FindsTheRenderedMugAndStatesItsKeypointError) {
   std::string why;
   if (!ModelsOr(&why)) GTEST_SKIP() << why;
-  const TriMesh mug = retarget::MakeMug();
-  const Eigen::Vector3d lo = mug.Min(), hi = mug.Max();
-  synth::World world;
-  world.style = synth::RandomStyle(3);
   BoxKeypointsConfig config;
   config.categories = {"cup"};
   BoxTracker tracker(config, "mug");
   int found = 0, detected = 0;
   double centre = 0, corners = 0, size = 0;
   for (int view = 0; view < 4; ++view) {
-    synth::FrameState st;
-    st.camera = {640, 480, 560, 560, 319.5, 239.5};
-    const double a = view * M_PI / 2 + 0.4;
-    st.camera_from_world = synth::LookAt(Vec3(0.3 * std::sin(a), -0.3 * std::cos(a), 0.22), Vec3(0, 0, 0.045));
-    st.object_pose = Pose::Identity();
-    const synth::RenderedFrame r = synth::RenderFrame(world, mug, st);
-    std::array<Eigen::Vector2d, kBoxKeypoints> truth;
-    const auto project = [&](const Eigen::Vector3d& p) {
-      return Eigen::Vector2d(st.camera.Project(st.camera_from_world * (st.object_pose * p)) +
-                             Eigen::Vector2d(0.5, 0.5));  // to pixel-corner coordinates
-    };
-    truth[0] = project((lo + hi) / 2);
-    for (int k = 1; k < kBoxKeypoints; ++k) {
-      const int b = k - 1;  // (x, up, front) bits; the mug's up is its +z
-      truth[k] = project({b & 4 ? hi.x() : lo.x(), b & 1 ? hi.y() : lo.y(), b & 2 ? hi.z() : lo.z()});
-    }
-    tracker.Reset();
-    std::vector<ObjectObservation> seen = tracker.Track(r.bgr, 0);
-    detected += !seen.empty();
-    if (seen.empty()) {  // the detector missed it: seed the true box's extent, as a person would
-      double x1 = 1e9, y1 = 1e9, x2 = -1e9, y2 = -1e9;
-      for (const Eigen::Vector2d& p : truth) {
-        x1 = std::min(x1, p.x()), y1 = std::min(y1, p.y()), x2 = std::max(x2, p.x()), y2 = std::max(y2, p.y());
-      }
-      tracker.Reset();
-      tracker.Seed("cup", cv::Rect2d(x1, y1, x2 - x1, y2 - y1));
-      seen = tracker.Track(r.bgr, 0);
-    }
+    const MugView v = RenderMugView(view);
+    const auto& truth = v.truth;
+    bool by_detector = false;
+    const std::vector<ObjectObservation> seen = MugBox(tracker, v, &by_detector);
+    detected += by_detector;
     if (seen.empty()) continue;
     ++found;
     const ObjectObservation& o = seen.front();
@@ -402,6 +429,170 @@ TEST(BoxTracker, FindsTheRenderedMugAndStatesItsKeypointError) {
   ASSERT_GE(found, 3);
   EXPECT_LT(centre / found, 0.25);
   EXPECT_LT(corners / found, 0.4);
+}
+
+// The boxes beside a hand: a 3 x 3 grid about the grasp point (the mean of
+// the thumb, index and middle fingertips), offset palm lengths apart, each
+// size palm lengths wide; none for a hand too small to hold anything.
+TEST(HandProposals, GridAboutTheGraspPointInPalmLengths) {
+  HandPoints2d hand;
+  hand.fill(Eigen::Vector2d(0, 0));
+  hand[0] = {100, 300};   // wrist
+  hand[9] = {100, 250};   // middle finger's base: palm 50 px
+  hand[4] = {190, 200};
+  hand[8] = {200, 210};
+  hand[12] = {210, 190};  // grasp point (200, 200)
+  const std::vector<cv::Rect2d> boxes = HandProposals(hand, {.sizes = {1.6, 2.4}, .offset = 0.5});
+  ASSERT_EQ(boxes.size(), 18u);
+  std::vector<std::pair<double, double>> centres;
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const double side = i < 9 ? 80 : 120;
+    EXPECT_DOUBLE_EQ(boxes[i].width, side);
+    EXPECT_DOUBLE_EQ(boxes[i].height, side);
+    centres.emplace_back(boxes[i].x + side / 2, boxes[i].y + side / 2);
+  }
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      const auto c = centres[(dy + 1) * 3 + dx + 1];
+      EXPECT_NEAR(c.first, 200 + 25 * dx, 1e-9);
+      EXPECT_NEAR(c.second, 200 + 25 * dy, 1e-9);
+    }
+  }
+  EXPECT_EQ(HandProposals(hand, {.sizes = {1.6}, .offset = 0}).size(), 1u);
+  hand[9] = {100, 295};  // a 5-px palm
+  EXPECT_TRUE(HandProposals(hand, {}).empty());
+}
+
+// With the detector shut (no score reaches 1) and no seed, a hand whose
+// fingertips are on the rendered mug starts its track: the mug found from
+// the hand alone, its centre on the mug but rougher than from a seed (as on
+// real video: docs/object_models.md "Looking beside the hands").
+TEST(BoxTracker, FindsTheRenderedMugBesideAHand) {
+  std::string why;
+  if (!ModelsOr(&why)) GTEST_SKIP() << why;
+  BoxKeypointsConfig config;
+  config.categories = {"cup"};
+  config.min_detection_score = 1.0;
+  config.hand_proposals = true;
+  BoxTracker tracker(config, "mug");
+  int found = 0;
+  double centre = 0;
+  for (int view = 0; view < 4; ++view) {
+    const MugView v = RenderMugView(view);
+    const double height = (v.truth[3] - v.truth[1]).norm();  // a left edge of the box, bottom to top
+    HandPoints2d hand;
+    hand.fill(v.truth[0]);  // every fingertip on the mug's centre
+    hand[0] = v.truth[0] + Eigen::Vector2d(height, 0);  // the wrist beside it, a palm length of
+    hand[9] = v.truth[0] + Eigen::Vector2d(0.4 * height, 0);  // 0.6 of the mug's height
+    tracker.Reset();
+    EXPECT_TRUE(tracker.Track(v.r.bgr, 0).empty()) << "view " << view << ": the detector is shut";
+    tracker.Reset();
+    tracker.NearHands({hand});
+    const std::vector<ObjectObservation> seen = tracker.Track(v.r.bgr, 0);
+    if (seen.empty()) continue;
+    ++found;
+    centre += (seen.front().keypoints_2d[0] - v.truth[0]).norm() / (v.truth[1] - v.truth[8]).norm();
+  }
+  std::printf("rendered mug beside a hand: %d of 4 views found, centre error %.3f of the box's diagonal\n", found,
+              found ? centre / found : 0.0);
+  // Measured: 4 of 4, centre 0.370 of the diagonal (0.149 from a seed of
+  // the true box).
+  ASSERT_GE(found, 3);
+  EXPECT_LT(centre / found, 0.5);
+}
+
+// A held object the model loses for a frame (here a blank frame) and a
+// hand box finds again is one track (hand_rejoin_frames); with rejoining
+// off it is a new one.
+TEST(BoxTracker, AHandsBoxContinuesTheTrackItLost) {
+  std::string why;
+  if (!ModelsOr(&why)) GTEST_SKIP() << why;
+  const MugView v = RenderMugView(0);
+  const double height = (v.truth[3] - v.truth[1]).norm();
+  HandPoints2d hand;
+  hand.fill(v.truth[0]);
+  hand[0] = v.truth[0] + Eigen::Vector2d(height, 0);
+  hand[9] = v.truth[0] + Eigen::Vector2d(0.4 * height, 0);
+  const cv::Mat blank(v.r.bgr.size(), CV_8UC3, cv::Scalar(128, 128, 128));
+  for (int rejoin : {30, 0}) {
+    BoxKeypointsConfig config;
+    config.categories = {"cup"};
+    config.min_detection_score = 1.0;  // the detector shut
+    config.hand_proposals = true;
+    config.hand_proposal_every = 1;
+    config.hand_rejoin_frames = rejoin;
+    BoxTracker tracker(config, "mug");
+    tracker.NearHands({hand});
+    const std::vector<ObjectObservation> first = tracker.Track(v.r.bgr, 0);
+    ASSERT_EQ(first.size(), 1u);
+    EXPECT_TRUE(tracker.Track(blank, 1).empty());
+    tracker.NearHands({hand});
+    const std::vector<ObjectObservation> again = tracker.Track(v.r.bgr, 2);
+    ASSERT_EQ(again.size(), 1u);
+    if (rejoin > 0) {
+      EXPECT_EQ(again[0].track, first[0].track);
+    } else {
+      EXPECT_NE(again[0].track, first[0].track);
+    }
+  }
+}
+
+// What `doasido objects` writes for the mug views (objects/objects_file.h):
+// the model's keypoints lifted with the renders' exact K and the cup's size
+// prior (no hands: scale_assumed). Against the truth: the centre (the
+// mesh's bounds' centre, camera frame), the box's up axis against the mug's
+// axis (a cup's turn about it is not observed), the height and the
+// diameter (the body's, 0.08 m; the prior is an 11 oz mug, 0.082 x 0.095).
+TEST(ObjectsFile, LiftsTheRenderedMugAndStatesItsErrors) {
+  std::string why;
+  if (!ModelsOr(&why)) GTEST_SKIP() << why;
+  ObjectsConfig config;
+  config.models.categories = {"cup"};
+  BoxTracker tracker(config.models, "mug");
+  int lifted = 0;
+  double centre = 0, depth = 0, axis = 0, height = 0, diameter = 0, distance = 0;
+  for (int view = 0; view < 4; ++view) {
+    const MugView v = RenderMugView(view);
+    bool by_detector = false;
+    DetectedObjects d{.width = 640, .height = 480};
+    d.frames.push_back(MugBox(tracker, v, &by_detector));
+    if (d.frames[0].empty()) continue;
+    const Mat3 K = v.st.camera.K();
+    const Json j = ObjectsFileJson(d, K, config);
+    ASSERT_EQ(j.at("frames").size(), 1u);
+    const Json& o = j.at("frames").at(0).at("objects").at(0);
+    ASSERT_FALSE(o.at("center_camera").is_null());
+    EXPECT_TRUE(o.at("scale_assumed").get<bool>());
+    const Vec3 c(o["center_camera"][0], o["center_camera"][1], o["center_camera"][2]);
+    Mat3 R;
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) R(r, k) = o["rotation_camera"][r][k];
+    }
+    const Vec3 size(o["size_m"][0], o["size_m"][1], o["size_m"][2]);
+    const Vec3 true_centre = v.st.camera_from_world * (v.st.object_pose * Vec3((v.lo + v.hi) / 2));
+    const Vec3 true_axis = v.st.camera_from_world.R() * v.st.object_pose.R() * Vec3::UnitZ();
+    ++lifted;
+    distance += true_centre.norm();
+    centre += (c - true_centre).norm();
+    depth += std::abs(c.z() - true_centre.z());
+    axis += std::acos(std::clamp(R.col(1).dot(true_axis), -1.0, 1.0));
+    height += std::abs(size.y() - (v.hi.z() - v.lo.z()));
+    diameter += std::abs(size.x() - 2 * retarget::MugShape{}.radius);
+    EXPECT_NEAR((R.transpose() * R - Mat3::Identity()).norm(), 0, 1e-6) << "view " << view;
+  }
+  ASSERT_GE(lifted, 3);
+  std::printf("rendered mug lifted, %d views at %.3f m: mean error of the centre %.3f m (along the depth %.3f), "
+              "of the axis %.1f deg, of the height %.3f m, of the diameter %.3f m\n",
+              lifted, distance / lifted, centre / lifted, depth / lifted, axis / lifted * 180 / M_PI,
+              height / lifted, diameter / lifted);
+  // Measured: 4 views, centre 0.020 m off (0.017 along the depth) at 0.35 m,
+  // axis 2.6 deg, height 0.008 m, diameter 0.004 m. The size is the prior's
+  // scale on the lifted proportions (the prior's height is the mug's), so
+  // the size errors are the proportions' and the depth error the scale's.
+  EXPECT_LT(centre / lifted, 0.05);
+  EXPECT_LT(axis / lifted, 10 * M_PI / 180);
+  EXPECT_LT(height / lifted, 0.02);
+  EXPECT_LT(diameter / lifted, 0.02);
 }
 
 }  // namespace

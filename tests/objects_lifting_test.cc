@@ -9,6 +9,7 @@
 #include <random>
 
 #include "objects/box_lifting.h"
+#include "objects/object_detection.h"
 #include "objects/object_categories.h"
 #include "objects/object_scale.h"
 #include "objects/object_shape.h"
@@ -180,6 +181,35 @@ TEST(ObjectShape, ClosedOutwardMeshesOfTheBoxsExtents) {
   const double r = size.x() / 2;
   EXPECT_NEAR(SignedVolume(cylinder), 0.5 * n * r * r * std::sin(2 * M_PI / n) * size.y(), 1e-12);
   EXPECT_NEAR(cylinder.vertices.col(1).maxCoeff(), size.y() / 2, 1e-15);
+}
+
+// The hands stage's metric joints as the tracker's 2D hands: projected by
+// K (pixel centres at integers) into pixel-corner coordinates, under the
+// file frame first_frame + t; invalid frames and hands behind the camera
+// left out.
+TEST(HandsFromBundle, ProjectsTheJointsByKUnderFileFrames) {
+  recon::ClipBundle b;
+  b.frames = 3;
+  Mat3 K;
+  K << 500, 0, 319.5, 0, 500, 239.5, 0, 0, 1;
+  b.K = {K};
+  recon::HandTrack h;
+  h.valid = {true, false, true};
+  for (int t = 0; t < 3; ++t) {
+    recon::Joints21 j;
+    for (int k = 0; k < 21; ++k) j.row(k) = Eigen::RowVector3d(0.01 * k, -0.02 + 0.001 * t, 0.5);
+    if (t == 2) j(5, 2) = -0.1;  // one joint behind the camera
+    h.joints.push_back(j);
+  }
+  b.hand_right = h;
+  const HandsByFrame hands = HandsFromBundle(b, 100);
+  ASSERT_EQ(hands.size(), 1u);
+  ASSERT_EQ(hands.count(100), 1u);
+  const HandPoints2d& p = hands.at(100).at(0);
+  for (int k = 0; k < 21; ++k) {
+    EXPECT_NEAR(p[k].x(), 500 * 0.01 * k / 0.5 + 319.5 + 0.5, 1e-9);
+    EXPECT_NEAR(p[k].y(), 500 * -0.02 / 0.5 + 239.5 + 0.5, 1e-9);
+  }
 }
 
 }  // namespace

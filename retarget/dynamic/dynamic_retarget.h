@@ -30,15 +30,6 @@
 
 namespace doasido::retarget {
 
-// The kinematic settings the dynamics retargeting tracks by default: the
-// grasp terms on, pressing touching fingertips 1 cm into the object.
-inline KinematicConfig GraspingKinematicConfig() {
-  KinematicConfig c;
-  c.contact_weight = 16;
-  c.contact_depth = 0.01;
-  return c;
-}
-
 struct DynamicRetargetConfig {
   std::string hand = "sharpa_right";  // embodiment name or description path
   // "" retargets the right hand only; a robot hand (e.g. "sharpa_left")
@@ -55,11 +46,7 @@ struct DynamicRetargetConfig {
   // `sampler` as written. A clip re-runs at the next rung only when it fails.
   std::vector<std::string> ladder = {"fast", "medium", "seed"};
   AnnealedSamplerConfig sampler;  // threads and seed apply to every preset
-  // The grasp terms on (KinematicConfig contact_weight 16, contact_depth
-  // 0.01): without them the reference's own grasp holds no lifted object
-  // (retarget_dynamics_bench --sections=grasp: 0 of 20 off, 20 of 20 on),
-  // and the cheap rung fails what it could track (docs/retargeting.md).
-  KinematicConfig kinematic = GraspingKinematicConfig();
+  KinematicConfig kinematic;
   SceneConfig scene;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DynamicRetargetConfig, hand, left_hand, robots_dir, preset,

@@ -98,6 +98,7 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
   };
   // The scene, model and kinematic reference are the same at every rung:
   // made at the first and reused by the others.
+  const std::filesystem::path scene_dir = context.artifact_dir / kSceneFolder;
   std::optional<BimanualRetarget> both_hands;
   std::optional<ClipRetarget> one_hand;
   const std::function<ClipRun(const std::string&)> track = [&](const std::string& rung) {
@@ -105,8 +106,8 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
     ClipRun out;
     if (bimanual) {
       if (!both_hands) {
-        both_hands.emplace(r, mesh, FindEmbodiment(config_.left_hand, robots), FindEmbodiment(config_.hand, robots),
-                           config_, context.artifact_dir / kSceneFolder, clip);
+        both_hands.emplace(r, mesh, FindEmbodiment(config_.left_hand, robots),
+                           FindEmbodiment(config_.hand, robots), config_, scene_dir, clip);
       }
       BimanualRun both = both_hands->Track(sampler);
       out.left_kinematic = std::move(both.left_kinematic);
@@ -121,8 +122,7 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
       out.run.in_hand_frames = both.right_in_hand_frames;
     } else {
       if (!one_hand) {
-        one_hand.emplace(r, mesh, FindEmbodiment(config_.hand, robots), config_, context.artifact_dir / kSceneFolder,
-                         clip);
+        one_hand.emplace(r, mesh, FindEmbodiment(config_.hand, robots), config_, scene_dir, clip);
       }
       out.run = one_hand->Track(sampler);
     }

@@ -52,14 +52,14 @@ double WristError(const HandTrajectory& simulated, const HandTrajectory& kinemat
 BimanualRetarget::BimanualRetarget(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
                                    const Embodiment& right, const DynamicRetargetConfig& config,
                                    const std::filesystem::path& scene_dir, const std::string& label)
-    : r_(r), mesh_(mesh), label_(label) {
+    : clip_{r, mesh, label, {}} {
   try {
     CheckReference(r, label);
     CheckLeftHand(r, label);
-    object_ = FilledObjectPoses(r);
+    clip_.object = FilledObjectPoses(r);
     SceneConfig scene_config = config.scene;
     scene_config.place_on_floor = false;
-    const ObjectScene scene = BuildObjectScene(mesh, object_[0], scene_config, scene_dir);
+    const ObjectScene scene = BuildObjectScene(mesh, clip_.object[0], scene_config, scene_dir);
     const std::string scene_xml = ReadFileOrThrow(scene.xml_path, "io", "cannot read the scene");
 
     // Step 3: each hand alone with the object.
@@ -67,8 +67,8 @@ BimanualRetarget::BimanualRetarget(const recon::Reconstruction& r, const TriMesh
                                const std::vector<bool>& valid) {
       const HandModel model = BuildHandModel(e, scene_xml, scene_dir);
       KinematicRetargeter retargeter(model, config.kinematic);
-      HandTrajectory t = retargeter.Solve(joints, valid, r.fps, {}, &object_);
-      t.object_poses = object_;
+      HandTrajectory t = retargeter.Solve(joints, valid, r.fps, {}, &clip_.object);
+      t.object_poses = clip_.object;
       return t;
     };
     left_kinematic_ = kinematic(left, r.left_joints, r.left_valid);
@@ -93,39 +93,38 @@ BimanualRun BimanualRetarget::Track(const AnnealedSamplerConfig& sampler,
   run.right_kinematic = right_kinematic_;
   run.robot_scene_xml = robot_scene_xml_;
   const mjModel* m = model_.get();
-  const recon::Reconstruction& r = r_;
+  const recon::Reconstruction& r = clip_.r;
   try {
     const HandTrajectory both = CombineBimanualTrajectories(run.left_kinematic, run.right_kinematic);
     const double epsilon = sampler.reward.transition_epsilon;
-    const std::vector<bool> in_left = LabelInHand(r.left_joints, r.left_valid, object_, mesh_, epsilon);
-    const std::vector<bool> in_right = LabelInHand(r.right_joints, r.right_valid, object_, mesh_, epsilon);
+    const std::vector<Pose>& object = clip_.object;
+    const std::vector<bool> in_left = LabelInHand(r.left_joints, r.left_valid, object, clip_.mesh, epsilon);
+    const std::vector<bool> in_right = LabelInHand(r.right_joints, r.right_valid, object, clip_.mesh, epsilon);
     // Step 5: the transition reward asks each hand for its own contact.
     const SceneIndex index = IndexScene(m);
     const auto bit = [&](const std::string& prefix) {
       for (size_t h = 0; h < index.hands.size(); ++h) {
         if (index.hands[h].rfind(prefix, 0) == 0) return static_cast<uint8_t>(1u << h);
       }
-      throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = label_});
+      throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = clip_.label});
     };
     const uint8_t left_bit = bit(kLeftPrefix), right_bit = bit(kRightPrefix);
-    const std::vector<bool> resting = LabelResting(object_, mesh_, sampler.reward.transition_rest_height);
+    const std::vector<bool> resting = LabelResting(object, clip_.mesh, sampler.reward.transition_rest_height);
     std::vector<uint8_t> in_hand(in_left.size());
     for (size_t t = 0; t < in_hand.size(); ++t) {
       in_hand[t] = (in_left[t] ? left_bit : 0) | (in_right[t] ? right_bit : 0);
       run.left_in_hand_frames += in_left[t] && !resting[t];
       run.right_in_hand_frames += in_right[t] && !resting[t];
     }
-    const DynamicReference ref = BuildReference(m, both, object_, in_hand, resting, WarmupSeconds(sampler));
+    const DynamicReference ref = BuildReference(m, both, object, in_hand, resting, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, both);
-    std::vector<bool> valid(r.frames());
-    for (int t = 0; t < r.frames(); ++t) valid[t] = r.object_valid[t];
-    run.metrics = ObjectTrackingMetrics(run.trajectory.object_poses, object_, valid);
+    run.metrics = ObjectMetrics(clip_, run.trajectory);
     run.left_wrist_error = WristError(run.trajectory, run.left_kinematic, kLeftPrefix);
     run.right_wrist_error = WristError(run.trajectory, run.right_kinematic, kRightPrefix);
   } catch (const Error& e) {
-    throw NamingClip(e, label_);
+    throw NamingClip(e, clip_.label);
   }
   run.trajectory.metrics = {{kMetricPositionError, run.metrics.e_pos},
                             {kMetricRotationError, run.metrics.e_rot},
@@ -140,7 +139,8 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
                              const Embodiment& right, const DynamicRetargetConfig& config,
                              const std::filesystem::path& scene_dir, const std::string& label,
                              const std::function<void(int, int)>& progress) {
-  return BimanualRetarget(r, mesh, left, right, config, scene_dir, label).Track(EffectiveSampler(config), progress);
+  const BimanualRetarget clip(r, mesh, left, right, config, scene_dir, label);
+  return clip.Track(EffectiveSampler(config), progress);
 }
 
 }  // namespace doasido::retarget

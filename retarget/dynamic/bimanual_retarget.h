@@ -51,10 +51,7 @@ class BimanualRetarget {
                     const std::function<void(int, int)>& progress = {}) const;
 
  private:
-  const recon::Reconstruction& r_;
-  const TriMesh& mesh_;
-  std::string label_;
-  std::vector<Pose> object_;
+  ClipObject clip_;
   HandTrajectory left_kinematic_, right_kinematic_;
   std::string robot_scene_xml_;
   ModelPtr model_;

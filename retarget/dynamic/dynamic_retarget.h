@@ -84,6 +84,20 @@ Error NamingClip(const Error& e, const std::string& label);
 HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
                                    const DynamicResult& result, const HandTrajectory& kinematic);
 
+// What a clip's retargeting keeps of its input between rungs: the
+// reconstruction and object mesh (not owned), the label naming the clip in
+// errors, and the object poses with invalid frames filled (FilledObjectPoses).
+struct ClipObject {
+  const recon::Reconstruction& r;
+  const TriMesh& mesh;
+  std::string label;
+  std::vector<Pose> object;
+};
+
+// The object's tracking metrics of `simulated` (SimulatedTrajectory)
+// against the clip's object poses, over its valid object frames.
+TrackingMetrics ObjectMetrics(const ClipObject& clip, const HandTrajectory& simulated);
+
 // Steps 1-3 of one clip, done once and tracked at any sampler setting
 // (steps 4-5): the ladder's rungs differ only in the sampler, so they share
 // the scene, the compiled model and the kinematic reference (building them
@@ -100,10 +114,7 @@ class ClipRetarget {
                            const std::function<void(int, int)>& progress = {}) const;
 
  private:
-  const recon::Reconstruction& r_;
-  const TriMesh& mesh_;
-  std::string label_;
-  std::vector<Pose> object_;
+  ClipObject clip_;
   HandModel model_;
   HandTrajectory kinematic_;
   std::vector<int> grasp_contacts_;

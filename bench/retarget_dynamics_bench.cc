@@ -8,7 +8,8 @@
 //     success rate, mean E_pos, mean E_rot per row;
 //  2. simulation steps per second inside the optimiser against raw mj_step
 //     of the same scene on the same number of threads: replaying the run's
-//     own controls (the same contact load), and at rest from qpos0;
+//     own controls (the same contact load), and at rest from qpos0; and the
+//     replay with MuJoCo's dense against its sparse constraint Jacobian;
 //  3. wall time and success retargeting --wall_clips 10-s clips (from clip
 //     --wall_first) with the fast preset, and on the first --seed_wall=N of
 //     them (noisy) with the seed preset (14-17 min a clip; without it,
@@ -49,7 +50,9 @@
 //     success, wall time (the rungs it ran) and the rungs' shares;
 //  8. the default configuration (--sections=default): DynamicRetargetConfig{}
 //     (the ladder) on a --clip_seconds synthetic clip (clean), wall and CPU
-//     seconds, the rung that succeeded.
+//     seconds per rung and in all, the rung that succeeded; as the stage,
+//     the scene, model and kinematic reference are made once (ClipRetarget)
+//     [--default_contact_weight=W replaces the default's grasp weight].
 #include <algorithm>
 #include <chrono>
 #include <cmath>

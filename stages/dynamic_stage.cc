@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <fstream>
 #include <functional>
+#include <optional>
 
 #include <spdlog/spdlog.h>
 
@@ -95,13 +96,20 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
     HandTrajectory left_kinematic;
     Json extra = Json::object();
   };
+  // The scene, model and kinematic reference are the same at every rung:
+  // made at the first and reused by the others.
+  const std::filesystem::path scene_dir = context.artifact_dir / kSceneFolder;
+  std::optional<BimanualRetarget> both_hands;
+  std::optional<ClipRetarget> one_hand;
   const std::function<ClipRun(const std::string&)> track = [&](const std::string& rung) {
-    const DynamicRetargetConfig config = AtRung(config_, rung);
+    const AnnealedSamplerConfig sampler = RungSampler(config_, rung);
     ClipRun out;
     if (bimanual) {
-      BimanualRun both = RetargetBimanual(r, mesh, FindEmbodiment(config.left_hand, robots),
-                                          FindEmbodiment(config.hand, robots), config,
-                                          context.artifact_dir / kSceneFolder, clip);
+      if (!both_hands) {
+        both_hands.emplace(r, mesh, FindEmbodiment(config_.left_hand, robots),
+                           FindEmbodiment(config_.hand, robots), config_, scene_dir, clip);
+      }
+      BimanualRun both = both_hands->Track(sampler);
       out.left_kinematic = std::move(both.left_kinematic);
       out.extra["left_wrist_error"] = both.left_wrist_error;
       out.extra["right_wrist_error"] = both.right_wrist_error;
@@ -113,8 +121,10 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
       out.run.robot_scene_xml = std::move(both.robot_scene_xml);
       out.run.in_hand_frames = both.right_in_hand_frames;
     } else {
-      out.run = RetargetReconstruction(r, mesh, FindEmbodiment(config.hand, robots), config,
-                                       context.artifact_dir / kSceneFolder, clip);
+      if (!one_hand) {
+        one_hand.emplace(r, mesh, FindEmbodiment(config_.hand, robots), config_, scene_dir, clip);
+      }
+      out.run = one_hand->Track(sampler);
     }
     out.metrics = out.run.metrics;
     spdlog::info("{} {}: rung {}: E_pos {:.3f} m, E_rot {:.3f} rad, {}", kRetargetStageName, clip, rung,

@@ -489,6 +489,29 @@ TEST(SamplerLadder, AClipFailingAtTheFirstRungKeepsTheSecondRungsRunAndRecordsBo
   EXPECT_GT(m[RungMeasurementKey("starved", kRungSeconds)].get<double>(), 0);
 }
 
+TEST(SamplerLadder, RungsSharingOneSceneEndAsRungsBuildingTheirOwn) {
+  // ClipRetarget builds the scene, model and kinematic reference once for
+  // every rung (as the `retarget` stage does); each rung's run must be the
+  // one RetargetReconstruction makes from scratch.
+  TempDir dir;
+  const recon::Reconstruction r = Lift(kLadderFrames);
+  const TriMesh cylinder = LadderCylinder();
+  const DynamicRetargetConfig base = LadderRung("replay");
+  const ClipRetarget shared(r, cylinder, FindEmbodiment(base.hand, base.robots_dir), base, dir / "shared", "lift");
+  for (const std::string rung : {"starved", "replay"}) {
+    const DynamicRetargetConfig c = LadderRung(rung);
+    const DynamicRetargetRun alone =
+        RetargetReconstruction(r, cylinder, FindEmbodiment(c.hand, c.robots_dir), c, dir / rung, "lift");
+    const DynamicRetargetRun reused = shared.Track(c.sampler);
+    EXPECT_EQ(reused.metrics.e_pos, alone.metrics.e_pos) << rung;
+    EXPECT_EQ(reused.stats.sim_steps, alone.stats.sim_steps) << rung;
+    ASSERT_EQ(reused.trajectory.qpos.size(), alone.trajectory.qpos.size());
+    for (size_t f = 0; f < alone.trajectory.qpos.size(); ++f) {
+      EXPECT_EQ(reused.trajectory.qpos[f], alone.trajectory.qpos[f]) << rung << " frame " << f;
+    }
+  }
+}
+
 TEST(SamplerLadder, AClipSucceedingAtTheFirstRungRunsNoOther) {
   TempDir root;
   recon::Reconstruction r = Lift(kLadderFrames);

@@ -106,6 +106,56 @@ TEST_P(KinematicTest, RandomStartsRecoverFingertipsOnlyTargets) {
   EXPECT_EQ(solved, trials);
 }
 
+TEST_P(KinematicTest, RandomStartsOnlyAtATracksStartAndAfterAJump) {
+  // Two smooth stretches of a known trajectory with a teleport between
+  // them: the random starts run at frame 0 and at the teleport only (the
+  // rule: keypoints moved more than jump_distance since the last solved
+  // frame), and the fingertips are recovered on both sides of it.
+  const HandModel hand = BuildHandModel(FindEmbodiment(GetParam(), SharedData() / "robots"));
+  KinematicConfig config;
+  config.scale = 1.0;
+  KinematicRetargeter solver(hand, config);
+  std::mt19937 rng(5);
+  const int stretch = 12;
+  std::vector<Eigen::VectorXd> truth;
+  for (int part = 0; part < 2; ++part) {
+    const Eigen::VectorXd a = RandomConfig(hand, rng);
+    // A third of the way to another configuration (within the joint
+    // ranges): no frame-to-frame jump.
+    const Eigen::VectorXd b = a + 0.3 * (RandomConfig(hand, rng) - a);
+    for (int f = 0; f < stretch; ++f) truth.push_back(a + (b - a) * (f / double(stretch)));
+  }
+  std::vector<Keypoints21> refs;
+  for (const auto& q : truth) refs.push_back(Reference(solver, hand, q));
+  // The jumps by the definition, from the references alone.
+  std::vector<std::size_t> jumps = {0};
+  for (size_t t = 1; t < refs.size(); ++t) {
+    if ((refs[t] - refs[t - 1]).rowwise().norm().maxCoeff() > config.jump_distance) jumps.push_back(t);
+  }
+  ASSERT_EQ(jumps, (std::vector<std::size_t>{0, static_cast<std::size_t>(stretch)}))
+      << "the trajectory is built to jump once, at the second stretch";
+
+  const HandTrajectory traj = solver.Solve(refs, {}, 30.0);
+  EXPECT_EQ(solver.restart_frames(), jumps);
+  for (size_t t = 0; t < refs.size(); ++t) {
+    EXPECT_LT(MaxFingertipError(solver, hand, traj.qpos[t], refs[t]), 0.002) << "frame " << t;
+  }
+  // A hand unseen for a while and back where it was is no jump; back
+  // somewhere else is one.
+  std::vector<bool> valid(refs.size(), true);
+  for (int t = 4; t < 6; ++t) valid[t] = false;
+  ASSERT_LT((refs[6] - refs[3]).rowwise().norm().maxCoeff(), config.jump_distance);
+  solver.Solve(refs, valid, 30.0);
+  EXPECT_EQ(solver.restart_frames(), jumps) << "frames 4-5 unseen, frame 6 near frame 3";
+  // Unseen across the teleport: the first frame seen after it is the jump.
+  valid.assign(refs.size(), true);
+  const int back = stretch + 3;
+  for (int t = stretch - 3; t < back; ++t) valid[t] = false;
+  ASSERT_GT((refs[back] - refs[stretch - 4]).rowwise().norm().maxCoeff(), config.jump_distance);
+  solver.Solve(refs, valid, 30.0);
+  EXPECT_EQ(solver.restart_frames(), (std::vector<std::size_t>{0, static_cast<std::size_t>(back)}));
+}
+
 INSTANTIATE_TEST_SUITE_P(Hands, KinematicTest, ::testing::Values("sharpa_right", "allegro"));
 
 TEST(KinematicScale, AdaptationRecoversAKnownScale) {

@@ -49,19 +49,17 @@ double WristError(const HandTrajectory& simulated, const HandTrajectory& kinemat
 
 }  // namespace
 
-BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
-                             const Embodiment& right, const DynamicRetargetConfig& config,
-                             const std::filesystem::path& scene_dir, const std::string& label,
-                             const std::function<void(int, int)>& progress) {
-  const AnnealedSamplerConfig sampler = EffectiveSampler(config);
-  BimanualRun run;
+BimanualRetarget::BimanualRetarget(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
+                                   const Embodiment& right, const DynamicRetargetConfig& config,
+                                   const std::filesystem::path& scene_dir, const std::string& label)
+    : clip_{r, mesh, label, {}} {
   try {
     CheckReference(r, label);
     CheckLeftHand(r, label);
-    const std::vector<Pose> object = FilledObjectPoses(r);
+    clip_.object = FilledObjectPoses(r);
     SceneConfig scene_config = config.scene;
     scene_config.place_on_floor = false;
-    const ObjectScene scene = BuildObjectScene(mesh, object[0], scene_config, scene_dir);
+    const ObjectScene scene = BuildObjectScene(mesh, clip_.object[0], scene_config, scene_dir);
     const std::string scene_xml = ReadFileOrThrow(scene.xml_path, "io", "cannot read the scene");
 
     // Step 3: each hand alone with the object.
@@ -69,35 +67,49 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
                                const std::vector<bool>& valid) {
       const HandModel model = BuildHandModel(e, scene_xml, scene_dir);
       KinematicRetargeter retargeter(model, config.kinematic);
-      HandTrajectory t = retargeter.Solve(joints, valid, r.fps, {}, &object);
-      t.object_poses = object;
+      HandTrajectory t = retargeter.Solve(joints, valid, r.fps, {}, &clip_.object);
+      t.object_poses = clip_.object;
       return t;
     };
-    run.left_kinematic = kinematic(left, r.left_joints, r.left_valid);
-    run.right_kinematic = kinematic(right, r.right_joints, r.right_valid);
+    left_kinematic_ = kinematic(left, r.left_joints, r.left_valid);
+    right_kinematic_ = kinematic(right, r.right_joints, r.right_valid);
 
     // Step 4: both hands and the object in one model.
     tinyxml2::XMLDocument doc;
     ParseMjcfText(PrefixMjcfNames(BuildHandModel(right).xml, kRightPrefix, right.name), right.name, doc);
     AppendRootChildren(doc, PrefixMjcfNames(BuildHandModel(left).xml, kLeftPrefix, left.name), left.name);
     AppendRootChildren(doc, PrepareMjcfText(scene_xml, scene_dir, (scene_dir / "scene").string()).xml, "scene");
-    run.robot_scene_xml = PrintMjcf(doc);
-    const ModelPtr model = CompileMjcfText(run.robot_scene_xml, label);
-    const mjModel* m = model.get();
+    robot_scene_xml_ = PrintMjcf(doc);
+    model_ = CompileMjcfText(robot_scene_xml_, label);
+  } catch (const Error& e) {
+    throw NamingClip(e, label);
+  }
+}
+
+BimanualRun BimanualRetarget::Track(const AnnealedSamplerConfig& sampler,
+                                    const std::function<void(int, int)>& progress) const {
+  BimanualRun run;
+  run.left_kinematic = left_kinematic_;
+  run.right_kinematic = right_kinematic_;
+  run.robot_scene_xml = robot_scene_xml_;
+  const mjModel* m = model_.get();
+  const recon::Reconstruction& r = clip_.r;
+  try {
     const HandTrajectory both = CombineBimanualTrajectories(run.left_kinematic, run.right_kinematic);
     const double epsilon = sampler.reward.transition_epsilon;
-    const std::vector<bool> in_left = LabelInHand(r.left_joints, r.left_valid, object, mesh, epsilon);
-    const std::vector<bool> in_right = LabelInHand(r.right_joints, r.right_valid, object, mesh, epsilon);
+    const std::vector<Pose>& object = clip_.object;
+    const std::vector<bool> in_left = LabelInHand(r.left_joints, r.left_valid, object, clip_.mesh, epsilon);
+    const std::vector<bool> in_right = LabelInHand(r.right_joints, r.right_valid, object, clip_.mesh, epsilon);
     // Step 5: the transition reward asks each hand for its own contact.
     const SceneIndex index = IndexScene(m);
     const auto bit = [&](const std::string& prefix) {
       for (size_t h = 0; h < index.hands.size(); ++h) {
         if (index.hands[h].rfind(prefix, 0) == 0) return static_cast<uint8_t>(1u << h);
       }
-      throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = label});
+      throw Error("bad_mjcf", "no wrist mount named " + prefix + kWristMountBody, {.clip = clip_.label});
     };
     const uint8_t left_bit = bit(kLeftPrefix), right_bit = bit(kRightPrefix);
-    const std::vector<bool> resting = LabelResting(object, mesh, sampler.reward.transition_rest_height);
+    const std::vector<bool> resting = LabelResting(object, clip_.mesh, sampler.reward.transition_rest_height);
     std::vector<uint8_t> in_hand(in_left.size());
     for (size_t t = 0; t < in_hand.size(); ++t) {
       in_hand[t] = (in_left[t] ? left_bit : 0) | (in_right[t] ? right_bit : 0);
@@ -108,13 +120,11 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, both);
-    std::vector<bool> valid(r.frames());
-    for (int t = 0; t < r.frames(); ++t) valid[t] = r.object_valid[t];
-    run.metrics = ObjectTrackingMetrics(run.trajectory.object_poses, object, valid);
+    run.metrics = ObjectMetrics(clip_, run.trajectory);
     run.left_wrist_error = WristError(run.trajectory, run.left_kinematic, kLeftPrefix);
     run.right_wrist_error = WristError(run.trajectory, run.right_kinematic, kRightPrefix);
   } catch (const Error& e) {
-    throw NamingClip(e, label);
+    throw NamingClip(e, clip_.label);
   }
   run.trajectory.metrics = {{kMetricPositionError, run.metrics.e_pos},
                             {kMetricRotationError, run.metrics.e_rot},
@@ -123,6 +133,14 @@ BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh
                             {"left_wrist_error", run.left_wrist_error},
                             {"right_wrist_error", run.right_wrist_error}};
   return run;
+}
+
+BimanualRun RetargetBimanual(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
+                             const Embodiment& right, const DynamicRetargetConfig& config,
+                             const std::filesystem::path& scene_dir, const std::string& label,
+                             const std::function<void(int, int)>& progress) {
+  const BimanualRetarget clip(r, mesh, left, right, config, scene_dir, label);
+  return clip.Track(EffectiveSampler(config), progress);
 }
 
 }  // namespace doasido::retarget

@@ -39,7 +39,26 @@ struct BimanualRun {
   std::string robot_scene_xml;  // both hands + object
 };
 
-// Runs steps 1-5. `r` must carry a left hand (left_valid non-empty);
+// Steps 1-4 of one clip, done once and tracked at any sampler setting
+// (step 5), as ClipRetarget (dynamic_retarget.h) for one hand. `r` and
+// `mesh` must outlive it.
+class BimanualRetarget {
+ public:
+  BimanualRetarget(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& left,
+                   const Embodiment& right, const DynamicRetargetConfig& config,
+                   const std::filesystem::path& scene_dir, const std::string& label);
+  BimanualRun Track(const AnnealedSamplerConfig& sampler,
+                    const std::function<void(int, int)>& progress = {}) const;
+
+ private:
+  ClipObject clip_;
+  HandTrajectory left_kinematic_, right_kinematic_;
+  std::string robot_scene_xml_;
+  ModelPtr model_;
+};
+
+// Runs steps 1-5 (BimanualRetarget, then Track at EffectiveSampler(config)).
+// `r` must carry a left hand (left_valid non-empty);
 // `left` and `right` are the robot hands (e.g. sharpa_left, sharpa_right;
 // `doasido hand mirror` makes one from the other). Throws as
 // RetargetReconstruction, and Error("bad_reference") for a missing hand.

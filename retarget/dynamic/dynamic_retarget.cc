@@ -86,50 +86,69 @@ AnnealedSamplerConfig EffectiveSampler(const DynamicRetargetConfig& config) {
   return RungSampler(config, LadderRungs(config).front());
 }
 
-DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const TriMesh& mesh,
-                                          const Embodiment& hand,
-                                          const DynamicRetargetConfig& config,
-                                          const std::filesystem::path& scene_dir,
-                                          const std::string& label,
-                                          const std::function<void(int, int)>& progress) {
-  const AnnealedSamplerConfig sampler = EffectiveSampler(config);
-  DynamicRetargetRun run;
+TrackingMetrics ObjectMetrics(const ClipObject& clip, const HandTrajectory& simulated) {
+  std::vector<bool> valid(clip.r.frames());
+  for (int t = 0; t < clip.r.frames(); ++t) valid[t] = clip.r.object_valid[t];
+  return ObjectTrackingMetrics(simulated.object_poses, clip.object, valid);
+}
+
+ClipRetarget::ClipRetarget(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& hand,
+                           const DynamicRetargetConfig& config, const std::filesystem::path& scene_dir,
+                           const std::string& label)
+    : clip_{r, mesh, label, {}} {
   try {
     CheckReference(r, label);
-    const std::vector<Pose> object = FilledObjectPoses(r);
+    clip_.object = FilledObjectPoses(r);
     SceneConfig scene_config = config.scene;
     scene_config.place_on_floor = false;  // the reconstruction's floor is z = 0 already
-    const ObjectScene scene = BuildObjectScene(mesh, object[0], scene_config, scene_dir);
-    const HandModel model = BuildHandModel(hand, TryReadFile(scene.xml_path).value_or(""), scene_dir);
-    run.robot_scene_xml = model.xml;
-    const mjModel* m = model.model.get();
+    const ObjectScene scene = BuildObjectScene(mesh, clip_.object[0], scene_config, scene_dir);
+    model_ = BuildHandModel(hand, TryReadFile(scene.xml_path).value_or(""), scene_dir);
+    KinematicRetargeter kinematic(model_, config.kinematic);
+    kinematic_ = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &clip_.object, &grasp_contacts_);
+    kinematic_.object_poses = clip_.object;
+  } catch (const Error& e) {
+    throw NamingClip(e, label);
+  }
+}
 
-    KinematicRetargeter kinematic(model, config.kinematic);
-    run.kinematic = kinematic.Solve(r.right_joints, r.right_valid, r.fps, {}, &object, &run.grasp_contacts);
-    run.kinematic.object_poses = object;
-    const std::vector<bool> in_hand =
-        LabelInHand(r, object, mesh, sampler.reward.transition_epsilon);
-    const std::vector<bool> resting = LabelResting(object, mesh, sampler.reward.transition_rest_height);
+DynamicRetargetRun ClipRetarget::Track(const AnnealedSamplerConfig& sampler,
+                                       const std::function<void(int, int)>& progress) const {
+  DynamicRetargetRun run;
+  run.robot_scene_xml = model_.xml;
+  run.kinematic = kinematic_;
+  run.grasp_contacts = grasp_contacts_;
+  const mjModel* m = model_.model.get();
+  try {
+    const RewardConfig& reward = sampler.reward;
+    const std::vector<bool> in_hand = LabelInHand(clip_.r, clip_.object, clip_.mesh, reward.transition_epsilon);
+    const std::vector<bool> resting = LabelResting(clip_.object, clip_.mesh, reward.transition_rest_height);
     for (size_t t = 0; t < in_hand.size(); ++t) run.in_hand_frames += in_hand[t] && !resting[t];
 
     const SceneIndex index = IndexScene(m);
     const DynamicReference ref =
-        BuildReference(m, run.kinematic, object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
+        BuildReference(m, run.kinematic, clip_.object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
                        resting, WarmupSeconds(sampler));
     const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);
-    std::vector<bool> valid(r.frames());
-    for (int t = 0; t < r.frames(); ++t) valid[t] = r.object_valid[t];
-    run.metrics = ObjectTrackingMetrics(run.trajectory.object_poses, object, valid);
+    run.metrics = ObjectMetrics(clip_, run.trajectory);
   } catch (const Error& e) {
-    throw NamingClip(e, label);
+    throw NamingClip(e, clip_.label);
   }
   run.trajectory.metrics = {{kMetricPositionError, run.metrics.e_pos},
                             {kMetricRotationError, run.metrics.e_rot},
                             {kMetricSuccess, run.metrics.success},
                             {"frames", run.metrics.frames}};
   return run;
+}
+
+DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const TriMesh& mesh,
+                                          const Embodiment& hand,
+                                          const DynamicRetargetConfig& config,
+                                          const std::filesystem::path& scene_dir,
+                                          const std::string& label,
+                                          const std::function<void(int, int)>& progress) {
+  return ClipRetarget(r, mesh, hand, config, scene_dir, label).Track(EffectiveSampler(config), progress);
 }
 
 }  // namespace doasido::retarget

@@ -84,8 +84,45 @@ Error NamingClip(const Error& e, const std::string& label);
 HandTrajectory SimulatedTrajectory(const mjModel* m, const SceneIndex& index, const DynamicReference& ref,
                                    const DynamicResult& result, const HandTrajectory& kinematic);
 
-// Runs steps 1-5. `mesh` is the object in its own frame; scene files go to
-// `scene_dir`. `label` names the clip in errors. Throws Error("bad_reference"),
+// What a clip's retargeting keeps of its input between rungs: the
+// reconstruction and object mesh (not owned), the label naming the clip in
+// errors, and the object poses with invalid frames filled (FilledObjectPoses).
+struct ClipObject {
+  const recon::Reconstruction& r;
+  const TriMesh& mesh;
+  std::string label;
+  std::vector<Pose> object;
+};
+
+// The object's tracking metrics of `simulated` (SimulatedTrajectory)
+// against the clip's object poses, over its valid object frames.
+TrackingMetrics ObjectMetrics(const ClipObject& clip, const HandTrajectory& simulated);
+
+// Steps 1-3 of one clip, done once and tracked at any sampler setting
+// (steps 4-5): the ladder's rungs differ only in the sampler, so they share
+// the scene, the compiled model and the kinematic reference (building them
+// costs seconds a rung). `r` and `mesh` must outlive it. Throws as
+// RetargetReconstruction, naming `label`.
+class ClipRetarget {
+ public:
+  ClipRetarget(const recon::Reconstruction& r, const TriMesh& mesh, const Embodiment& hand,
+               const DynamicRetargetConfig& config, const std::filesystem::path& scene_dir,
+               const std::string& label);
+  // Steps 4-5 with `sampler`; the same result as RetargetReconstruction
+  // with a config whose effective sampler is `sampler`.
+  DynamicRetargetRun Track(const AnnealedSamplerConfig& sampler,
+                           const std::function<void(int, int)>& progress = {}) const;
+
+ private:
+  ClipObject clip_;
+  HandModel model_;
+  HandTrajectory kinematic_;
+  std::vector<int> grasp_contacts_;
+};
+
+// Runs steps 1-5 (ClipRetarget, then Track at EffectiveSampler(config)).
+// `mesh` is the object in its own frame; scene files go to `scene_dir`.
+// `label` names the clip in errors. Throws Error("bad_reference"),
 // Error("bad_mesh") (decomposition failed), Error("unstable_simulation").
 DynamicRetargetRun RetargetReconstruction(const recon::Reconstruction& r, const TriMesh& mesh,
                                           const Embodiment& hand,

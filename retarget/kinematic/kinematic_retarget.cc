@@ -531,6 +531,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
   out.reference_keypoints.assign(human.size(), Keypoints21::Constant(std::nan("")));
   std::optional<Eigen::VectorXd> previous;
   Keypoints21 last_solved;
+  restart_frames_.clear();
   for (size_t t = 0; t < human.size(); ++t) {
     if (progress && t > 0) progress(t);
     out.valid[t] = is_valid(t);
@@ -544,6 +545,7 @@ HandTrajectory KinematicRetargeter::Solve(const std::vector<Keypoints21>& human,
       if (contacts) (*contacts)[t] = touching;
     }
     const bool jump = !previous || (human[t] - last_solved).rowwise().norm().maxCoeff() > config_.jump_distance;
+    if (jump) restart_frames_.push_back(t);
     FrameSolution s = SolveFrame(human[t], previous ? &*previous : nullptr, jump ? -1 : 0);
     last_solved = human[t];
     out.qpos[t] = s.qpos;

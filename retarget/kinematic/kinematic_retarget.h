@@ -131,6 +131,10 @@ class KinematicRetargeter {
                        const std::vector<Pose>* object = nullptr,
                        std::vector<int>* contacts = nullptr);
 
+  // The frames of the last Solve that got the random starts (a track's
+  // first valid frame and every jump), ascending.
+  const std::vector<std::size_t>& restart_frames() const { return restart_frames_; }
+
   // Poses the object for the next SolveFrame calls and chooses the grasp
   // terms from `human` (unscaled); returns the number of touching
   // fingertips (0 when fewer than kMinGraspFingertips touch). No-op
@@ -189,6 +193,7 @@ class KinematicRetargeter {
   std::vector<int> palm_points_;       // indices into hand_.points (wrist + knuckles)
   Eigen::VectorXd lower_, upper_;      // per qpos; +-inf when unlimited
   std::mt19937 rng_;
+  std::vector<std::size_t> restart_frames_;  // of the last Solve
 };
 
 }  // namespace doasido::retarget

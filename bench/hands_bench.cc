@@ -21,7 +21,8 @@
 //                              hand-made labels in bench/hand_labels/*.json
 //                              (hands/hand_labels.h), for the models alone,
 //                              the tracker and the fit; missed hands of each,
-//                              left/right swaps of the models and the tracker;
+//                              left/right swaps of the models and the tracker,
+//                              the mean 2D error (px) of the hands each found;
 //                              the fit with every frame trusted beside it.
 //   hands_bench startup [0|1]  the start-up tax of a fresh process, with (1)
 //                              or without the graphs prepared before the
@@ -587,9 +588,9 @@ void Labels() {
     std::printf("no label files in %s (see hands/hand_labels.h for the format)\n", dir.c_str());
     return;
   }
-  std::printf("%-22s %6s %6s %15s %15s %15s %12s %9s   %s\n", "video", "frames", "hands",
+  std::printf("%-22s %6s %6s %15s %15s %15s %12s %9s %17s   %s\n", "video", "frames", "hands",
               "models PCK.1/.2", "tracker PCK.1/.2", "fit PCK.1/.2", "missed m/t/f", "swaps m/t",
-              "fit, every frame trusted: PCK.1/.2 missed");
+              "err px m/t/f", "fit, every frame trusted: PCK.1/.2 missed");
   for (const auto& file : files) {
     const HandLabels labels = ReadHandLabels(file);
     int last = 0;
@@ -600,11 +601,14 @@ void Labels() {
     trusting.fit.max_untrusted_run = 0;
     const LabelScores all = ScoreLabels(
         labels, r.detected, ReconstructHands(r.detected, r.result.intrinsics, trusting));
-    std::printf("%-22s %6d %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %8d/%d/%d %7d/%d   %7.3f/%.3f %d\n",
-                file.stem().c_str(), s.labelled_frames, s.fit.hands, s.models.Pck01(),
-                s.models.Pck02(), s.tracker.Pck01(), s.tracker.Pck02(), s.fit.Pck01(),
-                s.fit.Pck02(), s.models.missed, s.tracker.missed, s.fit.missed, s.models.swaps,
-                s.tracker.swaps, all.fit.Pck01(), all.fit.Pck02(), all.fit.missed);
+    std::printf(
+        "%-22s %6d %6d %7.3f/%.3f %7.3f/%.3f %7.3f/%.3f %8d/%d/%d %7d/%d %5.1f/%.1f/%.1f   "
+        "%7.3f/%.3f %d\n",
+        file.stem().c_str(), s.labelled_frames, s.fit.hands, s.models.Pck01(), s.models.Pck02(),
+        s.tracker.Pck01(), s.tracker.Pck02(), s.fit.Pck01(), s.fit.Pck02(), s.models.missed,
+        s.tracker.missed, s.fit.missed, s.models.swaps, s.tracker.swaps, s.models.MeanErrorPx(),
+        s.tracker.MeanErrorPx(), s.fit.MeanErrorPx(), all.fit.Pck01(), all.fit.Pck02(),
+        all.fit.missed);
     std::fflush(stdout);
   }
 }

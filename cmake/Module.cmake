@@ -11,12 +11,10 @@
 # cannot include them by accident. SUBDIRS are sub-folders whose *.cc
 # belong to the same library (headers "retarget/scene/scene_builder.h").
 # Designated initialisers that leave members at their defaults are the
-# intended style, and GCC 12's -Wrestrict and -Wstringop-overflow misfire on
-# std::string appends ("text" + std::move(s); the second with the
-# precompiled header, cmake/Precompiled.cmake).
+# intended style, and GCC 12's -Wrestrict misfires on std::string appends.
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   set(DOASIDO_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor
-      -Wno-missing-field-initializers -Wno-restrict -Wno-stringop-overflow)
+      -Wno-missing-field-initializers -Wno-restrict)
 else()  # clang (the fuzz build) knows neither -Wshadow=local nor -Wno-restrict
   set(DOASIDO_WARNINGS -Wall -Wextra -Wpedantic -Wnon-virtual-dtor -Wno-missing-field-initializers)
 endif()
@@ -31,7 +29,6 @@ endif()
 
 function(doasido_apply_options target)
   target_compile_options(${target} PRIVATE ${DOASIDO_WARNINGS})
-  doasido_use_pch(${target})
   if(DOASIDO_FUZZ)
     target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link,address,undefined
                            -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g)

@@ -72,7 +72,7 @@ void Load(LoadedEpisode& l, const fs::path& version_dir, const LoadedEpisode* fi
   const retarget::HandTrajectory& t = l.trajectory;
   if (first) {
     const Mismatch m = TrajectoryMismatch(t, first->trajectory, first->episode->external_id,
-                                          /*object_poses_may_differ=*/true);
+                                          {.object_poses = true, .controls = true});
     if (m.field == "fps") mixed(m.field, m.why + "; --fps resamples every episode to one rate");
     if (!m.field.empty()) mixed(m.field, m.why);
   }

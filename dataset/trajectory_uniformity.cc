@@ -4,7 +4,7 @@ namespace doasido::dataset {
 
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
                             const retarget::HandTrajectory& first, const std::string& first_clip,
-                            bool object_poses_may_differ) {
+                            MayDiffer may_differ) {
   const std::string first_ones = "the first episode's (clip " + first_clip;
   if (t.embodiment != first.embodiment) {
     return {"embodiment", "robot " + t.embodiment + " differs from " + first_ones + ", " + first.embodiment + ")"};
@@ -15,10 +15,11 @@ Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
   }
   if (t.qpos_names != first.qpos_names)
     return {"qpos_names", "joints differ from " + first_ones + ")"};
-  if (t.ctrl_names != first.ctrl_names || t.ctrl.empty() != first.ctrl.empty()) {
+  if (!may_differ.controls &&
+      (t.ctrl_names != first.ctrl_names || t.ctrl.empty() != first.ctrl.empty())) {
     return {"ctrl_names", "actuators differ from " + first_ones + ")"};
   }
-  if (!object_poses_may_differ && t.object_poses.empty() != first.object_poses.empty()) {
+  if (!may_differ.object_poses && t.object_poses.empty() != first.object_poses.empty()) {
     return {"object_poses", "object poses are present in one episode and not the other"};
   }
   if (t.reference_keypoints.empty() != first.reference_keypoints.empty()) {

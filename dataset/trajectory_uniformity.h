@@ -17,15 +17,20 @@ inline constexpr const char* kMixedTrajectories = "mixed_trajectories";
 // sentence saying how, or {"", ""} when they agree. The sentence names
 // `first_clip`, the first episode's clip, so that both clips of the pair are
 // named whatever order the export reads them in. With
-// `object_poses_may_differ` (the LeRobot export, which leaves the object
-// feature out when any episode is hand-only) object poses are not compared.
+// `may_differ` the features an export can write for a mixed version are
+// not compared (the LeRobot export leaves the object feature out when any
+// episode is hand-only, and takes the next frame's joints as the action
+// when not every episode recorded actuator targets).
+struct MayDiffer {
+  bool object_poses = false;
+  bool controls = false;
+};
 struct Mismatch {
   std::string field;
   std::string why;
 };
 Mismatch TrajectoryMismatch(const retarget::HandTrajectory& t,
                             const retarget::HandTrajectory& first,
-                            const std::string& first_clip,
-                            bool object_poses_may_differ = false);
+                            const std::string& first_clip, MayDiffer may_differ = {});
 
 }  // namespace doasido::dataset

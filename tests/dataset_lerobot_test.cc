@@ -195,6 +195,44 @@ TEST(LeRobotExport, RefusesNonEmptyOutputAndMixedRates) {
   }
 }
 
+// Actuator targets for the given episodes' trajectories (3 actuators,
+// values distinct from every joint position).
+void AddControls(const fs::path& dir, const std::vector<std::string>& episodes) {
+  for (const std::string& id : episodes) {
+    const fs::path path = dir / "v1/episodes" / id / "trajectory.json";
+    retarget::HandTrajectory t = retarget::ReadTrajectoryJson(path);
+    t.ctrl_names = {"a0", "a1", "a2"};
+    for (size_t f = 0; f < t.qpos.size(); ++f) t.ctrl.push_back(Eigen::Vector3d(-1.0 - f, -2.0, -3.0));
+    fs::remove(path);
+    retarget::WriteTrajectoryJson(t, path);
+  }
+}
+
+// A version mixing a simulated episode (actuator targets) with kinematic
+// ones (none), as the demo's hand-object and hand-only episodes: one
+// meaning of `action` for the dataset, the next frame's joints, for all.
+// With targets in every episode the action is the targets.
+TEST(LeRobotExport, ActionsAreTheNextJointsUnlessEveryEpisodeHasActuatorTargets) {
+  TempDir dir;
+  const Made made = MakeVersion(dir.path());
+  AddControls(dir.path(), {"clip-000002"});
+  ExportLeRobot(dir / "v1", dir / "mixed", {.videos = false});
+  const Json mixed = ReadParquet(dir.path(), dir / "mixed/data/chunk-000/file-000.parquet");
+  const auto& first = made.trajectories[0];  // export order: train first
+  ASSERT_EQ(mixed["rows"][0]["action"].size(), 5u);
+  EXPECT_EQ(mixed["rows"][0]["action"][0].get<double>(), F(first.qpos[1][0]));
+  std::ifstream mixed_info(dir / "mixed/meta/info.json");
+  EXPECT_EQ(Json::parse(mixed_info)["features"]["action"]["names"][0], "q0");
+
+  AddControls(dir.path(), {"clip-000001", "clip-000003"});
+  ExportLeRobot(dir / "v1", dir / "all", {.videos = false});
+  const Json all = ReadParquet(dir.path(), dir / "all/data/chunk-000/file-000.parquet");
+  ASSERT_EQ(all["rows"][1]["action"].size(), 3u);
+  EXPECT_EQ(all["rows"][1]["action"][0].get<double>(), -2.0f);
+  std::ifstream all_info(dir / "all/meta/info.json");
+  EXPECT_EQ(Json::parse(all_info)["features"]["action"]["names"][0], "a0");
+}
+
 // A joint moving at a constant rate lands exactly on the line at the new
 // rate's times; a frame is valid when both neighbours are.
 TEST(LeRobotExport, ResamplingKeepsALinearMotionOnItsLine) {

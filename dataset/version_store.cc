@@ -15,6 +15,7 @@
 
 #include "core/error.h"
 #include "core/test_pause.h"
+#include "core/tree_copy.h"
 #include "core/whole_output.h"
 #include "core/tool_version.h"
 #include "dataset/episode_selection.h"
@@ -43,8 +44,7 @@ void CheckName(const std::string& name) {
 void CopyTree(const fs::path& from, const fs::path& to, const std::string& clip) {
   std::error_code ec;
   if (!fs::is_directory(from, ec)) return;
-  fs::create_directories(to.parent_path(), ec);
-  fs::copy(from, to, fs::copy_options::recursive, ec);
+  CopyTreeAsOurs(from, to, ec);
   if (ec) {
     throw Error("io", "cannot copy " + from.string() + " into the version: " + ec.message(),
                 {.clip = clip, .file = to.string()});

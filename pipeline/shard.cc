@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.h"
+#include "core/tree_copy.h"
 #include "core/whole_output.h"
 
 namespace doasido::pipeline {
@@ -86,8 +87,7 @@ std::set<std::string> StageFolders(const fs::path& root, ClipId clip) {
 // of either cannot change the other's.
 void CopyFolder(const fs::path& from, const fs::path& to) {
   std::error_code ec;
-  fs::create_directories(to.parent_path(), ec);
-  fs::copy(from, to, fs::copy_options::recursive, ec);
+  CopyTreeAsOurs(from, to, ec);
   if (ec) throw Error("io", "cannot copy artifacts: " + ec.message(), {.file = from.string()});
 }
 

@@ -363,6 +363,21 @@ fs::path CopyOfTheDatabase(const fs::path& pool, const fs::path& work) {
 
 std::string Quote(const fs::path& p) { return "'" + p.string() + "'"; }
 
+// Debian's h5py opens `file` and every demo's sample count adds up to the
+// file's total.
+void ExpectH5pyReadsEveryDemo(const fs::path& work, const fs::path& file) {
+  WriteFile(work / "read.py",
+            "import h5py, sys\nd = h5py.File(sys.argv[1], 'r')['data']\n"
+            "print(sum(int(d[k].attrs['num_samples']) for k in d), int(d.attrs['total']))\n");
+  const std::string read =
+      testing::ShellOk("/usr/bin/python3 " + Quote(work / "read.py") + " " + Quote(file));
+  std::istringstream numbers(read);
+  long samples = -1, total = -2;
+  numbers >> samples >> total;
+  EXPECT_GT(samples, 0) << read;
+  EXPECT_EQ(samples, total) << read;
+}
+
 // Issue #50, finding 1: a robomimic export that does not fit on the disk
 // (a tmpfs sized for one export and a little, in a private user + mount
 // namespace) fails naming the file and the cause, and the earlier export is
@@ -415,17 +430,51 @@ TEST_F(CliDataset, RobomimicOnAFullDiskKeepsTheEarlierExport) {
   EXPECT_NE(testing::ReadFile(work / "small.rc"), "0\n") << small;
   EXPECT_THAT(small, HasSubstr("No space left on device"));
   EXPECT_EQ(testing::ReadFile(work / "small.ls"), ".\n..\n") << "a failed export left a file";
-  // The export that stayed is whole: h5py reads every demo.
-  WriteFile(work / "read.py",
-            "import h5py, sys\nd = h5py.File(sys.argv[1], 'r')['data']\n"
-            "print(sum(int(d[k].attrs['num_samples']) for k in d), int(d.attrs['total']))\n");
-  const std::string read = testing::ShellOk("/usr/bin/python3 " + Quote(work / "read.py") + " " +
-                                            Quote(work / "after.hdf5"));
-  std::istringstream numbers(read);
-  long samples = -1, total = -2;
-  numbers >> samples >> total;
-  EXPECT_GT(samples, 0) << read;
-  EXPECT_EQ(samples, total) << read;
+  ExpectH5pyReadsEveryDemo(work.path(), work / "after.hdf5");
+}
+
+// Issue #50, finding 1 on any machine (no mount namespace needed): the
+// export runs under a file-size limit (prlimit, SIGXFSZ ignored), so its
+// write fails part way with EFBIG as a full disk fails with ENOSPC; the same
+// promise holds: the earlier export byte for byte, nothing new, the cause
+// and the file named.
+TEST_F(CliDataset, RobomimicPastAFileSizeLimitKeepsTheEarlierExport) {
+  TempDir work;
+  const fs::path root = work / "datasets";
+  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(), "--select",
+                        "all", "--no-thumbnails"})
+                .exit_code,
+            0);
+  const fs::path disk = work / "disk";
+  fs::create_directories(disk);
+  const fs::path earlier = disk / "x.hdf5";
+  const auto first = RunDoasido({"dataset", "export", "--root", root.string(), "v1", "--format",
+                                 "robomimic", "--out", earlier.string()});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string bytes = testing::ReadFile(earlier);
+  ASSERT_GT(bytes.size(), 8192u);
+  auto limited_export = [&](const fs::path& out, const std::string& name) {
+    WriteFile(work / (name + ".sh"),
+              "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(bytes.size() / 2) + " " +
+                  Quote(testing::DoasidoBin()) + " dataset export --root " + Quote(root) +
+                  " v1 --format robomimic --out " + Quote(out) + " > " +
+                  Quote(work / (name + ".out")) + " 2>&1");
+    const int status = std::system(("sh " + Quote(work / (name + ".sh"))).c_str());
+    return std::make_pair(status, testing::ReadFile(work / (name + ".out")));
+  };
+  const auto [replace_status, replace] = limited_export(earlier, "replace");
+  EXPECT_NE(replace_status, 0) << replace;
+  EXPECT_THAT(replace, HasSubstr("io"));
+  EXPECT_THAT(replace, HasSubstr("File too large"));
+  EXPECT_THAT(replace, HasSubstr("x.hdf5"));
+  EXPECT_TRUE(testing::ReadFile(earlier) == bytes) << "the earlier export changed";
+  const auto [new_status, fresh] = limited_export(disk / "y.hdf5", "new");
+  EXPECT_NE(new_status, 0) << fresh;
+  EXPECT_THAT(fresh, HasSubstr("File too large"));
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(disk)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"x.hdf5"}) << "temporaries or a failed export left";
+  ExpectH5pyReadsEveryDemo(work.path(), earlier);
 }
 
 // Issue #50, finding 5: `dataset create` racing a re-queue (slowed to 0.6 s
@@ -465,34 +514,25 @@ TEST_F(CliDataset, CreateRacingAReQueueNamesTheRunsThatChanged) {
   }
 }
 
-// Issue #50, finding 6: a database on a read-only mount (a bind mount in a
-// private user + mount namespace: root cannot write it either) is opened
-// read-only and said so; status, report and dataset create into another
-// root work; a write fails with read_only naming the file.
-TEST_F(CliDataset, AReadOnlyDatabaseIsShownAndRefusesWrites) {
-  if (std::system("unshare -rm true 2>/dev/null") != 0) {
-    GTEST_SKIP() << "user namespaces are not available on this machine";
-  }
-  TempDir work;
-  const fs::path db = CopyOfTheDatabase(dir_->path(), work / "ro");
-  const fs::path out = work / "out";
-  fs::create_directories(out);
-  const std::string bin = Quote(testing::DoasidoBin());
+// The commands of issue #50's finding 6 on the database `db`, each run as
+// the shell command `doasido`, their outputs in `out` (NAME.out/.err/.rc).
+std::string ReadOnlySteps(const fs::path& db, const fs::path& out, const std::string& doasido) {
+  const std::string& bin = doasido;
   auto step = [&](const std::string& name, const std::string& args) {
     return bin + " " + args + " > " + Quote(out / (name + ".out")) + " 2> " +
            Quote(out / (name + ".err")) + "; echo $? > " + Quote(out / (name + ".rc")) + "; ";
   };
-  const std::string script =
-      "set -u; mount --bind " + Quote(work / "ro") + " " + Quote(work / "ro") +
-      " && mount -o remount,ro,bind " + Quote(work / "ro") + " || exit 90; " +
-      step("status", "status --db " + Quote(db)) +
-      step("report", "report --db " + Quote(db) + " --no-thumbnails --out " + Quote(out / "report")) +
-      step("create", "dataset create --db " + Quote(db) + " --root " + Quote(out / "datasets") +
-                         " --select all --no-thumbnails") +
-      step("reset", "queue reset --db " + Quote(db) + " --stage retarget_kinematic --all") +
-      "exit 0";
-  WriteFile(work / "ro.sh", script);
-  ASSERT_EQ(std::system(("unshare -rm sh " + Quote(work / "ro.sh")).c_str()), 0);
+  return step("status", "status --db " + Quote(db)) +
+         step("report", "report --db " + Quote(db) + " --no-thumbnails --out " + Quote(out / "report")) +
+         step("create", "dataset create --db " + Quote(db) + " --root " + Quote(out / "datasets") +
+                            " --select all --no-thumbnails") +
+         step("reset", "queue reset --db " + Quote(db) + " --stage retarget_kinematic --all");
+}
+
+// What ReadOnlySteps must show: status, report and dataset create into
+// another root work and say the database is read-only; a write is refused
+// with read_only naming the file.
+void ExpectShownReadOnlyAndWritesRefused(const fs::path& db, const fs::path& out) {
   for (const char* name : {"status", "report", "create"}) {
     const std::string err = testing::ReadFile(out / (std::string(name) + ".err"));
     EXPECT_EQ(testing::ReadFile(out / (std::string(name) + ".rc")), "0\n") << name << ": " << err;
@@ -505,6 +545,48 @@ TEST_F(CliDataset, AReadOnlyDatabaseIsShownAndRefusesWrites) {
   EXPECT_NE(testing::ReadFile(out / "reset.rc"), "0\n") << reset;
   EXPECT_THAT(reset, HasSubstr("read_only"));
   EXPECT_THAT(reset, HasSubstr(db.string()));
+}
+
+// Issue #50, finding 6: a database on a read-only mount (a bind mount in a
+// private user + mount namespace: root cannot write it either) is opened
+// read-only and said so; status, report and dataset create into another
+// root work; a write fails with read_only naming the file.
+TEST_F(CliDataset, AReadOnlyDatabaseIsShownAndRefusesWrites) {
+  if (std::system("unshare -rm true 2>/dev/null") != 0) {
+    GTEST_SKIP() << "user namespaces are not available on this machine";
+  }
+  TempDir work;
+  const fs::path db = CopyOfTheDatabase(dir_->path(), work / "ro");
+  const fs::path out = work / "out";
+  fs::create_directories(out);
+  const std::string script =
+      "set -u; mount --bind " + Quote(work / "ro") + " " + Quote(work / "ro") +
+      " && mount -o remount,ro,bind " + Quote(work / "ro") + " || exit 90; " +
+      ReadOnlySteps(db, out, Quote(testing::DoasidoBin())) + "exit 0";
+  WriteFile(work / "ro.sh", script);
+  ASSERT_EQ(std::system(("unshare -rm sh " + Quote(work / "ro.sh")).c_str()), 0);
+  ExpectShownReadOnlyAndWritesRefused(db, out);
+}
+
+// Finding 6 on any machine (no namespace needed): a database file and
+// folder the user may not write (mode 0444 / 0555). Root writes whatever
+// the mode says, so as root the commands run without the capabilities that
+// override file modes (setpriv).
+TEST_F(CliDataset, ADatabaseTheUserMayNotWriteIsShownAndRefusesWrites) {
+  TempDir work;
+  const fs::path db = CopyOfTheDatabase(dir_->path(), work / "ro");
+  const fs::path out = work / "out";
+  fs::create_directories(out);
+  const std::string as_owner =
+      geteuid() == 0 ? "setpriv --bounding-set=-dac_override,-dac_read_search "
+                       "--inh-caps=-dac_override,-dac_read_search "
+                     : "";
+  testing::ShellOk("chmod -R a-w " + Quote(work / "ro"));
+  WriteFile(work / "ro.sh", ReadOnlySteps(db, out, as_owner + Quote(testing::DoasidoBin())) + "exit 0");
+  const int status = std::system(("sh " + Quote(work / "ro.sh")).c_str());
+  testing::ShellOk("chmod -R u+w " + Quote(work / "ro"));
+  ASSERT_EQ(status, 0);
+  ExpectShownReadOnlyAndWritesRefused(db, out);
 }
 
 // Two hands through the queue into a dataset: a synthetic two-handed carry

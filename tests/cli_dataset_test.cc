@@ -363,6 +363,18 @@ fs::path CopyOfTheDatabase(const fs::path& pool, const fs::path& work) {
 
 std::string Quote(const fs::path& p) { return "'" + p.string() + "'"; }
 
+// `dataset create` of the database `db`'s clips into `root` (v1) and its robomimic
+// export to `out`: the export's bytes (empty when either failed).
+std::string FirstRobomimicExport(const std::string& db, const fs::path& root, const fs::path& out) {
+  const auto create = RunDoasido({"dataset", "create", "--db", db, "--root",
+                                  root.string(), "--select", "all", "--no-thumbnails"});
+  EXPECT_EQ(create.exit_code, 0) << create.err;
+  const auto first = RunDoasido({"dataset", "export", "--root", root.string(), "v1", "--format",
+                                 "robomimic", "--out", out.string()});
+  EXPECT_EQ(first.exit_code, 0) << first.err;
+  return first.exit_code == 0 ? testing::ReadFile(out) : "";
+}
+
 // Debian's h5py opens `file` and every demo's sample count adds up to the
 // file's total.
 void ExpectH5pyReadsEveryDemo(const fs::path& work, const fs::path& file) {
@@ -388,15 +400,8 @@ TEST_F(CliDataset, RobomimicOnAFullDiskKeepsTheEarlierExport) {
   }
   TempDir work;
   const fs::path root = work / "datasets";
-  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(), "--select",
-                        "all", "--no-thumbnails"})
-                .exit_code,
-            0);
   const fs::path good = work / "good.hdf5";
-  const auto first = RunDoasido({"dataset", "export", "--root", root.string(), "v1", "--format",
-                                 "robomimic", "--out", good.string()});
-  ASSERT_EQ(first.exit_code, 0) << first.err;
-  const std::string bytes = testing::ReadFile(good);
+  const std::string bytes = FirstRobomimicExport(Db(), root, good);
   ASSERT_GT(bytes.size(), 8192u);
   const fs::path disk = work / "disk";
   fs::create_directories(disk);
@@ -441,17 +446,10 @@ TEST_F(CliDataset, RobomimicOnAFullDiskKeepsTheEarlierExport) {
 TEST_F(CliDataset, RobomimicPastAFileSizeLimitKeepsTheEarlierExport) {
   TempDir work;
   const fs::path root = work / "datasets";
-  ASSERT_EQ(RunDoasido({"dataset", "create", "--db", Db(), "--root", root.string(), "--select",
-                        "all", "--no-thumbnails"})
-                .exit_code,
-            0);
   const fs::path disk = work / "disk";
   fs::create_directories(disk);
   const fs::path earlier = disk / "x.hdf5";
-  const auto first = RunDoasido({"dataset", "export", "--root", root.string(), "v1", "--format",
-                                 "robomimic", "--out", earlier.string()});
-  ASSERT_EQ(first.exit_code, 0) << first.err;
-  const std::string bytes = testing::ReadFile(earlier);
+  const std::string bytes = FirstRobomimicExport(Db(), root, earlier);
   ASSERT_GT(bytes.size(), 8192u);
   auto limited_export = [&](const fs::path& out, const std::string& name) {
     WriteFile(work / (name + ".sh"),

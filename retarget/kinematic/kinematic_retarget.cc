@@ -380,7 +380,11 @@ class SmoothCost : public ceres::CostFunction {
 Eigen::VectorXd KinematicRetargeter::Minimise(Eigen::VectorXd q, const std::vector<Vec3>& targets,
                                               const Eigen::VectorXd* previous, double* objective) {
   Clamp(q);
-  std::vector<int> held;
+  // The first active set from the start: a warm start at the previous
+  // frame's answer begins with the joints that rested on a limit there (and
+  // are still pushed), which saves the solve that would find them again.
+  std::vector<int> held = PushedAgainstLimits(q, targets, previous);
+  if (static_cast<int>(held.size()) == q.size()) held.clear();
   for (int round = 0; round < kActiveSetRounds; ++round) {
     SolveHolding(q, targets, previous, held);
     std::vector<int> pushed = PushedAgainstLimits(q, targets, previous);

@@ -191,9 +191,6 @@ class KinematicRetargeter::PointEvaluator {
         surface_residual_(r.geom_terms_.size(), 0.0), surface_jacobian_(r.geom_terms_.size()),
         witness_(r.geom_terms_.size()), normal_(r.geom_terms_.size()) {}
 
-  int num_free() const { return n_; }
-  const std::vector<int>& free() const { return free_; }
-
   // Residual (3) and, when `jacobian` is set, its row-major 3 x num_free
   // Jacobian of matched point `i` (index into active_) at the free variables x.
   void Evaluate(const double* x, int i, double* residual, double* jacobian) {
@@ -265,7 +262,8 @@ class KinematicRetargeter::PointEvaluator {
     jacobians_ = false;
   }
 
-  // mj_jac needs mj_comPos after mj_kinematics (Pose left the hand posed).
+  // mj_jac needs mj_comPos after mj_kinematics. data_ is still posed at the
+  // last Pose's x: nothing else touches it while one evaluator serves a solve.
   void Jacobians() {
     const mjModel* m = r_.hand_.model.get();
     mjData* d = r_.data_.get();

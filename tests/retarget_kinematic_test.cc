@@ -3,6 +3,7 @@
 // configurations) are recovered to within 2 mm at every fingertip.
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,13 @@ namespace doasido::retarget {
 namespace {
 
 using doasido::testing::SharedData;
+
+// The range (lower, upper) of the joint at qpos address `adr`.
+std::pair<double, double> JointRange(const mjModel* m, int adr) {
+  int j = 0;
+  while (m->jnt_qposadr[j] != adr) ++j;
+  return {m->jnt_range[2 * j], m->jnt_range[2 * j + 1]};
+}
 
 // A random configuration: fingers uniform in their ranges, wrist anywhere
 // within 10 cm and 1 rad of the canonical pose.
@@ -29,9 +37,8 @@ Eigen::VectorXd RandomConfig(const HandModel& hand, std::mt19937& rng) {
     } else if (k < 6) {
       q[k] = 2.0 * unit(rng) - 1.0;
     } else {
-      int j = 0;
-      while (m->jnt_qposadr[j] != adr[k]) ++j;
-      q[k] = m->jnt_range[2 * j] + unit(rng) * (m->jnt_range[2 * j + 1] - m->jnt_range[2 * j]);
+      const auto [lo, hi] = JointRange(m, adr[k]);
+      q[k] = lo + unit(rng) * (hi - lo);
     }
   }
   return q;
@@ -176,15 +183,10 @@ TEST_P(KinematicTest, AJointAskedBeyondItsLimitRestsOnItAndTheOtherFingersAreRec
   KinematicConfig config;
   config.scale = 1.0;
   KinematicRetargeter solver(hand, config);
+  auto upper = [&](int k) { return JointRange(hand.model.get(), hand.finger_qpos[k - 6]).second; };
   std::mt19937 rng(3);
   const Eigen::VectorXd a = RandomConfig(hand, rng);
   const Eigen::VectorXd b = a + 0.3 * (RandomConfig(hand, rng) - a);
-  const mjModel* m = hand.model.get();
-  auto upper = [&](int k) {
-    int j = 0;
-    while (m->jnt_qposadr[j] != hand.finger_qpos[k - 6]) ++j;
-    return m->jnt_range[2 * j + 1];
-  };
   // The joint: the first finger joint whose push past the limit moves
   // exactly one fingertip by more than 5 mm; `moved` marks the fingertips it moves.
   int joint = -1;

@@ -3,6 +3,7 @@
 // configurations) are recovered to within 2 mm at every fingertip.
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,13 @@ namespace doasido::retarget {
 namespace {
 
 using doasido::testing::SharedData;
+
+// The range (lower, upper) of the joint at qpos address `adr`.
+std::pair<double, double> JointRange(const mjModel* m, int adr) {
+  int j = 0;
+  while (m->jnt_qposadr[j] != adr) ++j;
+  return {m->jnt_range[2 * j], m->jnt_range[2 * j + 1]};
+}
 
 // A random configuration: fingers uniform in their ranges, wrist anywhere
 // within 10 cm and 1 rad of the canonical pose.
@@ -29,9 +37,8 @@ Eigen::VectorXd RandomConfig(const HandModel& hand, std::mt19937& rng) {
     } else if (k < 6) {
       q[k] = 2.0 * unit(rng) - 1.0;
     } else {
-      int j = 0;
-      while (m->jnt_qposadr[j] != adr[k]) ++j;
-      q[k] = m->jnt_range[2 * j] + unit(rng) * (m->jnt_range[2 * j + 1] - m->jnt_range[2 * j]);
+      const auto [lo, hi] = JointRange(m, adr[k]);
+      q[k] = lo + unit(rng) * (hi - lo);
     }
   }
   return q;
@@ -58,9 +65,10 @@ double MaxFingertipError(KinematicRetargeter& solver, const HandModel& hand,
 
 class KinematicTest : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(KinematicTest, RecoversFingertipsOfAKnownTrajectory) {
-  const HandModel hand = BuildHandModel(FindEmbodiment(GetParam(), SharedData() / "robots"));
-  KinematicConfig config;
+// Solves 16 frames interpolated between three random configurations of
+// `hand_name` and expects every fingertip within 2 mm of the truth.
+void ExpectRecoversAKnownTrajectory(const char* hand_name, KinematicConfig config) {
+  const HandModel hand = BuildHandModel(FindEmbodiment(hand_name, SharedData() / "robots"));
   config.scale = 1.0;  // references are robot-sized
   KinematicRetargeter solver(hand, config);
   std::mt19937 rng(7);
@@ -83,6 +91,16 @@ TEST_P(KinematicTest, RecoversFingertipsOfAKnownTrajectory) {
     EXPECT_LT((traj.reference_keypoints[t] - refs[t]).cwiseAbs().maxCoeff(), 1e-12)
         << "scale 1: the reference is the input";
   }
+}
+
+TEST_P(KinematicTest, RecoversFingertipsOfAKnownTrajectory) { ExpectRecoversAKnownTrajectory(GetParam(), {}); }
+
+TEST_P(KinematicTest, RecoversFingertipsOfAKnownTrajectoryUnderAHuberLoss) {
+  // The robust path: one loss per point block, far from the answer (the
+  // first frame's Kabsch start) in its linear part.
+  KinematicConfig config;
+  config.robust_loss_scale = 1.0;
+  ExpectRecoversAKnownTrajectory(GetParam(), config);
 }
 
 TEST_P(KinematicTest, RandomStartsRecoverFingertipsOnlyTargets) {
@@ -154,6 +172,54 @@ TEST_P(KinematicTest, RandomStartsOnlyAtATracksStartAndAfterAJump) {
   ASSERT_GT((refs[back] - refs[stretch - 4]).rowwise().norm().maxCoeff(), config.jump_distance);
   solver.Solve(refs, valid, 30.0);
   EXPECT_EQ(solver.restart_frames(), (std::vector<std::size_t>{0, static_cast<std::size_t>(back)}));
+}
+
+TEST_P(KinematicTest, AJointAskedBeyondItsLimitRestsOnItAndTheOtherFingersAreRecovered) {
+  // The truth bends one finger joint 0.4 rad past its upper limit (forward
+  // kinematics ignores limits): the answer holds that joint on the limit
+  // (the active set) on every frame of a track, and the fingertips that
+  // joint does not move are recovered as if it were free.
+  const HandModel hand = BuildHandModel(FindEmbodiment(GetParam(), SharedData() / "robots"));
+  KinematicConfig config;
+  config.scale = 1.0;
+  KinematicRetargeter solver(hand, config);
+  auto upper = [&](int k) { return JointRange(hand.model.get(), hand.finger_qpos[k - 6]).second; };
+  std::mt19937 rng(3);
+  const Eigen::VectorXd a = RandomConfig(hand, rng);
+  const Eigen::VectorXd b = a + 0.3 * (RandomConfig(hand, rng) - a);
+  // The joint: the first finger joint whose push past the limit moves
+  // exactly one fingertip by more than 5 mm; `moved` marks the fingertips it moves.
+  int joint = -1;
+  std::vector<bool> moved;
+  for (int k = 6; k < a.size() && joint < 0; ++k) {
+    Eigen::VectorXd bent = a;
+    bent[k] = upper(k) + 0.4;
+    const std::vector<Vec3> x0 = solver.Points(a), x1 = solver.Points(bent);
+    moved.assign(hand.points.size(), false);
+    int tips = 0;
+    for (size_t i = 0; i < hand.points.size(); ++i) {
+      moved[i] = (x1[i] - x0[i]).norm() > 1e-9;
+      tips += hand.points[i].fingertip && (x1[i] - x0[i]).norm() > 0.005;
+    }
+    if (tips == 1) joint = k;
+  }
+  ASSERT_GE(joint, 0) << "no finger joint moves a single fingertip";
+  std::vector<Keypoints21> refs;
+  for (int f = 0; f < 8; ++f) {
+    Eigen::VectorXd q = a + (b - a) * (f / 8.0);
+    q[joint] = upper(joint) + 0.4;
+    refs.push_back(Reference(solver, hand, q));
+  }
+  const HandTrajectory traj = solver.Solve(refs, {}, 30.0);
+  for (size_t t = 0; t < refs.size(); ++t) {
+    EXPECT_NEAR(traj.qpos[t][joint], upper(joint), 1e-9) << "frame " << t;
+    const std::vector<Vec3> x = solver.Points(traj.qpos[t]);
+    for (size_t i = 0; i < hand.points.size(); ++i) {
+      if (!hand.points[i].fingertip || moved[i]) continue;
+      EXPECT_LT((x[i] - refs[t].row(hand.points[i].keypoint).transpose()).norm(), 0.002)
+          << "frame " << t << ", point " << i;
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Hands, KinematicTest, ::testing::Values("sharpa_right", "allegro"));

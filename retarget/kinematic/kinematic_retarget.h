@@ -9,7 +9,8 @@
 // and p_i(q) come from MuJoCo forward kinematics with Jacobians from mj_jac.
 // The solver is Ceres' Levenberg-Marquardt with the analytic Jacobians, the
 // joint limits as parameter bounds (with an active set: joints pushed against
-// a limit are held there and the rest solved again) and optionally a Huber
+// a limit are held there and the rest solved again, the first set being
+// those the start already pushes against a limit) and optionally a Huber
 // loss per point (robust_loss_scale, in sigma; off by default, since on the
 // real-hand bench it did not lower the fingertip error). Each frame is
 // solved from the previous frame's answer (warm start); a track's first

@@ -56,7 +56,10 @@ std::vector<Component> Components(const cv::Mat& mask, cv::Mat& labels) {
 // Skin-coloured pixels (a YCrCb box), opened then closed to drop specks
 // and fill small holes.
 cv::Mat SkinMask(const cv::Mat& bgr, const BuiltinDetectorConfig& config) {
-  cv::Mat skin = SkinColour(bgr, config);
+  cv::Mat ycrcb, skin;
+  cv::cvtColor(bgr, ycrcb, cv::COLOR_BGR2YCrCb);
+  cv::inRange(ycrcb, cv::Scalar(config.y_min, config.cr_min, config.cb_min),
+              cv::Scalar(255, config.cr_max, config.cb_max), skin);
   cv::morphologyEx(skin, skin, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
   cv::morphologyEx(skin, skin, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
   return skin;
@@ -162,36 +165,6 @@ Detection BoxDetection(const cv::Rect2d& b, double scale, std::int64_t frame,
 }
 
 }  // namespace
-
-// OpenCV's 8-bit BGR -> YCrCb (imgproc color_yuv: 14-bit fixed point,
-// rounded; coefficients 0.299, 0.587, 0.114 for Y, 0.713 and 0.564 for Cr
-// and Cb) and the in-range test, in one pass without the three-channel
-// image between them (the two OpenCV calls cost most of the skin mask).
-// filters_interaction_test checks every one of the 2^24 colours against
-// cv::cvtColor + cv::inRange.
-cv::Mat SkinColour(const cv::Mat& bgr, const BuiltinDetectorConfig& config) {
-  CV_Assert(bgr.type() == CV_8UC3);
-  constexpr int kShift = 14, kHalf = 1 << (kShift - 1), kDelta = 128 << kShift;
-  constexpr int kR2Y = 4899, kG2Y = 9617, kB2Y = 1868, kCr = 11682, kCb = 9241;
-  // Values and bounds saturated to 0..255, as the two calls do.
-  const auto sat = [](int v) { return std::clamp(v, 0, 255); };
-  const int y_min = sat(config.y_min), cr_min = sat(config.cr_min), cr_max = sat(config.cr_max);
-  const int cb_min = sat(config.cb_min), cb_max = sat(config.cb_max);
-  cv::Mat skin(bgr.size(), CV_8UC1);
-  for (int r = 0; r < bgr.rows; ++r) {
-    const std::uint8_t* p = bgr.ptr<std::uint8_t>(r);
-    std::uint8_t* out = skin.ptr<std::uint8_t>(r);
-    for (int c = 0; c < bgr.cols; ++c, p += 3) {
-      const int b = p[0], g = p[1], red = p[2];
-      const int y = (b * kB2Y + g * kG2Y + red * kR2Y + kHalf) >> kShift;  // 0..255
-      const int cr = sat(((red - y) * kCr + kDelta + kHalf) >> kShift);
-      const int cb = sat(((b - y) * kCb + kDelta + kHalf) >> kShift);
-      out[c] = (y >= y_min && cr >= cr_min && cr <= cr_max && cb >= cb_min && cb <= cb_max)
-                   ? 255 : 0;
-    }
-  }
-  return skin;
-}
 
 void BuiltinHandObjectDetector::Consume(FrameContext& context) {
   const cv::Mat& gray = context.gray;

@@ -93,12 +93,6 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BuiltinDetectorConfig, y_min, cr
 // Valid ranges (filters/config_checks.cc); throws Error("bad_config").
 void CheckConfig(const BuiltinDetectorConfig& c, const std::string& section);
 
-// The detector's skin colours in a BGR frame (8-bit, three channels): 255
-// where the pixel's YCrCb (OpenCV's conversion) lies inside the config's
-// box, else 0; the same mask as cv::cvtColor(COLOR_BGR2YCrCb) then
-// cv::inRange, at a fraction of their cost.
-cv::Mat SkinColour(const cv::Mat& bgr, const BuiltinDetectorConfig& config);
-
 // The built-in classical detector (see the file comment). Writes each
 // frame's boxes into FrameContext::boxes (so later consumers use them) and
 // keeps them as Detection rows at full resolution, source

@@ -2,7 +2,6 @@
 // frame) and the interaction decision on its boxes.
 #include <gtest/gtest.h>
 
-#include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "core/error.h"
@@ -182,41 +181,6 @@ TEST(Interaction, CountsTheHandsInContactOnATwoHandClip) {
   Json old = m;
   old["signals"].erase("in_contact");
   EXPECT_TRUE(InteractionStage().Redecide(old)->measurements.at("summary").at("two_hand_fraction").is_null());
-}
-
-// The fused skin mask is OpenCV's YCrCb conversion and range test, bit for
-// bit: every 24-bit colour once (a 4096 x 4096 picture), for the default
-// skin box and for boxes with bounds at 0 and 255.
-TEST(BuiltinDetector, SkinColourIsOpenCvsConversionAndRangeOnEveryColour) {
-  cv::Mat every(4096, 4096, CV_8UC3);
-  for (int r = 0; r < every.rows; ++r) {
-    auto* p = every.ptr<std::uint8_t>(r);
-    for (int c = 0; c < every.cols; ++c) {
-      const int v = r * every.cols + c;
-      p[3 * c] = v & 255;
-      p[3 * c + 1] = (v >> 8) & 255;
-      p[3 * c + 2] = v >> 16;
-    }
-  }
-  BuiltinDetectorConfig edges;
-  edges.y_min = 0;
-  edges.cr_min = 0;
-  edges.cr_max = 255;
-  edges.cb_min = 255;
-  edges.cb_max = 255;
-  BuiltinDetectorConfig narrow;
-  narrow.y_min = 250;  // near-white greys only
-  narrow.cr_min = narrow.cr_max = 128;
-  narrow.cb_min = narrow.cb_max = 128;
-  for (const BuiltinDetectorConfig& config : {BuiltinDetectorConfig{}, edges, narrow}) {
-    cv::Mat ycrcb, expected;
-    cv::cvtColor(every, ycrcb, cv::COLOR_BGR2YCrCb);
-    cv::inRange(ycrcb, cv::Scalar(config.y_min, config.cr_min, config.cb_min),
-                cv::Scalar(255, config.cr_max, config.cb_max), expected);
-    const cv::Mat got = SkinColour(every, config);
-    EXPECT_EQ(cv::countNonZero(got != expected), 0) << "y_min " << config.y_min;
-    EXPECT_GT(cv::countNonZero(expected), 0) << "y_min " << config.y_min;  // a box that holds colours
-  }
 }
 
 }  // namespace

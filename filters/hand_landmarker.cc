@@ -286,6 +286,9 @@ std::vector<DetectedPalm> HandLandmarker::Palms(const cv::Mat& rgb) {
   };
   std::vector<Palm> candidates;
   for (std::size_t i = 0; i < anchors_.size() && i < out.logits.size(); ++i) {
+    // A logit below -1e-6 scores below 0.4999998: no exp() for the
+    // thousands of anchors far from any palm.
+    if (out.logits[i] < -1e-6f) continue;
     const double score = 1 / (1 + std::exp(-std::clamp<double>(out.logits[i], -100, 100)));
     if (score < kMinPalmScore) continue;
     const float* r = out.regressors.data() + i * kPalmValues;

@@ -103,9 +103,18 @@ cv::Mat SceneMotion(const cv::Mat& gray, cv::Mat& old_gray, cv::Mat& old_skin,
 std::vector<cv::Rect2d> MovingHands(const cv::Mat& skin, const cv::Mat& motion,
                                     const BuiltinDetectorConfig& config, double frame_area) {
   std::vector<cv::Rect2d> hands;
+  const cv::Mat moving_skin = motion & skin;
+  // A hand is a component of at least min_hand_area of the frame of which
+  // at least min_hand_motion moved: with fewer moving skin pixels in the
+  // whole frame than that (a still or hand-less picture) none can be, and
+  // the components are not labelled (the 0.999 keeps rounding out of it).
+  if (config.min_hand_motion > 0 &&
+      cv::countNonZero(moving_skin) <
+          0.999 * config.min_hand_motion * config.min_hand_area * frame_area) {
+    return hands;
+  }
   cv::Mat labels;
   const std::vector<Component> skin_parts = Components(skin, labels);
-  const cv::Mat moving_skin = motion & skin;
   for (const Component& c : skin_parts) {
     if (static_cast<int>(hands.size()) >= config.max_hands) break;
     if (c.area < config.min_hand_area * frame_area) break;  // sorted by area
@@ -114,9 +123,8 @@ std::vector<cv::Rect2d> MovingHands(const cv::Mat& skin, const cv::Mat& motion,
     const cv::Mat moved_here = moving_skin(c.box) & mine;
     const int moved = cv::countNonZero(moved_here);
     if (moved < config.min_hand_motion * c.area) continue;
-    std::vector<cv::Point> pts;
-    cv::findNonZero(moved_here, pts);
-    cv::Rect part = cv::boundingRect(pts) + c.box.tl();
+    // The mask's own bounding box: the same box as of its non-zero points.
+    cv::Rect part = cv::boundingRect(moved_here) + c.box.tl();
     const int grow = std::max(2, part.width / 8);
     part = cv::Rect(part.x - grow, part.y - grow, part.width + 2 * grow, part.height + 2 * grow) &
            c.box;
@@ -137,6 +145,9 @@ std::vector<cv::Rect2d> ObjectsTouchingHands(const cv::Mat& motion, const cv::Ma
              2);
   cv::Mat other = motion & ~near_skin;
   cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  // No component can reach min_object_area when all of them together do
+  // not: no labelling then.
+  if (cv::countNonZero(other) < 0.999 * config.min_object_area * frame_area) return objects;
   cv::Mat object_labels;
   for (const Component& c : Components(other, object_labels)) {
     if (c.area < config.min_object_area * frame_area) break;

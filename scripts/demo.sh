@@ -8,11 +8,15 @@
 # export; then prints which episodes are hand-object (retargeted with
 # dynamics) and which hand-only, where each clip stopped and why, and how
 # long install, build and run took.
-# Real videos have no object model here: their bundle is the hands stage's
-# hand-only bundle (real hand motion, retargeted onto the robot hand). The
-# synthetic clips have exact ground truth: a stand-in for a model command
-# (tools/ground_truth_bundle.sh) hands their bundles, objects included, to
-# the bundle stage.
+# Real videos: the category models' 2D detector finds no red cup in
+# 02_cups, so one row of the list boxes the held cup on one frame (column
+# object_box, as a person prompts SAM2): the objects stage follows it and
+# lifts it to a metric pose sized by the touching fingertips, and that clip
+# (cups_held, frames 12-40) is a real hand + object episode retargeted with
+# dynamics. The other real clips stay hand-only (real hand motion on the
+# robot hand). The synthetic clips have exact ground truth: a stand-in for
+# a model command (tools/ground_truth_bundle.sh) hands their bundles,
+# objects included, to the bundle stage.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS=0

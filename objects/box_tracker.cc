@@ -174,13 +174,18 @@ void BoxTracker::DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* 
   }
 }
 
+bool BoxTracker::NoRoomFor(const cv::Rect2d& box, const std::vector<Tracked>& kept) const {
+  if (static_cast<int>(kept.size()) >= config_.max_objects) return true;
+  for (const Tracked& t : kept) {
+    if (BoxIoU(t.extent, box) > config_.same_object_iou) return true;
+  }
+  return false;
+}
+
 void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& category,
                             const cv::Rect2d& box, std::vector<Tracked>* kept,
                             std::vector<ObjectObservation>* found) {
-  if (static_cast<int>(kept->size()) >= config_.max_objects) return;
-  for (const Tracked& t : *kept) {
-    if (BoxIoU(t.extent, box) > config_.same_object_iou) return;
-  }
+  if (NoRoomFor(box, *kept)) return;
   const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
                                    box.height, 0.0, config_.crop_scale);
   ObjectObservation seen{.frame = frame};
@@ -190,10 +195,7 @@ void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& ca
 void BoxTracker::StartPrompted(const cv::Mat& rgb, int frame, const std::string& category,
                                const cv::Rect2d& box, std::vector<Tracked>* kept,
                                std::vector<ObjectObservation>* found) {
-  if (static_cast<int>(kept->size()) >= config_.max_objects) return;
-  for (const Tracked& t : *kept) {
-    if (BoxIoU(t.extent, box) > config_.same_object_iou) return;
-  }
+  if (NoRoomFor(box, *kept)) return;
   const cv::Rect whole(0, 0, rgb.cols, rgb.rows);
   const cv::Rect start = cv::Rect(box) & whole;
   if (start.width < 2 || start.height < 2) return;  // the box is off the frame

@@ -97,6 +97,8 @@ class BoxTracker {
     cv::Ptr<cv::Tracker> follower;  // a prompted track's 2D follower, else null
     int missing = 0;                // a prompted track's frames in a row without keypoints
   };
+  // True when max_objects are tracked or a kept track is at `box` already.
+  bool NoRoomFor(const cv::Rect2d& box, const std::vector<Tracked>& kept) const;
   // A prompted track's next frame: the follower's box, the model's keypoints
   // on it when present. False when the track ends.
   bool FollowPrompted(const cv::Mat& rgb, int frame, Tracked* t, std::vector<ObjectObservation>* found);

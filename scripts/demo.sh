@@ -50,6 +50,12 @@ if VERSION=$($DOASIDO dataset create --db "$DB" --root "$WORK/datasets" --name d
   rm -rf "$WORK/lerobot/$(basename "$VERSION")"
   # The cameras ran at 25, 29.97 and 30 fps: one rate for the export.
   $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --out "$WORK/lerobot/$(basename "$VERSION")"
+  # The hand-only episodes drop observation.object_pose from the whole
+  # export; the hand-object episodes alone (the real cups_held among them)
+  # keep it.
+  rm -rf "$WORK/lerobot/$(basename "$VERSION")-hand-object"
+  $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --hand-object-only \
+    --out "$WORK/lerobot/$(basename "$VERSION")-hand-object"
   echo
   echo "Episodes (kind: hand-object = retargeted with dynamics; hand-only = kinematic):"
   $DOASIDO dataset show "$VERSION"
@@ -62,7 +68,8 @@ $DOASIDO status --db "$DB" --clips
 echo
 echo "Database: $DB   (try: $DOASIDO status --db $DB)"
 echo "Report:   $WORK/report/report.html"
-[ -n "${VERSION:-}" ] && echo "Dataset:  $VERSION   LeRobot export: $WORK/lerobot/$(basename "$VERSION")"
+[ -n "${VERSION:-}" ] && echo "Dataset:  $VERSION   LeRobot export: $WORK/lerobot/$(basename "$VERSION")" \
+  "(hand-object episodes with observation.object_pose: $WORK/lerobot/$(basename "$VERSION")-hand-object)"
 echo "Review the flagged clips: $DOASIDO review serve --db $DB"
 RUN_S=$((SECONDS - INSTALL_S - BUILD_S))
 echo "Check the robot trajectories beside their videos: $DOASIDO review serve --db $DB  (then /verify)"

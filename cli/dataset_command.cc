@@ -36,6 +36,7 @@ struct Options {
   bool json = false;
   bool no_videos = false;
   bool no_verify = false;
+  bool hand_object_only = false;
   double fps = 0;
 };
 
@@ -247,7 +248,8 @@ void Export(const Options& o) {
     throw Error("bad_option", "unknown format '" + o.format + "'", {.field = "--format"});
   }
   WriteWhole(o.out, lerobot ? OutputKind::kFolder : OutputKind::kFile, [&](const fs::path& temp) {
-    s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos, .fps = o.fps}) : ExportRobomimic(dir, temp);
+    s = lerobot ? ExportLeRobot(dir, temp, {.videos = !o.no_videos, .fps = o.fps,
+                                                        .hand_object_only = o.hand_object_only}) : ExportRobomimic(dir, temp);
   }, &removed);
   for (const fs::path& p : removed) {
     std::fprintf(stderr, "removed %s (left by a killed export)\n", p.c_str());
@@ -294,6 +296,8 @@ void AddExportCommand(CLI::App& cmd, const std::shared_ptr<Options>& o) {
                   "Output folder (lerobot) or file (robomimic); written beside it and renamed "
                   "into place, replacing an earlier export only when complete")
       ->required();
+  exp->add_flag("--hand-object-only", o->hand_object_only,
+                "lerobot: leave out the hand-only episodes, so that observation.object_pose is exported");
   exp->add_flag("--no-verify", o->no_verify,
                 "Export without first checking every file against the manifest (says so)");
   exp->add_flag("--no-videos", o->no_videos,

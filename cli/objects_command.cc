@@ -21,6 +21,7 @@
 #include "hands/hands_config.h"
 #include "objects/box_overlay.h"
 #include "objects/objects_file.h"
+#include "objects/object_prompts.h"
 #include "objects/objects_in_video.h"
 #include "video/mp4_writer.h"
 
@@ -58,23 +59,6 @@ HandsByFrame FindHands(const fs::path& input, const cv::Mat* still) {
     }
   }
   return out;
-}
-
-// "FRAME:X,Y,W,H[:CATEGORY]" (pixels of the input as displayed).
-SeedBox ParseSeed(const std::string& text) {
-  SeedBox seed;
-  char category[32] = "cup";
-  long long frame = 0;
-  double x = 0, y = 0, w = 0, h = 0;
-  const int n = std::sscanf(text.c_str(), "%lld:%lf,%lf,%lf,%lf:%31s", &frame, &x, &y, &w, &h, category);
-  if (n < 5 || frame < 0 || w <= 0 || h <= 0) {
-    throw Error("bad_arguments", "a seed is FRAME:X,Y,W,H[:CATEGORY] with W, H > 0, not " + text,
-                {.field = "--seed"});
-  }
-  seed.frame = frame;
-  seed.category = category;
-  seed.box = cv::Rect2d(x, y, w, h);
-  return seed;
 }
 
 // Overlays of videos are drawn at most this large on their longer side.
@@ -156,7 +140,9 @@ void RunObjects(ObjectsOptions& o) {
     }
   }
   std::vector<SeedBox> seeds;  // a bad one is refused before any work
-  for (const std::string& text : o.seeds) seeds.push_back(ParseSeed(text));
+  for (const std::string& text : o.seeds) {
+    for (SeedBox& seed : SeedsFromPrompt(text, "", "--seed")) seeds.push_back(std::move(seed));
+  }
   fs::create_directories(o.out);
   BoxTracker tracker(o.config, "");
   int failed = 0;
@@ -194,9 +180,15 @@ void AddObjectsCommand(CLI::App& app) {
                   "While objects are tracked, the detector looks for others every this many frames")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  cmd->add_option("--min-presence", o->config.min_presence,
+                  "Box-landmark presence below this ends a track ([objects.models] min_presence)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   cmd->add_option("--seed", o->seeds,
-                  "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given): an object the detector may\n"
-                  "miss, boxed by hand on one frame (pixels of the input); tracked from there");
+                  "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given; several joined by ';'): an\n"
+                  "object the detector may miss, boxed by hand on one frame (pixels of the input); followed\n"
+                  "from there in 2D, the box-landmark model reading its keypoints (a clip list's\n"
+                  "object_box column takes the same text)");
   cmd->add_flag("--near-hands", o->near_hands,
                 "Also find the hands (MediaPipe Hands) and try boxes beside their fingers with the\n"
                 "box-landmark models: some held objects the 2D detector misses, as rough boxes; a bare\n"

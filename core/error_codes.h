@@ -44,6 +44,8 @@ inline constexpr const char* kGeoBlocked = "geo_blocked";
 inline constexpr const char* kBadIntrinsics = "bad_intrinsics";
 inline constexpr const char* kNoBundle = "no_bundle";
 inline constexpr const char* kBadBundle = "bad_bundle";
+// A clip's object prompt (ingest/object_prompt.h) that cannot be used.
+inline constexpr const char* kBadObjectBox = "bad_object_box";
 inline constexpr const char* kBadTrack = "bad_track";
 inline constexpr const char* kBundleServerRefused = "bundle_server_refused";
 
@@ -67,6 +69,7 @@ inline bool IsPermanentError(std::string_view code) {
         std::string_view(kNoDownloadCommand), std::string_view(kVideoUnavailable),
         std::string_view(kGeoBlocked), std::string_view(kBadIntrinsics),
         std::string_view(kNoBundle), std::string_view(kBadBundle), std::string_view(kBadTrack),
+        std::string_view(kBadObjectBox),
         std::string_view(kBundleServerRefused), std::string_view(kMeasurementsTooLarge),
         std::string_view(kStageTimeout), std::string_view(kReadOnly)}) {
     if (code == permanent) return true;

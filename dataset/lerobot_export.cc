@@ -180,6 +180,7 @@ ExportPlan LoadPlan(const Manifest& m, const fs::path& version_dir, const LeRobo
   std::vector<LoadedEpisode>& episodes = plan.episodes;
   std::map<std::string, std::int64_t> task_index;
   for (const Episode* e : ExportOrder(m)) {
+    if (options.hand_object_only && e->hand_only) continue;
     LoadedEpisode l;
     l.episode = e;
     Load(l, version_dir, episodes.empty() ? nullptr : &episodes.front(), options.fps);
@@ -189,6 +190,9 @@ ExportPlan LoadPlan(const Manifest& m, const fs::path& version_dir, const LeRobo
     }
     l.task_index = task_index[e->task];
     episodes.push_back(std::move(l));
+  }
+  if (episodes.empty()) {  // every episode hand-only, and those left out
+    throw Error("empty_version", "the version has no hand-object episode", {.file = version_dir.string()});
   }
   const retarget::HandTrajectory& first = plan.first();
   plan.fps = first.fps;

@@ -39,6 +39,11 @@ struct LeRobotOptions {
   // > 0: every episode resampled to this rate (dataset/resample.h), its
   // video frames picked to match; 0: episodes must share the first one's.
   double fps = 0;
+  // Leave out the hand-only episodes: a version that mixes them with
+  // hand-object ones then exports observation.object_pose (which a single
+  // hand-only episode drops for all). Throws Error("empty_version") when no
+  // hand-object episode is left.
+  bool hand_object_only = false;
 };
 
 // Writes the export into `out_dir`, which must not exist or be empty.

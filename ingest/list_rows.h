@@ -16,6 +16,7 @@
 
 #include "core/config.h"
 #include "ingest/clip_list.h"
+#include "ingest/object_prompt.h"
 
 namespace doasido::ingest::rows {
 
@@ -82,6 +83,10 @@ class RowBuilder {
       if (fresh) it->second = RoleOf(raw_key);
       const Role role = it->second;
       if (role == Role::kMetadata) {
+        if (Lower(Trim(raw_key)) == kObjectBoxColumn) {
+          if (!ObjectBox(value, line, row)) return;
+          continue;
+        }
         row.clip.metadata[raw_key] = value;
         continue;
       }
@@ -151,6 +156,9 @@ class RowBuilder {
     if (c.start_s && c.end_s && *c.end_s < *c.start_s) {
       return Bad(line, "end_time", "end is before start");
     }
+    if (const std::string why = PromptOutsideSpan(c); !why.empty()) {
+      return Bad(line, kObjectBoxColumn, why);
+    }
     char span[128];
     std::snprintf(span, sizeof span, "|%lld|%lld|%.17g|%.17g",
                   static_cast<long long>(c.start_frame.value_or(-1)),
@@ -192,6 +200,34 @@ class RowBuilder {
     if (path.size() <= 300) return path;
     return path.substr(0, 120) + "...(" + std::to_string(path.size()) + " characters)..." +
            path.substr(path.size() - 60);
+  }
+
+  // The object prompt cell (ingest/object_prompt.h): kept under its one
+  // name when well formed; an empty cell is no prompt.
+  bool ObjectBox(const Json& value, long line, ListRow& row) {
+    const std::string text = Trim(CellText(value));
+    if (text.empty() || value.is_null()) return true;
+    std::vector<ObjectPrompt> prompts;
+    if (const std::string why = ParseObjectPrompts(text, &prompts); !why.empty()) {
+      return Bad(line, kObjectBoxColumn, why), false;
+    }
+    row.clip.metadata[kObjectBoxColumn] = text;
+    return true;
+  }
+
+  // Why a prompt's frame lies outside the row's frame span, or "".
+  static std::string PromptOutsideSpan(const ClipRecord& c) {
+    if (!c.metadata.is_object() || !c.metadata.contains(kObjectBoxColumn)) return "";
+    std::vector<ObjectPrompt> prompts;
+    ParseObjectPrompts(c.metadata[kObjectBoxColumn].get<std::string>(), &prompts);
+    for (const ObjectPrompt& p : prompts) {
+      if ((c.start_frame && p.frame < *c.start_frame) || (c.end_frame && p.frame > *c.end_frame)) {
+        return "the box's frame " + std::to_string(p.frame) + " is outside the clip's frames " +
+               std::to_string(c.start_frame.value_or(0)) + "-" +
+               (c.end_frame ? std::to_string(*c.end_frame) : std::string("end"));
+      }
+    }
+    return "";
   }
 
   bool Frame(const std::string& text, const std::string& field, long line,

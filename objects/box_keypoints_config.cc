@@ -25,6 +25,7 @@ void CheckConfig(const BoxKeypointsConfig& c, const std::string& section) {
   RequireInRange(section, "hand_proposal_every", c.hand_proposal_every, 1, 1000);
   RequireInRange(section, "hand_proposal_offset", c.hand_proposal_offset, 0, 2);
   RequireInRange(section, "hand_rejoin_frames", c.hand_rejoin_frames, 0, 1000);
+  RequireInRange(section, "prompt_max_missing_frames", c.prompt_max_missing_frames, 0, 1000);
   if (c.hand_proposal_sizes.empty()) {
     throw Error("bad_config", section + ".hand_proposal_sizes must hold at least one size",
                 {.field = section + ".hand_proposal_sizes"});

@@ -54,12 +54,21 @@ struct BoxKeypointsConfig {
   // one 60-frame track of the rough boxes, and dynamics retargeting did
   // worse on it than on the 35-frame one (docs/objects.md).
   int hand_rejoin_frames = 0;
+  // A track a person prompted (BoxTracker::Seed: a list row's object_box, the
+  // command's --seed) is followed in 2D from its box (OpenCV's MIL tracker)
+  // rather than from the model's own keypoints, which on held or upside-down
+  // cups shrink onto part of the cup and lose it within a few frames
+  // (docs/object_models.md). The model still gives each frame's keypoints
+  // where its presence passes min_presence; the track ends after this many
+  // frames in a row without them, or where the 2D follower fails.
+  int prompt_max_missing_frames = 15;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,
                                                 same_object_iou, min_presence, crop_scale, max_side,
                                                 hand_proposals, hand_proposal_every, hand_proposal_sizes,
-                                                hand_proposal_offset, hand_rejoin_frames)
+                                                hand_proposal_offset, hand_rejoin_frames,
+                                                prompt_max_missing_frames)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);

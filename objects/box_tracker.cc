@@ -174,17 +174,59 @@ void BoxTracker::DetectNew(const cv::Mat& rgb, int frame, std::vector<Tracked>* 
   }
 }
 
+bool BoxTracker::NoRoomFor(const cv::Rect2d& box, const std::vector<Tracked>& kept) const {
+  if (static_cast<int>(kept.size()) >= config_.max_objects) return true;
+  for (const Tracked& t : kept) {
+    if (BoxIoU(t.extent, box) > config_.same_object_iou) return true;
+  }
+  return false;
+}
+
 void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& category,
                             const cv::Rect2d& box, std::vector<Tracked>* kept,
                             std::vector<ObjectObservation>* found) {
-  if (static_cast<int>(kept->size()) >= config_.max_objects) return;
-  for (const Tracked& t : *kept) {
-    if (BoxIoU(t.extent, box) > config_.same_object_iou) return;
-  }
+  if (NoRoomFor(box, *kept)) return;
   const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
                                    box.height, 0.0, config_.crop_scale);
   ObjectObservation seen{.frame = frame};
   if (Landmarks(rgb, category, crop, &seen)) Adopt(seen, kept, found);
+}
+
+void BoxTracker::StartPrompted(const cv::Mat& rgb, int frame, const std::string& category,
+                               const cv::Rect2d& box, std::vector<Tracked>* kept,
+                               std::vector<ObjectObservation>* found) {
+  if (NoRoomFor(box, *kept)) return;
+  const cv::Rect whole(0, 0, rgb.cols, rgb.rows);
+  const cv::Rect start = cv::Rect(box) & whole;
+  if (start.width < 2 || start.height < 2) return;  // the box is off the frame
+  Tracked t{.id = next_id_++, .category = category, .extent = start};
+  t.follower = cv::TrackerMIL::create();
+  t.follower->init(rgb, start);
+  ObjectObservation seen{.frame = frame, .track = t.id};
+  const BoxCrop crop = CropFromBox(start.x + start.width / 2.0, start.y + start.height / 2.0,
+                                   start.width, start.height, 0.0, config_.crop_scale);
+  if (Landmarks(rgb, category, crop, &seen)) {
+    found->push_back(seen);
+  } else {
+    t.missing = 1;
+  }
+  kept->push_back(std::move(t));
+}
+
+bool BoxTracker::FollowPrompted(const cv::Mat& rgb, int frame, Tracked* t,
+                                std::vector<ObjectObservation>* found) {
+  cv::Rect box;
+  if (!t->follower->update(rgb, box) || box.width <= 0 || box.height <= 0) return false;
+  t->extent = box;
+  ObjectObservation seen{.frame = frame, .track = t->id};
+  const BoxCrop crop = CropFromBox(box.x + box.width / 2.0, box.y + box.height / 2.0, box.width,
+                                   box.height, 0.0, config_.crop_scale);
+  if (Landmarks(rgb, t->category, crop, &seen)) {
+    found->push_back(seen);
+    t->missing = 0;
+    return true;
+  }
+  return ++t->missing <= config_.prompt_max_missing_frames;
 }
 
 void BoxTracker::Seed(const std::string& category, const cv::Rect2d& box) {
@@ -216,7 +258,15 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
   std::vector<ObjectObservation> found;
   std::vector<Tracked> kept;
   bool lost = false;
-  for (const Tracked& t : tracks_) {
+  for (Tracked& t : tracks_) {
+    if (t.follower) {
+      if (FollowPrompted(rgb, frame, &t, &found)) {
+        kept.push_back(std::move(t));
+      } else {
+        lost = true;
+      }
+      continue;
+    }
     ObjectObservation seen{.frame = frame, .track = t.id};
     if (!Landmarks(rgb, t.category, t.next, &seen)) {
       lost = true;
@@ -232,7 +282,7 @@ std::vector<ObjectObservation> BoxTracker::Track(const cv::Mat& bgr, int frame, 
   }
   const double to_input = scale / shrink;
   for (const auto& [category, box] : seeds_) {
-    StartTrack(rgb, frame, category,
+    StartPrompted(rgb, frame, category,
                cv::Rect2d(box.x / to_input, box.y / to_input, box.width / to_input, box.height / to_input),
                &kept, &found);
   }

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <opencv2/video/tracking.hpp>
 
 #include "objects/box_detector.h"
 #include "objects/box_keypoints.h"
@@ -71,9 +72,11 @@ class BoxTracker {
   std::vector<ObjectObservation> Track(const cv::Mat& bgr, int frame, double scale = 1.0);
   // An object shown by hand (or by another detector): `box` holds one
   // object of `category`, in the pixels Track() reports (the frame's times
-  // its scale). The next Track() starts a track there as a detection would
-  // (the box enlarged, the box-landmark model, its presence threshold);
-  // for objects the 2D detector misses, such as 02_cups' red plastic cups.
+  // its scale). The next Track() starts a prompted track there, unless a
+  // track is there already: for objects the 2D detector misses, such as
+  // 02_cups' red plastic cups. A prompted track follows the box in 2D
+  // (cv::TrackerMIL), the box-landmark model looking at that box each frame
+  // (BoxKeypointsConfig::prompt_max_missing_frames).
   void Seed(const std::string& category, const cv::Rect2d& box);
   // The hands of the next Track()'s frame (keypoints in the pixels Track()
   // reports). With hand_proposals on, every hand_proposal_every-th frame
@@ -91,7 +94,16 @@ class BoxTracker {
     std::string category;
     BoxCrop next;
     cv::Rect2d extent;  // of the keypoints, pixels of the (shrunk) frame
+    cv::Ptr<cv::Tracker> follower;  // a prompted track's 2D follower, else null
+    int missing = 0;                // a prompted track's frames in a row without keypoints
   };
+  // True when max_objects are tracked or a kept track is at `box` already.
+  bool NoRoomFor(const cv::Rect2d& box, const std::vector<Tracked>& kept) const;
+  // A prompted track's next frame: the follower's box, the model's keypoints
+  // on it when present. False when the track ends.
+  bool FollowPrompted(const cv::Mat& rgb, int frame, Tracked* t, std::vector<ObjectObservation>* found);
+  void StartPrompted(const cv::Mat& rgb, int frame, const std::string& category, const cv::Rect2d& box,
+                     std::vector<Tracked>* kept, std::vector<ObjectObservation>* found);
   // Runs `category`'s model on `crop`; false when the box is not present.
   bool Landmarks(const cv::Mat& rgb, const std::string& category, const BoxCrop& crop,
                  ObjectObservation* seen);

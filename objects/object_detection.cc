@@ -66,12 +66,13 @@ namespace {
 
 // The category models on every frame of the span; frames counted from its start.
 std::vector<ObjectObservation> RunModels(const std::filesystem::path& video, const FrameSpan& span,
-                                         const BoxKeypointsConfig& config, const HandsByFrame* hands) {
+                                         const BoxKeypointsConfig& config, const HandsByFrame* hands,
+                                         const std::vector<SeedBox>& seeds) {
   BoxTracker tracker(config, video.stem().string());
   DecoderOptions options{.clip = video.stem().string()};
   options.first_frame = span.first_frame;
   options.last_frame = span.first_frame + span.frames - 1;
-  const DetectedObjects detected = ObjectsInVideo(video, options, config.max_side, tracker, {}, {}, hands);
+  const DetectedObjects detected = ObjectsInVideo(video, options, config.max_side, tracker, {}, seeds, hands);
   std::vector<ObjectObservation> out;
   for (const auto& frame : detected.frames) {
     for (ObjectObservation o : frame) {
@@ -85,8 +86,9 @@ std::vector<ObjectObservation> RunModels(const std::filesystem::path& video, con
 }  // namespace
 
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
-                                             const ObjectsConfig& config, const HandsByFrame* hands) {
-  if (config.observations_dir.empty()) return RunModels(video, span, config.models, hands);
+                                             const ObjectsConfig& config, const HandsByFrame* hands,
+                                             const std::vector<SeedBox>& seeds) {
+  if (config.observations_dir.empty()) return RunModels(video, span, config.models, hands, seeds);
   const auto file = std::filesystem::path(config.observations_dir) / (video.stem().string() + ".json");
   if (!std::filesystem::is_regular_file(file)) {
     throw Error(kErrorObservationsMissing, "no observations for video " + video.string(),

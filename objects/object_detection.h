@@ -33,11 +33,14 @@ struct FrameSpan {
 // The observations of the span, frame 0 = span.first_frame (frames outside
 // the span left out): the models' keypoints, or the observations file's.
 // `hands` (may be null; file frames) is where the models also look beside
-// the fingers ([objects.models] hand_proposals). Errors name the clip's
-// video, the file and the field.
+// the fingers ([objects.models] hand_proposals); `seeds` (file frames) where
+// a person boxed the object (objects/object_prompts.h): the models start
+// prompted tracks there (seeds outside the span are not used). Errors name
+// the clip's video, the file and the field.
 std::vector<ObjectObservation> DetectObjects(const std::filesystem::path& video, const FrameSpan& span,
                                              const ObjectsConfig& config,
-                                             const HandsByFrame* hands = nullptr);
+                                             const HandsByFrame* hands = nullptr,
+                                             const std::vector<SeedBox>& seeds = {});
 
 // The hands of a hands-stage bundle (its metric joints projected by its K)
 // as 2D keypoints per file frame (frame t of the bundle is file frame

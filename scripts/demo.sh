@@ -8,11 +8,15 @@
 # export; then prints which episodes are hand-object (retargeted with
 # dynamics) and which hand-only, where each clip stopped and why, and how
 # long install, build and run took.
-# Real videos have no object model here: their bundle is the hands stage's
-# hand-only bundle (real hand motion, retargeted onto the robot hand). The
-# synthetic clips have exact ground truth: a stand-in for a model command
-# (tools/ground_truth_bundle.sh) hands their bundles, objects included, to
-# the bundle stage.
+# Real videos: the category models' 2D detector finds no red cup in
+# 02_cups, so one row of the list boxes the held cup on one frame (column
+# object_box, as a person prompts SAM2): the objects stage follows it and
+# lifts it to a metric pose sized by the touching fingertips, and that clip
+# (cups_held, frames 12-40) is a real hand + object episode retargeted with
+# dynamics. The other real clips stay hand-only (real hand motion on the
+# robot hand). The synthetic clips have exact ground truth: a stand-in for
+# a model command (tools/ground_truth_bundle.sh) hands their bundles,
+# objects included, to the bundle stage.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS=0
@@ -46,6 +50,12 @@ if VERSION=$($DOASIDO dataset create --db "$DB" --root "$WORK/datasets" --name d
   rm -rf "$WORK/lerobot/$(basename "$VERSION")"
   # The cameras ran at 25, 29.97 and 30 fps: one rate for the export.
   $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --out "$WORK/lerobot/$(basename "$VERSION")"
+  # The hand-only episodes drop observation.object_pose from the whole
+  # export; the hand-object episodes alone (the real cups_held among them)
+  # keep it.
+  rm -rf "$WORK/lerobot/$(basename "$VERSION")-hand-object"
+  $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --hand-object-only \
+    --out "$WORK/lerobot/$(basename "$VERSION")-hand-object"
   echo
   echo "Episodes (kind: hand-object = retargeted with dynamics; hand-only = kinematic):"
   $DOASIDO dataset show "$VERSION"
@@ -58,7 +68,8 @@ $DOASIDO status --db "$DB" --clips
 echo
 echo "Database: $DB   (try: $DOASIDO status --db $DB)"
 echo "Report:   $WORK/report/report.html"
-[ -n "${VERSION:-}" ] && echo "Dataset:  $VERSION   LeRobot export: $WORK/lerobot/$(basename "$VERSION")"
+[ -n "${VERSION:-}" ] && echo "Dataset:  $VERSION   LeRobot export: $WORK/lerobot/$(basename "$VERSION")" \
+  "(hand-object episodes with observation.object_pose: $WORK/lerobot/$(basename "$VERSION")-hand-object)"
 echo "Review the flagged clips: $DOASIDO review serve --db $DB"
 RUN_S=$((SECONDS - INSTALL_S - BUILD_S))
 echo "Check the robot trajectories beside their videos: $DOASIDO review serve --db $DB  (then /verify)"

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "stages/clip_inputs.h"
 #include "retarget/dynamic/bimanual_retarget.h"
+#include "retarget/holding_hand.h"
 #include "retarget/mirror_scene.h"
 #include "stages/kinematic_stage.h"
 
@@ -71,6 +72,11 @@ StageResult DynamicRetargetStage::Run(const ClipContext& context) {
     return std::find(v.begin(), v.end(), true) != v.end();
   };
   const bool left_seen = any(r.left_valid);
+  // One robot hand and two human hands: the one that holds the object
+  // (retarget/holding_hand.h), mirrored when it is the left.
+  if (config_.left_hand.empty() && left_seen && any(r.right_valid) && LeftHandHoldsObject(r, mesh)) {
+    r = KeepOnlyLeftHand(std::move(r));
+  }
   if (!any(r.right_valid)) {
     if (!left_seen) {  // recon rejects a clip without hands; a file may still say so
       result.verdict = Verdict::kReject;

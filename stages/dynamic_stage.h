@@ -25,7 +25,9 @@
 // left_wrist_error, right_wrist_error (m) and left_in_hand_frames.
 // A lone left hand is retargeted with the whole scene mirrored onto `hand`
 // (retarget/mirror_scene.h; measurement retargeted_hand "left_mirrored", else
-// "right"), both hands with config.left_hand set take the two-hand scene.
+// "right"), both hands with config.left_hand set take the two-hand scene;
+// both hands without it, the one holding the object (its fingertips nearer
+// the object, retarget/holding_hand.h): a left one mirrored as if alone.
 // A hand-only reconstruction keeps the retarget_kinematic trajectory (pass,
 // kReasonHandOnlyKinematic; reject kReasonNoObject when the pipeline has no
 // retarget_kinematic before this stage).

@@ -8,7 +8,9 @@
 #include "core/error_codes.h"
 #include "core/file_text.h"
 #include "objects/object_bundle_writer.h"
+#include "ingest/object_prompt.h"
 #include "objects/object_detection.h"
+#include "objects/object_prompts.h"
 #include "objects/object_reconstruction.h"
 #include "recon/bundle/bundle_location.h"
 #include "stages/clip_inputs.h"
@@ -54,6 +56,24 @@ Json Measurements(const ObjectsResult& r, size_t observations) {
   return m;
 }
 
+// The seed boxes of the clip's object prompt (its list row's object_box),
+// none when it has no prompt.
+std::vector<SeedBox> ClipPrompt(const ClipContext& context, const std::string& clip) {
+  const Json& meta = context.clip.metadata;
+  if (!meta.is_object() || !meta.contains(ingest::kObjectBoxColumn)) return {};
+  const Json& cell = meta[ingest::kObjectBoxColumn];
+  if (!cell.is_string()) {
+    throw Error(kBadObjectBox, "not text", {.clip = clip, .field = ingest::kObjectBoxColumn});
+  }
+  return SeedsFromPrompt(cell.get<std::string>(), clip, ingest::kObjectBoxColumn);
+}
+
+int SeedsInSpan(const std::vector<SeedBox>& seeds, const FrameSpan& span) {
+  int n = 0;
+  for (const SeedBox& s : seeds) n += s.frame >= span.first_frame && s.frame < span.first_frame + span.frames;
+  return n;
+}
+
 }  // namespace
 
 ObjectsStage::ObjectsStage(ObjectsConfig config) : config_(std::move(config)) {
@@ -68,6 +88,7 @@ StageResult ObjectsStage::Run(const ClipContext& context) {
                         {"bundle", BundleDir(context).string()}};
     return out;
   }
+  const std::vector<SeedBox> prompt = ClipPrompt(context, clip);  // checked before any work
   const auto hands_dir = SiblingArtifactDir(context, recon::kHandsStageFolder);
   if (!std::filesystem::is_regular_file(hands_dir / "meta.json")) {
     out.measurements = {{"skipped", "no output of the hands stage (its span, K and hands)"}};
@@ -80,7 +101,7 @@ StageResult ObjectsStage::Run(const ClipContext& context) {
   ObjectsResult result;
   try {
     const HandsByFrame near = HandsFromBundle(hands, span.first_frame);
-    observations = DetectObjects(context.video.path, span, config_, &near);
+    observations = DetectObjects(context.video.path, span, config_, &near, prompt);
     result = ReconstructObjects(observations, hands, config_);
   } catch (const Error& e) {
     ErrorSite site = e.site();
@@ -92,6 +113,10 @@ StageResult ObjectsStage::Run(const ClipContext& context) {
   WriteObjectBundle(result, hands, span.first_frame, context.artifact_dir, config_.cylinder_segments);
   out.measurements = Measurements(result, observations.size());
   out.measurements["first_frame"] = span.first_frame;
+  if (!prompt.empty()) {
+    out.measurements[kMeasurePromptBoxes] = prompt.size();
+    out.measurements[kMeasurePromptBoxesInSpan] = SeedsInSpan(prompt, span);
+  }
   out.measurements["seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.artifacts = {{"objects", kObjectsFile}};

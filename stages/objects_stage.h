@@ -16,10 +16,16 @@
 // "skipped": that bundle wins. So is a clip without the hands stage's
 // output (the span, K and the metric hands come from it).
 //
+// The clip's list row may box the object on a frame (column object_box,
+// ingest/object_prompt.h): the models start a prompted track there and
+// follow it (objects/box_tracker.h), for the objects their 2D detector
+// misses.
+//
 // Verdicts: pass; pass with reason `no_known_object` when no track of a
 // category the models know survives (only objects.json is written; the
 // clip stays hand-only). Errors (clip named): object_observations_missing
-// (observations_dir set, no file for the video: retried),
+// (observations_dir set, no file for the video: retried), bad_object_box
+// (the prompt is malformed or names an unknown category: permanent),
 // bad_observations (permanent), bad_bundle (the hands stage's output).
 #pragma once
 
@@ -43,6 +49,10 @@ inline constexpr const char* kMeasureFilledFrames = "filled_frames";
 inline constexpr const char* kMeasureDegenerateFrames = "degenerate_frames";
 inline constexpr const char* kMeasureTracks = "tracks";
 inline constexpr const char* kMeasureUnknownCategories = "unknown_categories";
+// The clip's object prompt (its list row's object_box): boxes given, and
+// those on frames of the kept span (the others cannot start a track).
+inline constexpr const char* kMeasurePromptBoxes = "prompt_boxes";
+inline constexpr const char* kMeasurePromptBoxesInSpan = "prompt_boxes_in_span";
 
 class ObjectsStage : public Stage {
  public:

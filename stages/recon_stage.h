@@ -11,7 +11,9 @@
 // (gravity.h) rotates camera coordinates so up is +z; the floor z = 0 is
 // put under the object's resting pose (the lowest point of the posed mesh in
 // the first frame where the object moves less than rest_speed, else in the
-// slowest frame). The right hand's joints are taken as metric (HaWoR).
+// slowest frame), or lower where the object gets lower on another frame (a
+// held object that pauses before it is set down: reconstruction.json
+// floor.lowest_frame). The right hand's joints are taken as metric (HaWoR).
 // Output in artifact_dir: reconstruction.npz, object.obj, reconstruction.json
 // (gravity source and inlier share, per-frame scales and how each frame was
 // filled, skipped frames with reasons, object pose source).

@@ -195,6 +195,41 @@ TEST(LeRobotExport, RefusesNonEmptyOutputAndMixedRates) {
   }
 }
 
+// A version mixing a hand-only episode (no object poses) with hand-object
+// ones, as the demo's: the whole export drops observation.object_pose; with
+// hand_object_only the hand-only episode is left out and the object poses
+// are exported, row for row; a version of hand-only episodes alone then has
+// nothing to export.
+TEST(LeRobotExport, HandObjectOnlyLeavesOutTheHandOnlyEpisodesAndKeepsTheObjectPoses) {
+  TempDir dir;
+  Made made = MakeVersion(dir.path());
+  const fs::path traj = dir / "v1/episodes/clip-000002/trajectory.json";
+  retarget::HandTrajectory t = retarget::ReadTrajectoryJson(traj);
+  t.object_poses.clear();
+  fs::remove(traj);
+  retarget::WriteTrajectoryJson(t, traj);
+  made.manifest.episodes[1].hand_only = true;
+  WriteFile(dir / "v1/manifest.json", ToJson(made.manifest).dump());
+  auto info = [&](const fs::path& out) { return Json::parse(testing::ReadFile(out / "meta/info.json")); };
+  ExportLeRobot(dir / "v1", dir / "all", {.videos = false});
+  EXPECT_FALSE(info(dir / "all")["features"].contains("observation.object_pose"));
+  EXPECT_EQ(info(dir / "all")["total_episodes"], 3);
+  ExportLeRobot(dir / "v1", dir / "held", {.videos = false, .hand_object_only = true});
+  const Json held = info(dir / "held");
+  EXPECT_TRUE(held["features"].contains("observation.object_pose"));
+  EXPECT_EQ(held["total_episodes"], 2);
+  EXPECT_EQ(held["total_frames"], made.trajectories[0].qpos.size() + made.trajectories[2].qpos.size());
+
+  for (Episode& e : made.manifest.episodes) e.hand_only = true;
+  WriteFile(dir / "v1/manifest.json", ToJson(made.manifest).dump());
+  try {
+    ExportLeRobot(dir / "v1", dir / "none", {.videos = false, .hand_object_only = true});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), "empty_version");
+  }
+}
+
 // Actuator targets for the given episodes' trajectories (3 actuators,
 // values distinct from every joint position).
 void AddControls(const fs::path& dir, const std::vector<std::string>& episodes) {

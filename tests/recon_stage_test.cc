@@ -46,6 +46,37 @@ TEST(ReconStage, ExactBundleGivesScaleOneAndAReadableReconstruction) {
   EXPECT_EQ(rec.info["object_pose_source"], "bundle");
 }
 
+// An object held still in the air, then set down (02_cups' lowered cup):
+// the first frames are a resting pose 10 cm up (against the bundle's
+// gravity), the rest the clip's own path. The floor goes under the lowest
+// the object gets, so no posed frame puts any vertex below it; under the
+// in-air resting pose alone the later frames would be 10 cm through it.
+TEST(ReconStage, AnObjectSetDownFromTheAirIsNeverBelowTheFloor) {
+  TempDir root;
+  ClipBundle b = Clip();
+  ASSERT_FALSE(b.gravity_up.empty());
+  for (int t = 0; t < 6; ++t) {
+    b.object_poses[t] = b.object_poses[6];
+    b.object_poses[t].t += 0.10 * b.gravity_up[6].normalized();
+  }
+  const ClipContext c = Context(root, b);
+  const StageResult r = stages::ReconStage().Run(c);
+  ASSERT_EQ(r.verdict, Verdict::kPass) << r.reason;
+  const Reconstruction rec = ReadReconstruction(c.artifact_dir);
+  double lowest = 1e9, first = 1e9;
+  for (int t = 0; t < rec.frames(); ++t) {
+    if (!rec.object_valid[t]) continue;
+    for (int v = 0; v < b.object_mesh->num_vertices(); ++v) {
+      const double z = (rec.object_poses[t] * Vec3(b.object_mesh->vertices.row(v).transpose())).z();
+      lowest = std::min(lowest, z);
+      if (t == 0) first = std::min(first, z);
+    }
+  }
+  EXPECT_NEAR(lowest, 0.0, 1e-6);
+  EXPECT_GT(first, 0.05);  // the held pose is above the floor, not on it
+  EXPECT_GT(rec.info["floor"]["lowest_frame"].get<int>(), 5);
+}
+
 // Both hands come through in the same frame: here the left hand is the
 // clip's hand track moved 30 cm, so every left joint sits the same 30-cm
 // vector (turned by gravity alignment) from its right twin.

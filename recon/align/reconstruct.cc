@@ -103,13 +103,29 @@ void PlaceObject(const HandObjectAlignment& a, const Mat3& R, int T, Reconstruct
   }
 }
 
-// The height of the mesh's lowest vertex at the resting frame (the floor),
-// 0 without one.
-double FloorHeight(const TriMesh& mesh, const Reconstruction& r, int rest) {
-  if (rest < 0) return 0;
-  double floor_h = 1e30;
+// The height of the posed mesh's lowest vertex on frame t.
+double LowestPoint(const TriMesh& mesh, const Reconstruction& r, int t) {
+  double low = 1e30;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    floor_h = std::min(floor_h, (r.object_poses[rest] * Vec3(mesh.vertices.row(v).transpose())).z());
+    low = std::min(low, (r.object_poses[t] * Vec3(mesh.vertices.row(v).transpose())).z());
+  }
+  return low;
+}
+
+// The floor: the mesh's lowest vertex at the resting frame, lowered to the
+// lowest the object gets on any posed frame when that is lower (an object
+// never passes through its support; a held cup that pauses in the air
+// before it is set down, 02_cups' first second, would otherwise be put on
+// the floor there and pushed through it later). 0 without a resting
+// frame. `lowest` gets the frame that sets it.
+double FloorHeight(const TriMesh& mesh, const Reconstruction& r, int rest, int* lowest) {
+  *lowest = rest;
+  if (rest < 0) return 0;
+  double floor_h = LowestPoint(mesh, r, rest);
+  for (int t = 0; t < static_cast<int>(r.object_poses.size()); ++t) {
+    if (!r.object_valid[t]) continue;
+    const double low = LowestPoint(mesh, r, t);
+    if (low < floor_h) floor_h = low, *lowest = t;
   }
   return floor_h;
 }
@@ -219,7 +235,8 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
   r.fps = b.fps > 0 ? b.fps : 30.0;
   PlaceObject(out.alignment, R, b.frames, r);
   const int rest = RestingFrame(r.object_poses, r.object_valid, config.rest_speed);
-  const double floor_h = FloorHeight(*b.object_mesh, r, rest);
+  int lowest = -1;
+  const double floor_h = FloorHeight(*b.object_mesh, r, rest, &lowest);
   out.floor_offset = floor_h;
   for (Pose& p : r.object_poses) p.t.z() -= floor_h;
   r.right_valid.assign(b.frames, false);
@@ -230,6 +247,7 @@ ReconOutput Reconstruct(const ClipBundle& b, const std::vector<Pose>& poses,
   AddAlignmentMeasurements(out, pose_valid, b.frames);
   AddQuality(out, *b.object_mesh);
   r.info = ReconstructionInfo(out, config, b.frames, rest, floor_h);
+  r.info["floor"]["lowest_frame"] = lowest;
   return out;
 }
 

@@ -54,8 +54,7 @@
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
-
+#include "bench/child_cpu.h"
 #include "core/error.h"
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
@@ -135,12 +134,6 @@ retarget::DynamicRetargetConfig FastConfig(const Flags& f) {
   return c;
 }
 
-double CpuSeconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
 void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
   retarget::WriteTrajectoryJson(t, dir / "trajectory.json.tmp");
   fs::rename(dir / "trajectory.json.tmp", dir / "trajectory.json");
@@ -154,7 +147,7 @@ void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
 void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarget::DynamicRetargetConfig& config,
                const fs::path& dir) {
   const std::string label = dir.filename().string();
-  const double cpu0 = CpuSeconds();
+  const double cpu0 = bench::SelfCpu();
   const auto t0 = Clock::now();
   std::optional<retarget::ClipRetarget> clip;
   Json made = {{"preset", config.preset}, {"rungs", Json::array()}};
@@ -162,13 +155,13 @@ void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarg
     if (!clip) {
       clip.emplace(r, mesh, retarget::FindEmbodiment(config.hand, config.robots_dir), config, dir / "scene", label);
       made["prepare_seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-      made["prepare_cpu_seconds"] = CpuSeconds() - cpu0;
+      made["prepare_cpu_seconds"] = bench::SelfCpu() - cpu0;
     }
-    const double rung_cpu0 = CpuSeconds();
+    const double rung_cpu0 = bench::SelfCpu();
     const auto r0 = Clock::now();
     retarget::DynamicRetargetRun run = clip->Track(retarget::RungSampler(config, rung));
     const double seconds = std::chrono::duration<double>(Clock::now() - r0).count();
-    const double cpu = CpuSeconds() - rung_cpu0;
+    const double cpu = bench::SelfCpu() - rung_cpu0;
     made["rungs"].push_back({{"name", rung}, {"seconds", seconds}, {"cpu_seconds", cpu},
                              {"success", run.metrics.success}, {"e_pos", run.metrics.e_pos},
                              {"e_rot", run.metrics.e_rot}});
@@ -183,7 +176,7 @@ void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarg
   made["kept"] = ladder.rungs[ladder.best_rung].name;
   made["success"] = ladder.best.metrics.success;
   made["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-  made["cpu_seconds"] = CpuSeconds() - cpu0;
+  made["cpu_seconds"] = bench::SelfCpu() - cpu0;
   Save(t, dir);
   std::ofstream(dir / "made.json") << made.dump(1) << "\n";
   std::fprintf(stderr, "made %s: success %d at rung %s, %.0f s wall, %.0f s CPU\n", label.c_str(),

@@ -16,6 +16,13 @@ inline double Seconds(const timeval& t) {
   return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6;
 }
 
+// User + system seconds of this process so far (all its threads).
+inline double SelfCpu() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return Seconds(u.ru_utime) + Seconds(u.ru_stime);
+}
+
 // User + system seconds of `argv` (looked up on PATH) and every child it
 // waited for, from wait4; its output goes to /dev/null. -1 when it fails.
 inline double ChildCpu(const std::vector<std::string>& argv) {

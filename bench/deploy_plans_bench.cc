@@ -24,6 +24,15 @@
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
 //       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--follow_rounds=N] [--follow_smoothing=S]
+//       [--preset=fast|medium|seed|ladder] [--no_hot3d]
+// --preset retargets the single-hand references with that preset, or with
+// "ladder" along DynamicRetargetConfig{}'s ladder as the `retarget` stage
+// does (the scene, model and kinematic reference once, a rung only when the
+// one before failed); use a --cache per preset. Each reference's rungs
+// (wall and CPU seconds, success) go to made.json beside its trajectory,
+// and the report gives per reference the rungs, the kept rung's share and
+// the first rung alone against the ladder. --no_hot3d neither makes nor
+// plans the HOT3D reference.
 // The arm is planned on the floating hand's replayed wrist (plan.h step
 // 3b, deploy.follow_rounds; --follow_rounds=0: on the trajectory's wrist).
 // --compare replays each plan also on the floating hand (plan.h
@@ -38,9 +47,14 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "bench/child_cpu.h"
 #include "core/error.h"
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
@@ -64,12 +78,13 @@ struct Flags {
   int refs = 10, carries = 5, threads = 2;
   int from = 0;  // make references from..refs-1 only (two makers split the list)
   double clip_seconds = 10, carry_seconds = 4;
-  bool make_only = false, plan_only = false, replay = true;
+  bool make_only = false, plan_only = false, replay = true, hot3d = true;
   bool compare = false;
   // Hand-only trajectories of real clips: every <clip>/retarget_kinematic/
   // trajectory.json under this folder (a doasido run's artifact root).
   fs::path real;     // also replay the floating hand (re-timed and at the video's clock)
   std::string only;         // plan only the reference of this name
+  std::string preset = "fast";  // the single-hand references' preset, or "ladder"
   deploy::PlanConfig plan;  // --no_leads: without the lead moves
 };
 
@@ -89,10 +104,12 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--make_only") f.make_only = true;
     else if (k == "--plan_only") f.plan_only = true;
     else if (k == "--no_replay") f.replay = false;
+    else if (k == "--no_hot3d") f.hot3d = false;
     else if (k == "--compare") f.compare = true;
     else if (k == "--real") f.real = v;
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
+    else if (k == "--preset") f.preset = v;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
     else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
@@ -122,6 +139,51 @@ void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
   fs::rename(dir / "trajectory.json.tmp", dir / "trajectory.json");
 }
 
+// One reference along the rungs of `config` (one rung for a preset), as
+// the `retarget` stage runs them: the scene, model and kinematic reference
+// once (ClipRetarget), then a rung only when the one before failed. The
+// kept trajectory carries the ladder's measurements; made.json holds each
+// rung's wall and CPU seconds and the preparation's.
+void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarget::DynamicRetargetConfig& config,
+               const fs::path& dir) {
+  const std::string label = dir.filename().string();
+  const double cpu0 = bench::SelfCpu();
+  const auto t0 = Clock::now();
+  std::optional<retarget::ClipRetarget> clip;
+  Json made = {{"preset", config.preset}, {"rungs", Json::array()}};
+  const std::function<retarget::DynamicRetargetRun(const std::string&)> track = [&](const std::string& rung) {
+    if (!clip) {
+      clip.emplace(r, mesh, retarget::FindEmbodiment(config.hand, config.robots_dir), config, dir / "scene", label);
+      made["prepare_seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
+      made["prepare_cpu_seconds"] = bench::SelfCpu() - cpu0;
+    }
+    const double rung_cpu0 = bench::SelfCpu();
+    const auto r0 = Clock::now();
+    retarget::DynamicRetargetRun run = clip->Track(retarget::RungSampler(config, rung));
+    const double seconds = std::chrono::duration<double>(Clock::now() - r0).count();
+    const double cpu = bench::SelfCpu() - rung_cpu0;
+    made["rungs"].push_back({{"name", rung}, {"seconds", seconds}, {"cpu_seconds", cpu},
+                             {"success", run.metrics.success}, {"e_pos", run.metrics.e_pos},
+                             {"e_rot", run.metrics.e_rot}});
+    std::fprintf(stderr, "%s rung %s: success %d (E_pos %.3f, E_rot %.3f), %.0f s wall, %.0f s CPU\n",
+                 label.c_str(), rung.c_str(), run.metrics.success, run.metrics.e_pos, run.metrics.e_rot, seconds,
+                 cpu);
+    return run;
+  };
+  retarget::LadderResult<retarget::DynamicRetargetRun> ladder = retarget::RunLadder(retarget::LadderRungs(config), track);
+  retarget::HandTrajectory& t = ladder.best.trajectory;
+  retarget::WriteLadderMeasurements(ladder.rungs, ladder.best_rung, t.metrics);
+  made["kept"] = ladder.rungs[ladder.best_rung].name;
+  made["success"] = ladder.best.metrics.success;
+  made["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
+  made["cpu_seconds"] = bench::SelfCpu() - cpu0;
+  Save(t, dir);
+  std::ofstream(dir / "made.json") << made.dump(1) << "\n";
+  std::fprintf(stderr, "made %s: success %d at rung %s, %.0f s wall, %.0f s CPU\n", label.c_str(),
+               ladder.best.metrics.success, made["kept"].get<std::string>().c_str(), made["seconds"].get<double>(),
+               made["cpu_seconds"].get<double>());
+}
+
 // Reference i as the dynamics bench makes it (verb, object, approach vary with i).
 void MakeSingle(const Flags& f, int i) {
   const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
@@ -137,18 +199,13 @@ void MakeSingle(const Flags& f, int i) {
   const recon::Reconstruction clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
   recon::Reconstruction noisy = clean;
   synth::AddReconstructionNoise(noisy, {}, 1000 + i);
-  const retarget::DynamicRetargetConfig config = FastConfig(f);
+  retarget::DynamicRetargetConfig config = FastConfig(f);
+  config.preset = f.preset;
   for (int n = 0; n < 2; ++n) {
     const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
     if (fs::exists(dir / "trajectory.json")) continue;
     fs::create_directories(dir);
-    const auto t0 = Clock::now();
-    const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
-        n ? noisy : clean, mesh, retarget::FindEmbodiment(config.hand, config.robots_dir), config, dir / "scene",
-        dir.filename().string());
-    Save(run.trajectory, dir);
-    std::fprintf(stderr, "made %s: success %d, %.0f s\n", dir.filename().c_str(), run.metrics.success,
-                 std::chrono::duration<double>(Clock::now() - t0).count());
+    MakeRungs(n ? noisy : clean, mesh, config, dir);
   }
 }
 
@@ -434,6 +491,52 @@ void Report(const std::vector<Row>& rows) {
   }
 }
 
+// The single-hand references' retargeting from their made.json: per
+// reference the rungs that ran, the kept one, the first rung alone against
+// the whole run; then the kept rungs' shares and the sums.
+void ReportRungs(const Flags& f) {
+  std::printf("\n== Retargeting (made.json): per reference the rungs run (success, wall / CPU s), the first "
+              "rung alone against the whole run (preparation included in both)\n");
+  std::map<std::string, int> kept;
+  int n = 0, first_ok = 0, all_ok = 0;
+  double first_wall = 0, first_cpu = 0, all_wall = 0, all_cpu = 0;
+  for (int i = 0; i < f.refs; ++i) {
+    for (const char* kind : {"_clean", "_noisy"}) {
+      const fs::path path = f.cache / ("ref" + std::to_string(i) + kind) / "made.json";
+      if (!fs::exists(path)) continue;
+      const Json made = Json::parse(std::ifstream(path));
+      const Json& first = made["rungs"][0];
+      const double prep = made["prepare_seconds"].get<double>(), prep_cpu = made["prepare_cpu_seconds"].get<double>();
+      std::string rungs;
+      for (const Json& r : made["rungs"]) {
+        char buf[96];
+        std::snprintf(buf, sizeof(buf), " %s %d %.0f/%.0f", r["name"].get<std::string>().c_str(),
+                      r["success"].get<bool>(), r["seconds"].get<double>(), r["cpu_seconds"].get<double>());
+        rungs += buf;
+      }
+      std::printf("%-14s | %-7s | kept %-6s %d | first alone %d %6.0f / %6.0f s | all %6.0f / %6.0f s |%s\n",
+                  path.parent_path().filename().c_str(), made["preset"].get<std::string>().c_str(),
+                  made["kept"].get<std::string>().c_str(), made["success"].get<bool>(), first["success"].get<bool>(),
+                  prep + first["seconds"].get<double>(), prep_cpu + first["cpu_seconds"].get<double>(),
+                  made["seconds"].get<double>(), made["cpu_seconds"].get<double>(), rungs.c_str());
+      ++n;
+      ++kept[made["success"].get<bool>() ? made["kept"].get<std::string>() : "none"];
+      first_ok += first["success"].get<bool>();
+      all_ok += made["success"].get<bool>();
+      first_wall += prep + first["seconds"].get<double>();
+      first_cpu += prep_cpu + first["cpu_seconds"].get<double>();
+      all_wall += made["seconds"].get<double>();
+      all_cpu += made["cpu_seconds"].get<double>();
+    }
+  }
+  if (!n) return;
+  std::printf("%d references: first rung alone success %d, %.0f s wall, %.0f s CPU in all; whole run success %d, "
+              "%.0f s wall, %.0f s CPU in all; kept rung:", n, first_ok, first_wall, first_cpu, all_ok, all_wall,
+              all_cpu);
+  for (const auto& [rung, count] : kept) std::printf(" %s %d of %d,", rung.c_str(), count, n);
+  std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -441,7 +544,7 @@ int main(int argc, char** argv) {
   fs::create_directories(f.cache);
   const auto t0 = Clock::now();
   for (int i = f.from; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
-  if (!f.plan_only) MakeHot3d(f);
+  if (!f.plan_only && f.hot3d) MakeHot3d(f);
   for (int i = 0; i < f.carries && !f.plan_only; ++i) MakeCarry(f, i);
   std::fprintf(stderr, "trajectories ready in %s (%.0f s)\n", f.cache.c_str(),
                std::chrono::duration<double>(Clock::now() - t0).count());
@@ -458,14 +561,15 @@ int main(int argc, char** argv) {
       if (made(dir)) single.push_back(PlanOne(f, dir));
     }
   }
-  if (made(f.cache / "hot3d_left")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
+  if (f.hot3d && made(f.cache / "hot3d_left")) single.push_back(PlanOne(f, f.cache / "hot3d_left"));
   for (int i = 0; i < f.carries; ++i) {
     const fs::path dir = f.cache / ("carry" + std::to_string(i));
     if (made(dir)) two.push_back(PlanTwo(f, dir));
   }
-  std::printf("== One arm: %zu trajectories (%d synthetic %.0f-s references clean + noisy, fast preset; HOT3D)\n",
-              single.size(), f.refs, f.clip_seconds);
+  std::printf("== One arm: %zu trajectories (%d synthetic %.0f-s references clean + noisy, %s; HOT3D fast)\n",
+              single.size(), f.refs, f.clip_seconds, f.preset.c_str());
   Report(single);
+  ReportRungs(f);
   std::printf("\n== Two arms (deploy plan-two, one clock): %zu synthetic carries\n", two.size());
   Report(two);
   std::vector<Row> real;

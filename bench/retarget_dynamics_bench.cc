@@ -43,6 +43,7 @@
 //   [--noise_scale=1] (times the sampler's noise; 0 replays the kinematic reference)
 //   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; not where a preset replaces the flags)
 //   [--ladder_clips=2 --ladder_first=0 --ladder_clean --ladder_presets=fast,medium] (section "ladder")
+//   [--ladder_clean_only] (the ladder section on the clean references only)
 //  7. the ladder (--sections=ladder): each preset of --ladder_presets alone
 //     on --ladder_clips clips, wall and CPU seconds and success per clip;
 //     the ladder of those presets in that order is composed from the same
@@ -113,7 +114,7 @@ struct Flags {
   // and clean with --ladder_clean), each preset of --ladder_presets alone;
   // the ladder (those presets in that order) follows from them.
   int ladder_clips = 2, ladder_first = 0;
-  bool ladder_clean = false;
+  bool ladder_clean = false, ladder_clean_only = false;
   std::string ladder_presets = "fast,medium";
   // The default section: >= 0 replaces the default config's
   // kinematic.contact_weight (to compare with the grasp terms off).
@@ -155,6 +156,7 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--ladder_clips") f.ladder_clips = std::stoi(v);
     else if (k == "--ladder_first") f.ladder_first = std::stoi(v);
     else if (k == "--ladder_clean") f.ladder_clean = v != "0";
+    else if (k == "--ladder_clean_only") f.ladder_clean = f.ladder_clean_only = v != "0";
     else if (k == "--ladder_presets") f.ladder_presets = v;
     else if (k == "--default_contact_weight") f.default_contact_weight = std::stod(v);
     else if (k == "--verbose") f.verbose = v != "0";
@@ -661,7 +663,7 @@ void Ladder(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
   const std::vector<std::string> presets = SplitList(f.ladder_presets);
   std::printf("\n== Ladder %s on %d %.0f-s clips from clip %d (%s), %d threads\n", f.ladder_presets.c_str(),
-              f.ladder_clips, f.clip_seconds, f.ladder_first, f.ladder_clean ? "noisy and clean" : "noisy",
+              f.ladder_clips, f.clip_seconds, f.ladder_first, f.ladder_clean_only ? "clean" : f.ladder_clean ? "noisy and clean" : "noisy",
               f.threads);
   struct Sum { int n = 0, success = 0; double wall = 0, cpu = 0; };
   std::map<std::string, Sum> alone;
@@ -670,7 +672,7 @@ void Ladder(const Flags& f) {
   for (int n = 0; n < f.ladder_clips; ++n) {
     const int i = f.ladder_first + n;
     const Case c = MakeCase(f, i, frames);
-    for (int noisy = 1; noisy >= (f.ladder_clean ? 0 : 1); --noisy) {
+    for (int noisy = f.ladder_clean_only ? 0 : 1; noisy >= (f.ladder_clean ? 0 : 1); --noisy) {
       bool done = false;
       for (const std::string& preset : presets) {
         DynamicRetargetConfig config = BaseConfig(f);

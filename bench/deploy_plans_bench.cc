@@ -24,7 +24,13 @@
 //   deploy_plans_bench [--cache=/tmp/doasido-deploy-bench] [--refs=10] [--carries=5]
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
 //       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--follow_rounds=N] [--follow_smoothing=S]
-//       [--preset=fast|medium|seed|ladder] [--no_hot3d]
+//       [--preset=fast|medium|seed|ladder] [--no_hot3d] [--default_scene] [--diagnose]
+// --default_scene makes the references with DynamicRetargetConfig{}'s
+// kinematic and scene settings (object density, grasp terms off) instead of
+// the dynamics bench's; use its own --cache. --diagnose makes nothing and
+// prints, per made reference, the object's error every half second against
+// the reference and against an open-loop replay of the kinematic
+// reference, and whether the reference grasp holds the object (issue 51).
 // --preset retargets the single-hand references with that preset, or with
 // "ladder" along DynamicRetargetConfig{}'s ladder as the `retarget` stage
 // does (the scene, model and kinematic reference once, a rung only when the
@@ -59,9 +65,11 @@
 #include "deploy/bimanual.h"
 #include "deploy/plan.h"
 #include "eval/hot3d_recording.h"
+#include "eval/reference_hold.h"
 #include "eval/reconstruction_noise.h"
 #include "retarget/dynamic/bimanual_retarget.h"
 #include "retarget/dynamic/dynamic_retarget.h"
+#include "robot/mj_model.h"
 #include "robot/trajectory/source.h"
 #include "synth/objects.h"
 
@@ -80,6 +88,10 @@ struct Flags {
   double clip_seconds = 10, carry_seconds = 4;
   bool make_only = false, plan_only = false, replay = true, hot3d = true;
   bool compare = false;
+  // --default_scene: the kinematic and scene settings of DynamicRetargetConfig{}
+  // (density, grasp terms, restarts) instead of the dynamics bench's.
+  bool default_scene = false;
+  bool diagnose = false;  // --diagnose: the object's error over time (Diagnose)
   // Hand-only trajectories of real clips: every <clip>/retarget_kinematic/
   // trajectory.json under this folder (a doasido run's artifact root).
   fs::path real;     // also replay the floating hand (re-timed and at the video's clock)
@@ -110,6 +122,8 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--no_leads") f.plan.lead_in = f.plan.lead_out = false;
     else if (k == "--only") f.only = v;
     else if (k == "--preset") f.preset = v;
+    else if (k == "--default_scene") f.default_scene = true;
+    else if (k == "--diagnose") f.diagnose = true;
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
     else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
@@ -131,6 +145,10 @@ retarget::DynamicRetargetConfig FastConfig(const Flags& f) {
   c.kinematic.contact_depth = 0.01;
   c.scene.density = 400;
   c.sampler.threads = f.threads;
+  if (f.default_scene) {
+    c.kinematic = retarget::KinematicConfig{};
+    c.scene = retarget::DynamicRetargetConfig{}.scene;
+  }
   return c;
 }
 
@@ -185,9 +203,14 @@ void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarg
 }
 
 // Reference i as the dynamics bench makes it (verb, object, approach vary with i).
-void MakeSingle(const Flags& f, int i) {
+struct SingleReference {
+  TriMesh mesh;
+  recon::Reconstruction clean, noisy;
+};
+SingleReference MakeSingleReference(const Flags& f, int i) {
   const synth::Verb verbs[] = {synth::Verb::kPickPlace, synth::Verb::kLiftRotate, synth::Verb::kSlide};
-  const TriMesh mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
+  SingleReference s;
+  s.mesh = i % 2 ? synth::MakeBox(0.05, 0.05, 0.08) : synth::MakeCylinder(0.03 + 0.005 * (i % 3), 0.09, 16);
   synth::EpisodeSpec spec;
   spec.verb = verbs[i % 3];
   spec.frames = static_cast<int>(f.clip_seconds * 30);
@@ -196,16 +219,65 @@ void MakeSingle(const Flags& f, int i) {
   spec.approach_elevation = 0.55;
   spec.grasp = synth::GraspTypeFromName("pinch");
   spec.approach_azimuth = -0.35 + 0.1 * ((i / 3) % 4);
-  const recon::Reconstruction clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, mesh), 30.0);
-  recon::Reconstruction noisy = clean;
-  synth::AddReconstructionNoise(noisy, {}, 1000 + i);
+  s.clean = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, s.mesh), 30.0);
+  s.noisy = s.clean;
+  synth::AddReconstructionNoise(s.noisy, {}, 1000 + i);
+  return s;
+}
+
+void MakeSingle(const Flags& f, int i) {
+  const SingleReference s = MakeSingleReference(f, i);
   retarget::DynamicRetargetConfig config = FastConfig(f);
   config.preset = f.preset;
   for (int n = 0; n < 2; ++n) {
     const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
     if (fs::exists(dir / "trajectory.json")) continue;
     fs::create_directories(dir);
-    MakeRungs(n ? noisy : clean, mesh, config, dir);
+    MakeRungs(n ? s.noisy : s.clean, s.mesh, config, dir);
+  }
+}
+
+// --diagnose: for each made reference, the object's error over time in the
+// cached trajectory against the reference (a late drop, a drift or an
+// offset), beside an open-loop replay of the kinematic reference (the
+// sampler's nominal controls alone: one sample, one iteration) and whether
+// the reference's grasp at its highest frame holds the object for 1 s
+// (eval/reference_hold.h).
+void Diagnose(const Flags& f, int i) {
+  const SingleReference s = MakeSingleReference(f, i);
+  for (int n = 0; n < 2; ++n) {
+    const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
+    if (!fs::exists(dir / "trajectory.json")) continue;
+    const recon::Reconstruction& r = n ? s.noisy : s.clean;
+    const std::vector<Pose> ref = retarget::FilledObjectPoses(r);
+    const retarget::HandTrajectory made = retarget::ReadTrajectoryJson(dir / "trajectory.json");
+    retarget::DynamicRetargetConfig replay = FastConfig(f);
+    replay.preset = "";
+    replay.sampler = retarget::SamplerPreset("fast");
+    replay.sampler.threads = f.threads;
+    replay.sampler.num_samples = 1;
+    replay.sampler.max_num_iterations = 1;
+    const double cpu0 = bench::SelfCpu();
+    const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
+        r, s.mesh, retarget::FindEmbodiment(replay.hand, replay.robots_dir), replay, dir / "diagnose_scene", "diagnose");
+    int top = 0;
+    for (int k = 0; k < r.frames(); ++k) top = ref[k].t.z() > ref[top].t.z() ? k : top;
+    const retarget::ModelPtr m = retarget::CompileMjcfText(run.robot_scene_xml, (dir / "diagnose_scene" / "robot_scene.xml").string());
+    const retarget::DataPtr d = retarget::MakeData(m.get());
+    const double drop = retarget::ReferenceHoldDrop(m.get(), d.get(), run.kinematic, top, ref[top], 1.0);
+    const retarget::TrackingMetrics mm = retarget::ObjectTrackingMetrics(made.object_poses, ref);
+    std::printf("\n== %s: trajectory E_pos %.3f E_rot %.3f; kinematic replay E_pos %.3f E_rot %.3f "
+                "(%.0f CPU s); grasp at the highest frame %d (z %.3f): object falls %.3f m in 1 s\n",
+                dir.filename().c_str(), mm.e_pos, mm.e_rot, run.metrics.e_pos, run.metrics.e_rot,
+                bench::SelfCpu() - cpu0, top, ref[top].t.z(), drop);
+    std::printf("%6s | %7s | %7s %8s %8s | %7s %8s\n", "t s", "ref z", "traj z", "E_pos m", "E_rot", "replay z",
+                "E_pos m");
+    const auto& sim = run.trajectory.object_poses;
+    for (int k = 0; k < r.frames(); k += 15) {
+      std::printf("%6.1f | %7.3f | %7.3f %8.3f %8.3f | %7.3f %8.3f\n", k / 30.0, ref[k].t.z(),
+                  made.object_poses[k].t.z(), (made.object_poses[k].t - ref[k].t).norm(),
+                  RotationAngle(ref[k].q, made.object_poses[k].q), sim[k].t.z(), (sim[k].t - ref[k].t).norm());
+    }
   }
 }
 
@@ -543,6 +615,10 @@ int main(int argc, char** argv) {
   const Flags f = Parse(argc, argv);
   fs::create_directories(f.cache);
   const auto t0 = Clock::now();
+  if (f.diagnose) {
+    for (int i = f.from; i < f.refs; ++i) Diagnose(f, i);
+    return 0;
+  }
   for (int i = f.from; i < f.refs && !f.plan_only; ++i) MakeSingle(f, i);
   if (!f.plan_only && f.hot3d) MakeHot3d(f);
   for (int i = 0; i < f.carries && !f.plan_only; ++i) MakeCarry(f, i);

@@ -25,12 +25,15 @@
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
 //       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--follow_rounds=N] [--follow_smoothing=S]
 //       [--preset=fast|medium|seed|ladder] [--no_hot3d] [--default_scene] [--diagnose]
-// --default_scene makes the references with DynamicRetargetConfig{}'s
+//       [--sampler=JSON]
+// --sampler='{"horizon":2}' replaces those fields of the --preset's sampler
+// (AnnealedSamplerConfig keys; one rung). --default_scene makes the references with DynamicRetargetConfig{}'s
 // kinematic and scene settings (object density, grasp terms off) instead of
 // the dynamics bench's; use its own --cache. --diagnose makes nothing and
 // prints, per made reference, the object's error every half second against
 // the reference and against an open-loop replay of the kinematic
-// reference, and whether the reference grasp holds the object (issue 51).
+// reference and the object left at rest, and whether the reference grasp
+// holds the object (issue 51).
 // --preset retargets the single-hand references with that preset, or with
 // "ladder" along DynamicRetargetConfig{}'s ladder as the `retarget` stage
 // does (the scene, model and kinematic reference once, a rung only when the
@@ -45,7 +48,7 @@
 // ReplayMount::kFloating), under the plan's time map and at the video's
 // clock, and the arm at the video's clock (limits ignored): which of the
 // re-timing, the lead-in or the arm loses an object; --only=NAME prints
-// that reference command by command. --real=DIR plans the hand-only
+// that reference command by command (and makes only that reference). --real=DIR plans the hand-only
 // trajectories of real clips a doasido run made (no object: no replay).
 #include <algorithm>
 #include <chrono>
@@ -92,6 +95,9 @@ struct Flags {
   // (density, grasp terms, restarts) instead of the dynamics bench's.
   bool default_scene = false;
   bool diagnose = false;  // --diagnose: the object's error over time (Diagnose)
+  // --sampler='{"horizon": 2}': the --preset's sampler with these fields
+  // replaced (a JSON object of AnnealedSamplerConfig keys), run as one rung.
+  Json sampler_patch;
   // Hand-only trajectories of real clips: every <clip>/retarget_kinematic/
   // trajectory.json under this folder (a doasido run's artifact root).
   fs::path real;     // also replay the floating hand (re-timed and at the video's clock)
@@ -124,6 +130,7 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--preset") f.preset = v;
     else if (k == "--default_scene") f.default_scene = true;
     else if (k == "--diagnose") f.diagnose = true;
+    else if (k == "--sampler") f.sampler_patch = Json::parse(v);
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
     else if (k == "--follow_smoothing") f.plan.follow_smoothing = std::stod(v);
@@ -229,9 +236,17 @@ void MakeSingle(const Flags& f, int i) {
   const SingleReference s = MakeSingleReference(f, i);
   retarget::DynamicRetargetConfig config = FastConfig(f);
   config.preset = f.preset;
+  if (!f.sampler_patch.is_null()) {
+    Json sampler = retarget::SamplerPreset(f.preset);
+    sampler.merge_patch(f.sampler_patch);
+    sampler["threads"] = f.threads;
+    config.sampler = sampler.get<retarget::AnnealedSamplerConfig>();
+    retarget::CheckConfig(config.sampler, "--sampler");
+    config.preset = "";
+  }
   for (int n = 0; n < 2; ++n) {
     const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
-    if (fs::exists(dir / "trajectory.json")) continue;
+    if (fs::exists(dir / "trajectory.json") || (!f.only.empty() && dir.filename() != f.only)) continue;
     fs::create_directories(dir);
     MakeRungs(n ? s.noisy : s.clean, s.mesh, config, dir);
   }
@@ -266,15 +281,19 @@ void Diagnose(const Flags& f, int i) {
     const retarget::DataPtr d = retarget::MakeData(m.get());
     const double drop = retarget::ReferenceHoldDrop(m.get(), d.get(), run.kinematic, top, ref[top], 1.0);
     const retarget::TrackingMetrics mm = retarget::ObjectTrackingMetrics(made.object_poses, ref);
+    // The object left where it starts: what the success threshold separates a lift from.
+    const retarget::TrackingMetrics rest =
+        retarget::ObjectTrackingMetrics(std::vector<Pose>(ref.size(), made.object_poses.front()), ref);
     std::printf("\n== %s: trajectory E_pos %.3f E_rot %.3f; kinematic replay E_pos %.3f E_rot %.3f "
-                "(%.0f CPU s); grasp at the highest frame %d (z %.3f): object falls %.3f m in 1 s\n",
+                "(%.0f CPU s); object left at rest E_pos %.3f E_rot %.3f; grasp at the highest frame %d (z %.3f): "
+                "object falls %.3f m in 1 s\n",
                 dir.filename().c_str(), mm.e_pos, mm.e_rot, run.metrics.e_pos, run.metrics.e_rot,
-                bench::SelfCpu() - cpu0, top, ref[top].t.z(), drop);
+                bench::SelfCpu() - cpu0, rest.e_pos, rest.e_rot, top, ref[top].t.z(), drop);
     std::printf("%6s | %7s | %7s %8s %8s | %7s %8s\n", "t s", "ref z", "traj z", "E_pos m", "E_rot", "replay z",
                 "E_pos m");
     const auto& sim = run.trajectory.object_poses;
-    for (int k = 0; k < r.frames(); k += 15) {
-      std::printf("%6.1f | %7.3f | %7.3f %8.3f %8.3f | %7.3f %8.3f\n", k / 30.0, ref[k].t.z(),
+    for (int k = 0; k < r.frames(); k += std::max(1, r.frames() / 20)) {
+      std::printf("%6.2f | %7.3f | %7.3f %8.3f %8.3f | %7.3f %8.3f\n", k / 30.0, ref[k].t.z(),
                   made.object_poses[k].t.z(), (made.object_poses[k].t - ref[k].t).norm(),
                   RotationAngle(ref[k].q, made.object_poses[k].q), sim[k].t.z(), (sim[k].t - ref[k].t).norm());
     }

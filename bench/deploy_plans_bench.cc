@@ -255,7 +255,7 @@ void MakeSingle(const Flags& f, int i) {
 // --diagnose: for each made reference, the object's error over time in the
 // cached trajectory against the reference (a late drop, a drift or an
 // offset), beside an open-loop replay of the kinematic reference (the
-// sampler's nominal controls alone: one sample, one iteration) and whether
+// sampler's nominal controls alone: one iteration, no noise) and whether
 // the reference's grasp at its highest frame holds the object for 1 s
 // (eval/reference_hold.h).
 void Diagnose(const Flags& f, int i) {
@@ -270,8 +270,10 @@ void Diagnose(const Flags& f, int i) {
     replay.preset = "";
     replay.sampler = retarget::SamplerPreset("fast");
     replay.sampler.threads = f.threads;
-    replay.sampler.num_samples = 1;
+    // Every sample the nominal (no noise; the planner draws at least two): the reference's controls alone.
+    replay.sampler.num_samples = 2;
     replay.sampler.max_num_iterations = 1;
+    replay.sampler.pos_noise_scale = replay.sampler.rot_noise_scale = replay.sampler.joint_noise_scale = 0;
     const double cpu0 = bench::SelfCpu();
     const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
         r, s.mesh, retarget::FindEmbodiment(replay.hand, replay.robots_dir), replay, dir / "diagnose_scene", "diagnose");

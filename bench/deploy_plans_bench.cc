@@ -291,13 +291,22 @@ void Diagnose(const Flags& f, int i) {
                 "object falls %.3f m in 1 s\n",
                 dir.filename().c_str(), mm.e_pos, mm.e_rot, run.metrics.e_pos, run.metrics.e_rot,
                 bench::SelfCpu() - cpu0, rest.e_pos, rest.e_rot, top, ref[top].t.z(), drop);
-    std::printf("%6s | %7s | %7s %8s %8s | %7s %8s\n", "t s", "ref z", "traj z", "E_pos m", "E_rot", "replay z",
-                "E_pos m");
+    // How far the trajectory's hand is from the kinematic reference it
+    // tracked (qpos: wrist x y z, wrist rotations, then the fingers).
+    const auto hand_off = [&](const retarget::HandTrajectory& t, int k) {
+      const Eigen::VectorXd e = t.qpos[k] - run.kinematic.qpos[k];
+      return std::pair{1000 * e.head<3>().norm(), e.tail(e.size() - 6).cwiseAbs().mean()};
+    };
+    std::printf("%6s | %7s | %7s %8s %8s %8s %8s | %7s %8s %8s %8s\n", "t s", "ref z", "traj z", "E_pos m", "E_rot",
+                "wrist mm", "fing rad", "replay z", "E_pos m", "wrist mm", "fing rad");
     const auto& sim = run.trajectory.object_poses;
     for (int k = 0; k < r.frames(); k += std::max(1, r.frames() / 20)) {
-      std::printf("%6.2f | %7.3f | %7.3f %8.3f %8.3f | %7.3f %8.3f\n", k / 30.0, ref[k].t.z(),
-                  made.object_poses[k].t.z(), (made.object_poses[k].t - ref[k].t).norm(),
-                  RotationAngle(ref[k].q, made.object_poses[k].q), sim[k].t.z(), (sim[k].t - ref[k].t).norm());
+      const auto [tw, tf] = hand_off(made, k);
+      const auto [rw, rf] = hand_off(run.trajectory, k);
+      std::printf("%6.2f | %7.3f | %7.3f %8.3f %8.3f %8.1f %8.3f | %7.3f %8.3f %8.1f %8.3f\n", k / 30.0,
+                  ref[k].t.z(), made.object_poses[k].t.z(), (made.object_poses[k].t - ref[k].t).norm(),
+                  RotationAngle(ref[k].q, made.object_poses[k].q), tw, tf, sim[k].t.z(),
+                  (sim[k].t - ref[k].t).norm(), rw, rf);
     }
   }
 }

@@ -37,6 +37,10 @@ BoxCrop CropFromBox(double cx, double cy, double w, double h, double rotation, d
   return {.cx = cx, .cy = cy, .side = std::max(w, h) * scale, .rotation = rotation};
 }
 
+BoxCrop CropAroundBox(const cv::Rect2d& box, double scale) {
+  return CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width, box.height, 0.0, scale);
+}
+
 BoxCrop CropFromKeypoints(const std::array<Eigen::Vector2d, kBoxKeypoints>& keypoints,
                           double scale) {
   Eigen::Vector2d top = Eigen::Vector2d::Zero(), bottom = Eigen::Vector2d::Zero();
@@ -121,8 +125,7 @@ void BoxTracker::ProposeNearHands(const cv::Mat& rgb, int frame, std::vector<Tra
     if (held) continue;
     ObjectObservation best{.frame = frame};
     for (const cv::Rect2d& box : HandProposals(hand, proposal)) {
-      const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
-                                       box.height, 0.0, config_.crop_scale);
+      const BoxCrop crop = CropAroundBox(box, config_.crop_scale);
       for (const std::string& category : config_.categories) {
         ObjectObservation seen{.frame = frame};
         if (Landmarks(rgb, category, crop, &seen) && seen.score > best.score) best = seen;
@@ -186,8 +189,7 @@ void BoxTracker::StartTrack(const cv::Mat& rgb, int frame, const std::string& ca
                             const cv::Rect2d& box, std::vector<Tracked>* kept,
                             std::vector<ObjectObservation>* found) {
   if (NoRoomFor(box, *kept)) return;
-  const BoxCrop crop = CropFromBox(box.x + box.width / 2, box.y + box.height / 2, box.width,
-                                   box.height, 0.0, config_.crop_scale);
+  const BoxCrop crop = CropAroundBox(box, config_.crop_scale);
   ObjectObservation seen{.frame = frame};
   if (Landmarks(rgb, category, crop, &seen)) Adopt(seen, kept, found);
 }
@@ -203,8 +205,7 @@ void BoxTracker::StartPrompted(const cv::Mat& rgb, int frame, const std::string&
   t.follower = cv::TrackerMIL::create();
   t.follower->init(rgb, start);
   ObjectObservation seen{.frame = frame, .track = t.id};
-  const BoxCrop crop = CropFromBox(start.x + start.width / 2.0, start.y + start.height / 2.0,
-                                   start.width, start.height, 0.0, config_.crop_scale);
+  const BoxCrop crop = CropAroundBox(start, config_.crop_scale);
   if (Landmarks(rgb, category, crop, &seen)) {
     found->push_back(seen);
   } else {
@@ -219,8 +220,7 @@ bool BoxTracker::FollowPrompted(const cv::Mat& rgb, int frame, Tracked* t,
   if (!t->follower->update(rgb, box) || box.width <= 0 || box.height <= 0) return false;
   t->extent = box;
   ObjectObservation seen{.frame = frame, .track = t->id};
-  const BoxCrop crop = CropFromBox(box.x + box.width / 2.0, box.y + box.height / 2.0, box.width,
-                                   box.height, 0.0, config_.crop_scale);
+  const BoxCrop crop = CropAroundBox(box, config_.crop_scale);
   if (Landmarks(rgb, t->category, crop, &seen)) {
     found->push_back(seen);
     t->missing = 0;

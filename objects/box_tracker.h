@@ -46,6 +46,9 @@ struct BoxCrop {
 // times and squared on its long side (RectTransformationCalculator's
 // scale_x = scale_y = scale, square_long).
 BoxCrop CropFromBox(double cx, double cy, double w, double h, double rotation, double scale);
+// The unturned crop of a box on screen (a detection, a proposal, a person's
+// prompt or the follower's box): CropFromBox about the box's centre.
+BoxCrop CropAroundBox(const cv::Rect2d& box, double scale);
 // The next frame's crop from this frame's keypoints: their extent on screen,
 // turned by the angle that makes the box's projected up axis (bottom-face
 // centre to top-face centre) point up; unturned when that axis is shorter

@@ -9,6 +9,7 @@
 // way on the whole video, the track never moves onto another of its cups.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -171,8 +172,10 @@ TEST(ObjectPrompt, ThePromptedCupIsNeverFollowedOntoAnotherCupOverTheWholeVideo)
   // frames of 02_cups, three identical red cups moved about by two hands:
   // on frame 100 the cups cross behind a hand and the labels no longer tell
   // which is the prompted one. The track must sit on the held cup on every
-  // labelled frame up to 90 where it has keypoints, and end before frame
-  // 100, since past it nothing shows it is still on the right cup. (A
+  // frame within 5 of a labelled one up to 90 where it has keypoints, and
+  // end before frame 100, since past it nothing shows it is still on the
+  // right cup. (Without the jump guard, --max-jump 10, the median-flow box
+  // follows the hand onto the middle cup from frame 83.) (A
   // follower that lost the cup and drifted onto another one, as MIL on a
   // frame shrunk to a 56-px box did, carried on to frame ~260.)
   const FrameSpan span{.first_frame = 0, .frames = 300};
@@ -188,12 +191,19 @@ TEST(ObjectPrompt, ThePromptedCupIsNeverFollowedOntoAnotherCupOverTheWholeVideo)
   for (const ObjectObservation& o : seen) {
     if (o.track != prompted) continue;
     last = std::max(last, static_cast<int>(o.frame));
-    const auto label = held.find(static_cast<int>(o.frame));
-    if (label == held.end()) continue;
-    ++checked;
+    // The nearest labelled frame within 5: a quarter of the cup's height on
+    // it, half (the cup moves up to ~40 px in 5 frames; the next cup is
+    // >= 240 px away) on the frames about it.
+    const auto label = std::min_element(held.begin(), held.end(), [&](const auto& a, const auto& b) {
+      return std::abs(a.first - o.frame) < std::abs(b.first - o.frame);
+    });
+    const int apart = std::abs(label->first - o.frame);
+    if (apart > 5) continue;
+    checked += apart == 0;
     const double error = (o.keypoints_2d[0] - label->second.centre).norm() / label->second.height;
-    EXPECT_LT(error, 0.25) << "frame " << o.frame << ": " << o.keypoints_2d[0].transpose() << " vs the held cup at "
-                           << label->second.centre.transpose();
+    EXPECT_LT(error, apart == 0 ? 0.25 : 0.5) << "frame " << o.frame << ": " << o.keypoints_2d[0].transpose()
+                                              << " vs the held cup at " << label->second.centre.transpose()
+                                              << " on frame " << label->first;
   }
   EXPECT_GE(checked, 4) << "labelled frames with the prompted track";  // measured: 20, 30, 40, 50, 60
   EXPECT_LT(last, 100) << "the prompted track lasted past the cups' crossing, to frame " << last;

@@ -96,16 +96,20 @@ struct Label {
   Eigen::Vector2d centre;
   double height = 0;
 };
+Label CupLabel(const Json& cup) {
+  const auto point = [&](const char* name) {
+    return Eigen::Vector2d(cup.at(name)[0].get<double>(), cup.at(name)[1].get<double>());
+  };
+  return {point("centre"), (point("upper") - point("lower")).norm()};
+}
 Label HeldCup(int frame) {
   const Json labels = Json::parse(testing::ReadFile(SourceDir() / "bench/object_labels/02_cups.json"));
   Label best{{1e9, 1e9}, 0};
   for (const Json& f : labels.at("frames")) {
     if (f.at("frame") != frame) continue;
     for (const Json& cup : f.at("cups")) {
-      const Eigen::Vector2d c(cup.at("centre")[0].get<double>(), cup.at("centre")[1].get<double>());
-      const Eigen::Vector2d up(cup.at("upper")[0].get<double>(), cup.at("upper")[1].get<double>());
-      const Eigen::Vector2d low(cup.at("lower")[0].get<double>(), cup.at("lower")[1].get<double>());
-      if (c.x() < best.centre.x()) best = {c, (up - low).norm()};
+      const Label l = CupLabel(cup);
+      if (l.centre.x() < best.centre.x()) best = l;
     }
   }
   return best;
@@ -157,10 +161,8 @@ std::map<int, Label> HeldCupUpTo(int last) {
     const Eigen::Vector2d before = held.rbegin()->second.centre;
     Label best{{1e9, 1e9}, 0};
     for (const Json& cup : f.at("cups")) {
-      const Eigen::Vector2d c(cup.at("centre")[0].get<double>(), cup.at("centre")[1].get<double>());
-      const Eigen::Vector2d up(cup.at("upper")[0].get<double>(), cup.at("upper")[1].get<double>());
-      const Eigen::Vector2d low(cup.at("lower")[0].get<double>(), cup.at("lower")[1].get<double>());
-      if ((c - before).norm() < (best.centre - before).norm()) best = {c, (up - low).norm()};
+      const Label l = CupLabel(cup);
+      if ((l.centre - before).norm() < (best.centre - before).norm()) best = l;
     }
     held[frame] = best;
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -24,6 +25,20 @@ double Median(std::vector<double> v) {
   return *mid;
 }
 
+// The median ratio of the kept points' pairwise distances after to before:
+// how much the box grew.
+double MedianGrowth(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                    const std::vector<int>& kept) {
+  std::vector<double> ratios;
+  for (std::size_t a = 0; a < kept.size(); ++a) {
+    for (std::size_t b = a + 1; b < kept.size(); ++b) {
+      const double before = cv::norm(from[kept[a]] - from[kept[b]]);
+      if (before > 1e-3) ratios.push_back(cv::norm(to[kept[a]] - to[kept[b]]) / before);
+    }
+  }
+  return ratios.empty() ? 1.0 : Median(std::move(ratios));
+}
+
 }  // namespace
 
 cv::Mat BoxFollower::Grey(const cv::Mat& frame) const {
@@ -39,9 +54,7 @@ void BoxFollower::Start(const cv::Mat& frame, const cv::Rect2d& box) {
   scale_ = std::min(1.0, config_.side / std::max(box.width, box.height));
   box_ = box;
   previous_ = Grey(frame);
-  error_ = 0;
 }
-
 
 bool BoxFollower::Follow(const cv::Mat& frame) {
   cv::Mat next = Grey(frame);
@@ -59,25 +72,16 @@ bool BoxFollower::Follow(const cv::Mat& frame) {
   cv::calcOpticalFlowPyrLK(next, previous_, to_, back_, ok_back, unused, kWindow, kLevels, kStop);
   previous_ = next;
   std::vector<int> kept;
-  std::vector<double> dx, dy, errors;
+  std::vector<double> dx, dy;
   for (std::size_t k = 0; k < from_.size(); ++k) {
     const double e = cv::norm(from_[k] - back_[k]);
     if (!ok[k] || !ok_back[k] || !(e <= config_.max_error)) continue;
     kept.push_back(static_cast<int>(k));
     dx.push_back(to_[k].x - from_[k].x);
     dy.push_back(to_[k].y - from_[k].y);
-    errors.push_back(e);
   }
   if (kept.size() < std::max<std::size_t>(2, std::ceil(config_.min_points * n * n))) return false;
-  error_ = Median(errors);
-  std::vector<double> ratios;
-  for (std::size_t a = 0; a < kept.size(); ++a) {
-    for (std::size_t b = a + 1; b < kept.size(); ++b) {
-      const double before = cv::norm(from_[kept[a]] - from_[kept[b]]);
-      if (before > 1e-3) ratios.push_back(cv::norm(to_[kept[a]] - to_[kept[b]]) / before);
-    }
-  }
-  const double grow = ratios.empty() ? 1.0 : Median(ratios);
+  const double grow = MedianGrowth(from_, to_, kept);
   const double cx = box_.x + box_.width / 2 + Median(dx) / scale_;
   const double cy = box_.y + box_.height / 2 + Median(dy) / scale_;
   box_.width *= grow;

@@ -38,9 +38,6 @@ class BoxFollower {
   void Start(const cv::Mat& frame, const cv::Rect2d& box);
   bool Follow(const cv::Mat& frame);
   const cv::Rect2d& box() const { return box_; }
-  // The median forward-backward error of the last Follow's kept points
-  // (pixels of the follower's frame).
-  double error() const { return error_; }
 
  private:
   cv::Mat Grey(const cv::Mat& frame) const;
@@ -49,7 +46,6 @@ class BoxFollower {
   double scale_ = 1.0;  // the follower's frame: the caller's times this, fixed at Start
   cv::Mat previous_;    // grey, shrunk
   cv::Rect2d box_;      // the caller's pixels
-  double error_ = 0;
   std::vector<cv::Point2f> from_, to_, back_;  // reused between frames
 };
 

@@ -7,7 +7,8 @@
 // (hands/hand_detection.h, MediaPipe Hands, tracked, palm_every 10).
 //
 // Usage: objects_box_keypoints_bench [video=../shared/data/videos/02_cups.mp4]
-//          [detect_every=10] [FRAME:X,Y,W,H ...] (cup seeds, as doasido objects --seed)
+//          [detect_every=10] [FRAME:X,Y,W,H ...] (cup seeds, as doasido objects --seed;
+//          the prompted tracks' 2D follower's runs and CPU ms are printed too)
 //        objects_box_keypoints_bench labels [labels.json=bench/object_labels/02_cups.json]
 //          the box-landmark model alone against the hand-made cup labels: on
 //          every labelled frame each labelled cup is seeded as a person would
@@ -335,6 +336,8 @@ int main(int argc, char** argv) {
               d.detector_runs ? d.detector_ms / d.detector_runs : 0.0);
   std::printf("  box landmarks:  %4d runs, %7.2f ms per run\n", d.landmark_runs,
               d.landmark_runs ? d.landmark_ms / d.landmark_runs : 0.0);
+  std::printf("  2D follower:    %4d runs, %7.2f ms per run (prompted tracks)\n", tracker.follower_runs(),
+              tracker.follower_runs() ? tracker.follower_ms() / tracker.follower_runs() : 0.0);
   std::printf("  objects pass:   %.2f CPU s = %.3f CPU s per video second (goal <= 0.5)\n", objects_cpu,
               video_s > 0 ? objects_cpu / video_s : 0.0);
   std::printf("  hands pass:     %.2f CPU s = %.3f CPU s per video second (peer)\n", hands_cpu,

@@ -187,8 +187,25 @@ void AddObjectsCommand(CLI::App& app) {
   cmd->add_option("--seed", o->seeds,
                   "FRAME:X,Y,W,H[:CATEGORY] (category cup when not given; several joined by ';'): an\n"
                   "object the detector may miss, boxed by hand on one frame (pixels of the input); followed\n"
-                  "from there in 2D, the box-landmark model reading its keypoints (a clip list's\n"
-                  "object_box column takes the same text)");
+                  "from there in 2D (median flow), the box-landmark model reading its keypoints (a clip\n"
+                  "list's object_box column takes the same text); the track ends where the keypoints leave\n"
+                  "the followed box or the follower loses it");
+  cmd->add_option("--follow-side", o->config.prompt_follow_side,
+                  "A seeded box is followed on a grey frame shrunk so that its long side is this many\n"
+                  "pixels ([objects.models] prompt_follow_side)")
+      ->check(CLI::Range(16, 1024))
+      ->capture_default_str();
+  cmd->add_option("--follow-max-error", o->config.prompt_follow_max_error,
+                  "Forward-backward error (pixels of the follower's frame) a followed point may have\n"
+                  "([objects.models] prompt_follow_max_error)")
+      ->check(CLI::Range(0.01, 100.0))
+      ->capture_default_str();
+  cmd->add_option("--max-jump", o->config.prompt_max_jump,
+                  "A seeded track ends where the model's keypoint centre lies further than this times the\n"
+                  "box's long side from the followed box or from where it was last seen\n"
+                  "([objects.models] prompt_max_jump)")
+      ->check(CLI::Range(0.01, 10.0))
+      ->capture_default_str();
   cmd->add_flag("--near-hands", o->near_hands,
                 "Also find the hands (MediaPipe Hands) and try boxes beside their fingers with the\n"
                 "box-landmark models: some held objects the 2D detector misses, as rough boxes; a bare\n"

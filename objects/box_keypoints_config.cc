@@ -26,6 +26,11 @@ void CheckConfig(const BoxKeypointsConfig& c, const std::string& section) {
   RequireInRange(section, "hand_proposal_offset", c.hand_proposal_offset, 0, 2);
   RequireInRange(section, "hand_rejoin_frames", c.hand_rejoin_frames, 0, 1000);
   RequireInRange(section, "prompt_max_missing_frames", c.prompt_max_missing_frames, 0, 1000);
+  RequireInRange(section, "prompt_follow_side", c.prompt_follow_side, 16, 1024);
+  RequireInRange(section, "prompt_follow_grid", c.prompt_follow_grid, 2, 30);
+  RequireInRange(section, "prompt_follow_max_error", c.prompt_follow_max_error, 0.01, 100);
+  RequireInRange(section, "prompt_follow_min_points", c.prompt_follow_min_points, 0, 1);
+  RequireInRange(section, "prompt_max_jump", c.prompt_max_jump, 0.01, 10);
   if (c.hand_proposal_sizes.empty()) {
     throw Error("bad_config", section + ".hand_proposal_sizes must hold at least one size",
                 {.field = section + ".hand_proposal_sizes"});

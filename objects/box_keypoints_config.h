@@ -55,20 +55,36 @@ struct BoxKeypointsConfig {
   // worse on it than on the 35-frame one (docs/objects.md).
   int hand_rejoin_frames = 0;
   // A track a person prompted (BoxTracker::Seed: a list row's object_box, the
-  // command's --seed) is followed in 2D from its box (OpenCV's MIL tracker)
-  // rather than from the model's own keypoints, which on held or upside-down
-  // cups shrink onto part of the cup and lose it within a few frames
-  // (docs/object_models.md). The model still gives each frame's keypoints
-  // where its presence passes min_presence; the track ends after this many
-  // frames in a row without them, or where the 2D follower fails.
+  // command's --seed) is followed in 2D from its box (objects/box_follower.h,
+  // median flow) rather than from the model's own keypoints, which on held
+  // or upside-down cups shrink onto part of the cup and lose it within a few
+  // frames (docs/object_models.md). The model still gives each frame's
+  // keypoints where its presence passes min_presence; the track ends after
+  // this many frames in a row without them, or where the 2D follower fails.
   int prompt_max_missing_frames = 15;
+  // The follower (BoxFollowerConfig): the box's long side on its grey frame
+  // (pixels), points per side of its grid, the forward-backward error a
+  // point may have (pixels of that frame) and the fraction of the grid that
+  // must follow, else the track ends.
+  int prompt_follow_side = 48;
+  int prompt_follow_grid = 10;
+  double prompt_follow_max_error = 1.0;
+  double prompt_follow_min_points = 0.25;
+  // The guard against following the wrong object: the track ends where the
+  // model's keypoint centre lies further than this (times the followed box's
+  // long side) from the followed box's centre or from the keypoint centre
+  // of the last frame they were seen. The box is not moved onto the
+  // keypoints: on 02_cups' lowered cup their centre lags the cup, and moved
+  // there the box lost it for 15 frames (docs/objects.md).
+  double prompt_max_jump = 0.5;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BoxKeypointsConfig, categories, max_objects,
                                                 detect_every, idle_detect_every, min_detection_score, nms_iou,
                                                 same_object_iou, min_presence, crop_scale, max_side,
                                                 hand_proposals, hand_proposal_every, hand_proposal_sizes,
                                                 hand_proposal_offset, hand_rejoin_frames,
-                                                prompt_max_missing_frames)
+                                                prompt_max_missing_frames, prompt_follow_side, prompt_follow_grid,
+                                                prompt_follow_max_error, prompt_follow_min_points, prompt_max_jump)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const BoxKeypointsConfig& c, const std::string& section);

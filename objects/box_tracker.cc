@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/clock.h"
 #include "core/error.h"
 
 namespace doasido::objects {
@@ -202,11 +203,15 @@ void BoxTracker::StartPrompted(const cv::Mat& rgb, int frame, const std::string&
   const cv::Rect start = cv::Rect(box) & whole;
   if (start.width < 2 || start.height < 2) return;  // the box is off the frame
   Tracked t{.id = next_id_++, .category = category, .extent = start};
-  t.follower = cv::TrackerMIL::create();
-  t.follower->init(rgb, start);
+  t.follower = std::make_unique<BoxFollower>(BoxFollowerConfig{.side = config_.prompt_follow_side,
+                                                               .grid = config_.prompt_follow_grid,
+                                                               .max_error = config_.prompt_follow_max_error,
+                                                               .min_points = config_.prompt_follow_min_points});
+  t.follower->Start(rgb, start);
   ObjectObservation seen{.frame = frame, .track = t.id};
   const BoxCrop crop = CropAroundBox(start, config_.crop_scale);
   if (Landmarks(rgb, category, crop, &seen)) {
+    t.seen_at = seen.keypoints_2d[0];
     found->push_back(seen);
   } else {
     t.missing = 1;
@@ -216,12 +221,29 @@ void BoxTracker::StartPrompted(const cv::Mat& rgb, int frame, const std::string&
 
 bool BoxTracker::FollowPrompted(const cv::Mat& rgb, int frame, Tracked* t,
                                 std::vector<ObjectObservation>* found) {
-  cv::Rect box;
-  if (!t->follower->update(rgb, box) || box.width <= 0 || box.height <= 0) return false;
+  const double start = ThreadCpuMs();
+  const bool followed = t->follower->Follow(rgb);
+  follower_ms_ += ThreadCpuMs() - start;
+  ++follower_runs_;
+  if (!followed) return false;
+  const cv::Rect2d box = t->follower->box();
   t->extent = box;
   ObjectObservation seen{.frame = frame, .track = t->id};
-  const BoxCrop crop = CropAroundBox(box, config_.crop_scale);
-  if (Landmarks(rgb, t->category, crop, &seen)) {
+  if (Landmarks(rgb, t->category, CropAroundBox(box, config_.crop_scale), &seen)) {
+    // The model sees a box of the category in the crop, but not where the
+    // follower put the object: one of them is on something else (a
+    // look-alike beside it, the hand), so the track ends rather than risk
+    // following the wrong object.
+    // After frames unseen the follower has drifted unchecked (onto the
+    // hand that hid the object, say): the keypoints must also be back
+    // where the object was last seen.
+    const Eigen::Vector2d centre(box.x + box.width / 2, box.y + box.height / 2);
+    const Eigen::Vector2d& at = seen.keypoints_2d[0];
+    const double reach = config_.prompt_max_jump * std::max(box.width, box.height);
+    if ((at - centre).norm() > reach || (!std::isnan(t->seen_at.x()) && (at - t->seen_at).norm() > reach)) {
+      return false;
+    }
+    t->seen_at = at;
     found->push_back(seen);
     t->missing = 0;
     return true;

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -25,9 +26,9 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
-#include <opencv2/video/tracking.hpp>
 
 #include "objects/box_detector.h"
+#include "objects/box_follower.h"
 #include "objects/box_keypoints.h"
 #include "objects/box_keypoints_config.h"
 #include "objects/hand_proposals.h"
@@ -78,9 +79,13 @@ class BoxTracker {
   // its scale). The next Track() starts a prompted track there, unless a
   // track is there already: for objects the 2D detector misses, such as
   // 02_cups' red plastic cups. A prompted track follows the box in 2D
-  // (cv::TrackerMIL), the box-landmark model looking at that box each frame
-  // (BoxKeypointsConfig::prompt_max_missing_frames).
+  // (objects/box_follower.h), the box-landmark model looking at that box
+  // each frame; the track ends where the model's keypoints leave the box
+  // (BoxKeypointsConfig's prompt_ fields).
   void Seed(const std::string& category, const cv::Rect2d& box);
+  // CPU milliseconds in the prompted tracks' 2D follower, and its runs.
+  double follower_ms() const { return follower_ms_; }
+  int follower_runs() const { return follower_runs_; }
   // The hands of the next Track()'s frame (keypoints in the pixels Track()
   // reports). With hand_proposals on, every hand_proposal_every-th frame
   // (and the first) each hand whose grasp point lies in no tracked object
@@ -97,8 +102,9 @@ class BoxTracker {
     std::string category;
     BoxCrop next;
     cv::Rect2d extent;  // of the keypoints, pixels of the (shrunk) frame
-    cv::Ptr<cv::Tracker> follower;  // a prompted track's 2D follower, else null
+    std::unique_ptr<BoxFollower> follower;  // a prompted track's 2D follower, else null
     int missing = 0;                // a prompted track's frames in a row without keypoints
+    Eigen::Vector2d seen_at{NAN, NAN};  // a prompted track's last keypoint centre, pixels of the (shrunk) frame
   };
   // True when max_objects are tracked or a kept track is at `box` already.
   bool NoRoomFor(const cv::Rect2d& box, const std::vector<Tracked>& kept) const;
@@ -144,6 +150,8 @@ class BoxTracker {
   };
   std::vector<Lost> lost_;  // tracks lost within hand_rejoin_frames
   std::vector<float> input_;
+  double follower_ms_ = 0;
+  int follower_runs_ = 0;
 };
 
 }  // namespace doasido::objects

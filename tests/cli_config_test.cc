@@ -108,7 +108,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadConfig{"NestedOutOfRange", "nested.toml",
                   "[retarget_kinematic.scene.decomposition]\nmin_solidity = 2\n",
                   "retarget_kinematic.scene.decomposition.min_solidity",
-                  "value 2 is out of range [0, 1]"}),
+                  "value 2 is out of range [0, 1]"},
+        BadConfig{"ObjectFollowerOutOfRange", "follower.toml", "[objects.models]\nprompt_follow_side = 8\n",
+                  "objects.models.prompt_follow_side", "value 8 is out of range [16, 1024]"}),
     [](const ::testing::TestParamInfo<BadConfig>& p) { return p.param.name; });
 
 TEST(CliConfig, AGoodFileRunsAndDefaultsPass) {

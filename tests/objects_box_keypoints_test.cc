@@ -323,9 +323,9 @@ TEST(BoxTracker, TracksTheSeededRedCupsOf02CupsOntoTheHandMadeLabels) {
               "mean error centre %.1f px, top face %.1f px, bottom face %.1f px (cups %.0f px tall)\n",
               unseeded_frames, seeded_frames, n, centre / n, top / n, bottom / n, height / n);
   EXPECT_EQ(unseeded_frames, 0);  // the detector's miss, stated: no "Coffee cup" or "Mug" box
-  EXPECT_GE(seeded_frames, 70);   // measured: 79 (one cup to frame 78; the other lost at 12)
+  EXPECT_GE(seeded_frames, 70);   // measured: 85 (the right cup to frame 89, the left to 53)
   EXPECT_GE(n, 8);
-  EXPECT_LT(centre / n, 0.1 * height / n);  // measured 10.6 px of 213
+  EXPECT_LT(centre / n, 0.1 * height / n);  // measured 11.4 px of 213
   EXPECT_LT(top / n, 0.15 * height / n);
 }
 

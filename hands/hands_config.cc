@@ -20,6 +20,7 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
   RequireInRange(t, "max_jump", c.tracker.max_jump, 0.01, 100);
   RequireInRange(t, "min_track_frames", c.tracker.min_track_frames, 1, 100000);
   RequireInRange(t, "duplicate_distance", c.tracker.duplicate_distance, 0, 10);
+  RequireInRange(t, "min_arrangement_lean", c.tracker.min_arrangement_lean, 0, 1);
   const std::string f = section + ".fit";
   RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);
   RequireInRange(f, "huber", c.fit.huber, 0.1, 100);

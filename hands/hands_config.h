@@ -30,9 +30,15 @@ struct TrackerConfig {
   int min_track_frames = 3;         // tracks with fewer observed frames are dropped (spurious)
   double duplicate_distance = 0.5;  // hands this close (mean keypoint distance over the
                                     // smaller's size) in one frame are one hand; 0: off
+  // Two hands seen together whose handedness votes alike get their sides
+  // from where they are in the image when their fingers lean up or down by
+  // at least this fraction of the hand's size (hands/hand_tracker.h); 0:
+  // the surer vote keeps its side.
+  double min_arrangement_lean = 0.1;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrackerConfig, min_score, max_gap_frames, max_jump,
-                                                min_track_frames, duplicate_distance)
+                                                min_track_frames, duplicate_distance,
+                                                min_arrangement_lean)
 
 // The skeleton fit of one track (hands/hand_skeleton_fit.h). Sigmas weigh
 // each residual: a residual of one sigma costs as much as any other.

@@ -14,6 +14,7 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
                {filters::kModelsFull, filters::kModelsLite, filters::kModelsLiteLandmark});
   RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
   RequireInRange(section, "wide_search_every", c.wide_search_every, 0, 100000);
+  RequireInRange(section, "lost_wide_search", c.lost_wide_search, 0, 100000);
   const std::string t = section + ".tracker";
   RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);
   RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);

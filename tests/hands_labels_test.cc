@@ -106,7 +106,8 @@ TEST(HandLabels, CupsLiftKeepsThePersonsSidesWhereTheModelCallsBothLeft) {
                                       .max_side = config.max_side,
                                       .palm_every = config.palm_every,
                                       .lost_search = config.palm_every,
-                                      .wide_every = config.wide_search_every});
+                                      .wide_every = config.wide_search_every,
+                                      .lost_wide = config.lost_wide_search});
   const std::string video = (testing::SharedData() / labels.video).string();
   const DetectedFrames detected = DetectVideo(
       video, {.first_frame = 274, .last_frame = 299, .clip = video}, config.max_side, landmarker);

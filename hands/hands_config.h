@@ -118,8 +118,11 @@ struct HandsConfig {
   // blurred or half hidden by what it carries: 02_cups 286-296, the cup
   // lifted to the frame's top; docs/hands.md). On all of 02_cups: 3 and 10
   // both find that hand on 286-294 (0: none), the detection 6.0 / 9.1 /
-  // 11.2 model s for 0 / 3 / 10. 0: off.
-  int lost_wide_search = 3;
+  // 11.2 model s for 0 / 3 / 10; but 3 also adds finds elsewhere that
+  // stretch a track's fitted hand to 21 cm and a wrist jump to 5.2 cm
+  // (hands_stage_test's bounds), so it is off by default and on in the
+  // demo's config. 0: off.
+  int lost_wide_search = 0;
   TrackerConfig tracker;
   FitConfig fit;
 };

@@ -42,6 +42,11 @@ command = "sh '$PWD/tools/ground_truth_bundle.sh' {video} {output}"
 
 [retarget]
 preset = "fast"
+
+# Look wide for a hand lost mid-clip (cups_lifted_left's hand lifting the
+# cup to the frame's top: docs/hands.md).
+[hands]
+lost_wide_search = 3
 TOML
 $DOASIDO init --db "$DB"   # the whole chain
 $DOASIDO run --db "$DB" --jobs 2 --config "$WORK/demo.toml" examples/demo_clips.csv "$WORK/synth"

@@ -87,6 +87,33 @@ TEST(HandLabels, AslHandStaysAboveTheFloorForModelsTrackerAndFit) {
   }
 }
 
+// 02_cups' labels on frame 279 and the hands stage's models, tracker and
+// fit on frames 274..`last_frame` with `config`.
+struct CupsLift {
+  HandLabels labels;
+  DetectedFrames detected;
+  HandsResult result;
+};
+CupsLift RunCupsLift(const HandsConfig& config, int last_frame) {
+  CupsLift out;
+  out.labels = ReadHandLabels(testing::SourceDir() / "bench/hand_labels/02_cups.json");
+  std::erase_if(out.labels.frames, [](const LabelledFrame& f) { return f.frame != 279; });
+  filters::HandLandmarker landmarker({.max_hands = config.max_hands,
+                                      .max_side = config.max_side,
+                                      .palm_every = config.palm_every,
+                                      .lost_search = config.palm_every,
+                                      .wide_every = config.wide_search_every,
+                                      .lost_wide = config.lost_wide_search});
+  const std::string video = (testing::SharedData() / out.labels.video).string();
+  out.detected = DetectVideo(video, {.first_frame = 274, .last_frame = last_frame, .clip = video},
+                             config.max_side, landmarker);
+  const Intrinsics in{.K = KFromFov(out.detected.width, out.detected.height, config.default_fov_deg),
+                      .assumed = true,
+                      .source = kIntrinsicsFromDefault};
+  out.result = ReconstructHands(out.detected, in, config);
+  return out;
+}
+
 // 02_cups frames 274-299 (the person's left hand lifts the right cup): the
 // landmark model calls both hands left on most of these frames (p_right
 // 0.00-0.02), and the longer track, the person's right hand, kept left, so
@@ -97,24 +124,10 @@ TEST(HandLabels, AslHandStaysAboveTheFloorForModelsTrackerAndFit) {
 TEST(HandLabels, CupsLiftKeepsThePersonsSidesWhereTheModelCallsBothLeft) {
   std::string why;
   if (!filters::HandLandmarkerAvailable(&why)) GTEST_SKIP() << "hand models unavailable: " << why;
-  HandLabels labels = ReadHandLabels(testing::SourceDir() / "bench/hand_labels/02_cups.json");
-  std::erase_if(labels.frames, [](const LabelledFrame& f) { return f.frame != 279; });
-  ASSERT_EQ(labels.frames.size(), 1u);
-  ASSERT_EQ(labels.frames[0].hands.size(), 2u);
-  const HandsConfig config;
-  filters::HandLandmarker landmarker({.max_hands = config.max_hands,
-                                      .max_side = config.max_side,
-                                      .palm_every = config.palm_every,
-                                      .lost_search = config.palm_every,
-                                      .wide_every = config.wide_search_every,
-                                      .lost_wide = config.lost_wide_search});
-  const std::string video = (testing::SharedData() / labels.video).string();
-  const DetectedFrames detected = DetectVideo(
-      video, {.first_frame = 274, .last_frame = 299, .clip = video}, config.max_side, landmarker);
-  const Intrinsics in{.K = KFromFov(detected.width, detected.height, config.default_fov_deg),
-                      .assumed = true,
-                      .source = kIntrinsicsFromDefault};
-  const LabelScores s = ScoreLabels(labels, detected, ReconstructHands(detected, in, config));
+  const CupsLift run = RunCupsLift(HandsConfig{}, 299);
+  ASSERT_EQ(run.labels.frames.size(), 1u);
+  ASSERT_EQ(run.labels.frames[0].hands.size(), 2u);
+  const LabelScores s = ScoreLabels(run.labels, run.detected, run.result);
   std::printf("02_cups 279 in 274-299: swaps models %d, tracker %d, fit %d; PCK@0.2 fit %.3f\n",
               s.models.swaps, s.tracker.swaps, s.fit.swaps, s.fit.Pck02());
   EXPECT_EQ(s.labelled_frames, 1);
@@ -133,30 +146,16 @@ TEST(HandLabels, CupsLiftKeepsThePersonsSidesWhereTheModelCallsBothLeft) {
 // the two hands' sides in a run: the place rule settles only votes that
 // agree; the demo's row starts at 274.)
 int LiftObservedFrames(int lost_wide_search) {
-  HandLabels labels = ReadHandLabels(testing::SourceDir() / "bench/hand_labels/02_cups.json");
-  std::erase_if(labels.frames, [](const LabelledFrame& f) { return f.frame != 279; });
   HandsConfig config;
   config.lost_wide_search = lost_wide_search;
-  filters::HandLandmarker landmarker({.max_hands = config.max_hands,
-                                      .max_side = config.max_side,
-                                      .palm_every = config.palm_every,
-                                      .lost_search = config.palm_every,
-                                      .wide_every = config.wide_search_every,
-                                      .lost_wide = config.lost_wide_search});
-  const std::string video = (testing::SharedData() / labels.video).string();
-  const DetectedFrames detected = DetectVideo(
-      video, {.first_frame = 274, .last_frame = 294, .clip = video}, config.max_side, landmarker);
-  const Intrinsics in{.K = KFromFov(detected.width, detected.height, config.default_fov_deg),
-                      .assumed = true,
-                      .source = kIntrinsicsFromDefault};
-  const HandsResult result = ReconstructHands(detected, in, config);
-  EXPECT_EQ(ScoreLabels(labels, detected, result).tracker.swaps, 0);
+  const CupsLift run = RunCupsLift(config, 294);
+  EXPECT_EQ(ScoreLabels(run.labels, run.detected, run.result).tracker.swaps, 0);
   // The labelled left hand's wrist on frame 279 (the span's frame 5).
   Eigen::Vector2d wrist(-1, -1);
-  for (const LabelledHand& h : labels.frames[0].hands) {
+  for (const LabelledHand& h : run.labels.frames[0].hands) {
     if (h.side == Side::kLeft) wrist = h.uv[0];
   }
-  for (const FittedTrack& t : result.tracks) {
+  for (const FittedTrack& t : run.result.tracks) {
     const int at_279 = 5 - t.first_frame;
     if (at_279 < 0 || at_279 >= static_cast<int>(t.observations.size()) || !t.observations[at_279]) {
       continue;

@@ -128,7 +128,8 @@ filters::HandLandmarkerOptions LandmarkerOptions(int wide_every) {
           .palm_every = HandsConfig{}.palm_every,
           .lost_search = HandsConfig{}.palm_every,
           .unchanged_crop_fraction = g_unchanged_crop,
-          .wide_every = wide_every};
+          .wide_every = wide_every,
+          .lost_wide = HandsConfig{}.lost_wide_search};
 }
 
 filters::HandLandmarker& Landmarker() {

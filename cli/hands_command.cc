@@ -124,7 +124,8 @@ std::unique_ptr<filters::HandLandmarker> StartLandmarker(const HandsConfig& c) {
       filters::HandLandmarkerOptions{.max_hands = c.max_hands, .max_side = c.max_side, .backend = c.backend,
                                       .models = c.models, .palm_every = c.palm_every,
                                       .lost_search = c.palm_every,
-                                      .wide_every = c.wide_search_every});
+                                      .wide_every = c.wide_search_every,
+                                      .lost_wide = c.lost_wide_search});
 }
 
 void RunHands(const HandsOptions& o) {

@@ -268,6 +268,7 @@ void HandLandmarker::Reset() {
   tracked_.clear();
   since_palms_ = 0;
   searching_ = 0;
+  lost_wide_left_ = 0;
   frames_ = 0;
   handless_ = 0;
 }
@@ -478,7 +479,14 @@ std::vector<LandmarkedHand> HandLandmarker::DetectRgb(const cv::Mat& rgb, double
   }
   // A hand lost on this frame is looked for on this frame and the next
   // lost_search - 1 (until max_hands hands are tracked).
-  if (hands.size() < tracked_.size()) searching_ = options_.lost_search;
+  if (hands.size() < tracked_.size()) {
+    searching_ = options_.lost_search;
+    lost_wide_left_ = options_.lost_wide;
+  }
+  if (lost_wide_left_ > 0) {
+    --lost_wide_left_;
+    wide = true;
+  }
   ++since_palms_;
   if (static_cast<int>(hands.size()) < options_.max_hands &&
       (hands.empty() || searching_ > 0 || since_palms_ >= options_.palm_every)) {
@@ -509,7 +517,7 @@ std::vector<LandmarkedHand> HandLandmarker::DetectRgb(const cv::Mat& rgb, double
   }
   ++frames_;
   if (searching_ > 0) --searching_;
-  if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = 0;
+  if (static_cast<int>(hands.size()) >= options_.max_hands) searching_ = lost_wide_left_ = 0;
   tracked_ = std::move(runs);
   for (std::size_t i = 0; i < hands.size(); ++i) tracked_[i].next = CropFromHand(hands[i]);
   last_ms_ = models_->TakeModelMs();

@@ -72,6 +72,12 @@ struct HandLandmarkerOptions {
   // Reset() when no hand is tracked there, and on every wide_every-th frame
   // after it with no hand tracked. 0: only DetectStill() searches wide.
   int wide_every = 0;
+  // On video, the wide search also runs on this many frames from the one
+  // where a tracked hand is lost (while fewer than max_hands are tracked):
+  // a hand moving fast, blurred or half hidden by what it carries, that
+  // neither its last crop nor the palm detector on the whole frame finds
+  // again (02_cups 286-296: a cup lifted to the frame's top). 0: never.
+  int lost_wide = 0;
 };
 
 // What the wide search looks at beyond the palm detector on the whole
@@ -169,6 +175,7 @@ class HandLandmarker {
   std::vector<TrackedHand> tracked_;  // where to look first in the next frame
   int since_palms_ = 0;            // frames since the palm detector last ran
   int searching_ = 0;              // frames left to look for a lost hand on every frame
+  int lost_wide_left_ = 0;         // frames left of the wide search after a loss
   int frames_ = 0;                 // frames since Reset()
   int handless_ = 0;               // frames without a tracked hand since the last wide search
   int wide_searches_ = 0, wide_found_ = 0;

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace doasido::hands {
 namespace {
+
+constexpr int kWrist = 0, kMiddleBase = 9;  // MediaPipe order
 
 Eigen::Vector2d Centre(const HandObservation& o) {
   Eigen::Vector2d c = Eigen::Vector2d::Zero();
@@ -149,9 +152,42 @@ bool Overlap(const Track& a, const Track& b) {
   return a.first_frame <= b.last_frame() && b.first_frame <= a.last_frame();
 }
 
+// Where the model's handedness cannot be right (two hands seen together
+// voting alike), the side one person's two hands must have by where they
+// are: the arms come from the body, so where the fingers point down the
+// image (wrist above the middle finger's base) the person faces the camera
+// across the hands (02_cups, 03_blocks) and their right hand is at the
+// image's left; where the fingers point up (one's own view, over the
+// shoulder) the right hand is at the image's right. Every labelled
+// two-hand frame of bench/hand_labels agrees. The side of `t` against
+// `k` over the frames both observe, or nullopt where the fingers point
+// across (under `min_lean` of the hand's size) or the two never share a
+// frame.
+std::optional<Side> ArrangedSide(const Track& t, const Track& k, double min_lean) {
+  double lean = 0, left_of = 0;
+  int shared = 0;
+  for (int f = std::max(t.first_frame, k.first_frame); f <= std::min(t.last_frame(), k.last_frame());
+       ++f) {
+    const auto& a = t.frames[static_cast<size_t>(f - t.first_frame)];
+    const auto& b = k.frames[static_cast<size_t>(f - k.first_frame)];
+    if (!a || !b) continue;
+    for (const HandObservation* o : {&*a, &*b}) {
+      lean += (o->uv[kMiddleBase].y() - o->uv[kWrist].y()) / Size(*o) / 2;
+    }
+    left_of += Centre(*a).x() < Centre(*b).x() ? 1 : -1;
+    ++shared;
+  }
+  if (shared == 0 || std::abs(lean / shared) < min_lean || left_of == 0) return std::nullopt;
+  const bool fingers_down = lean > 0;
+  const bool t_left_in_image = left_of > 0;
+  return fingers_down == t_left_in_image ? Side::kRight : Side::kLeft;
+}
+
 // Sides: surest votes first; a side already held by an overlapping track
-// goes to the other side; a track with both sides taken is dropped.
-std::vector<Track> AssignSides(std::vector<Track> tracks, TrackingSummary& summary) {
+// goes to the other side, unless the two hands' arrangement in the image
+// (ArrangedSide) gives it to this one, when the held track takes the
+// other; a track with both sides taken is dropped.
+std::vector<Track> AssignSides(std::vector<Track> tracks, double min_lean, TrackingSummary& summary) {
   for (Track& t : tracks) t.side_vote = Vote(t);
   std::sort(tracks.begin(), tracks.end(), [](const Track& a, const Track& b) {
     const double sa = std::abs(a.side_vote - 0.5) * a.observed();
@@ -159,16 +195,33 @@ std::vector<Track> AssignSides(std::vector<Track> tracks, TrackingSummary& summa
     return sa > sb;
   });
   std::vector<Track> kept;
+  const auto holders = [&](Side s, const Track& t) {
+    std::vector<Track*> out;
+    for (Track& k : kept) {
+      if (k.side == s && Overlap(k, t)) out.push_back(&k);
+    }
+    return out;
+  };
   for (Track& t : tracks) {
     const Side wanted = t.side_vote >= 0.5 ? Side::kRight : Side::kLeft;
     const Side other = wanted == Side::kRight ? Side::kLeft : Side::kRight;
-    auto taken = [&](Side s) {
-      return std::any_of(kept.begin(), kept.end(),
-                         [&](const Track& k) { return k.side == s && Overlap(k, t); });
-    };
-    if (!taken(wanted)) {
+    const std::vector<Track*> held = holders(wanted, t);
+    if (held.size() == 1 && min_lean > 0 && ArrangedSide(t, *held[0], min_lean) == wanted) {
+      Track& k = *held[0];
+      const bool k_free = std::none_of(kept.begin(), kept.end(), [&](const Track& j) {
+        return &j != &k && j.side == other && Overlap(j, k);
+      });
+      if (k_free) {
+        k.side = other;
+        ++summary.side_changes;
+        t.side = wanted;
+        kept.push_back(std::move(t));
+        continue;
+      }
+    }
+    if (held.empty()) {
       t.side = wanted;
-    } else if (!taken(other)) {
+    } else if (holders(other, t).empty()) {
       t.side = other;
       ++summary.side_changes;
     } else {
@@ -213,7 +266,7 @@ std::vector<Track> BuildTracks(const std::vector<FrameObservations>& frames,
       ++s.dropped_tracks;
     }
   }
-  return AssignSides(std::move(long_enough), s);
+  return AssignSides(std::move(long_enough), config.min_arrangement_lean, s);
 }
 
 }  // namespace doasido::hands

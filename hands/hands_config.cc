@@ -14,12 +14,14 @@ void CheckConfig(const HandsConfig& c, const std::string& section) {
                {filters::kModelsFull, filters::kModelsLite, filters::kModelsLiteLandmark});
   RequireInRange(section, "palm_every", c.palm_every, 1, 1000);
   RequireInRange(section, "wide_search_every", c.wide_search_every, 0, 100000);
+  RequireInRange(section, "lost_wide_search", c.lost_wide_search, 0, 100000);
   const std::string t = section + ".tracker";
   RequireInRange(t, "min_score", c.tracker.min_score, 0, 1);
   RequireInRange(t, "max_gap_frames", c.tracker.max_gap_frames, 0, 300);
   RequireInRange(t, "max_jump", c.tracker.max_jump, 0.01, 100);
   RequireInRange(t, "min_track_frames", c.tracker.min_track_frames, 1, 100000);
   RequireInRange(t, "duplicate_distance", c.tracker.duplicate_distance, 0, 10);
+  RequireInRange(t, "min_arrangement_lean", c.tracker.min_arrangement_lean, 0, 1);
   const std::string f = section + ".fit";
   RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);
   RequireInRange(f, "huber", c.fit.huber, 0.1, 100);

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "objects/held_object.h"
 #include "objects/object_categories.h"
 #include "objects/object_scale.h"
 #include "objects/object_track_fit.h"
@@ -264,6 +265,7 @@ ObjectsResult ReconstructObjects(const std::vector<ObjectObservation>& observati
       continue;
     }
     ObjectTrack t = LiftTrack(obs, *FindCategory(obs.front()->category), hands, config);
+    CarryWithHands(t, hands, config.carry, config.fingertip_offset_m);
     if (t.PosedFrames() > 0) result.tracks.push_back(std::move(t));
   }
   for (int i = 0; i < static_cast<int>(result.tracks.size()); ++i) {

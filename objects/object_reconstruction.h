@@ -14,7 +14,9 @@
 //   5. one smoothing fit per run of frames without a gap over
 //      max_gap_frames (objects/object_track_fit.h), gaps filled and marked;
 //      round objects' yaw made one convention (objects/box_lifting.h
-//      CanonicalYaw): the models' yaw of a cup is not an observation.
+//      CanonicalYaw): the models' yaw of a cup is not an observation;
+//   6. a held object carried by the hand holding it where the model loses
+//      it or reads it wrong (objects/held_object.h, [objects.carry]).
 // Everything in the camera frame of the frames as displayed, metres.
 #pragma once
 
@@ -34,7 +36,8 @@ struct ObjectFrame {
   bool posed = false;
   Pose pose;                 // object (box centre, box axes) -> camera, metres
   bool observed = false;     // the model saw the object (keypoints below)
-  bool filled = false;       // posed by the fit across a gap
+  bool filled = false;       // posed by the fit across a gap, or carried
+  bool carried = false;      // posed by the hand holding it (objects/held_object.h)
   bool degenerate = false;   // the frame's lifted box is a thin slab
   float score = 0;
   BoxKeypoints keypoints{};  // when observed, as the record gives them

@@ -14,6 +14,9 @@ void CheckConfig(const ObjectsConfig& c, const std::string& section) {
   RequireInRange(section, "fingertip_offset_m", c.fingertip_offset_m, 0, 0.05);
   RequireInRange(section, "contact_robust_m", c.contact_robust_m, 1e-4, 1);
   RequireInRange(section, "max_contact_residual_m", c.max_contact_residual_m, 1e-4, 1);
+  RequireInRange(section + ".carry", "hold_distance_m", c.carry.hold_distance_m, 0, 1);
+  RequireInRange(section + ".carry", "max_deviation_m", c.carry.max_deviation_m, 1e-3, 10);
+  RequireInRange(section + ".carry", "max_frames", c.carry.max_frames, 0, 100000);
   RequireInRange(section, "cylinder_segments", c.cylinder_segments, 8, 1024);
   const std::string f = section + ".fit";
   RequireInRange(f, "reprojection_sigma", c.fit.reprojection_sigma, 1e-4, 1);

@@ -33,6 +33,16 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObjectFitConfig, reprojection_si
                                                 acceleration_sigma_ms2,
                                                 angular_acceleration_sigma, max_iterations)
 
+// A held object carried by its hand where the model loses it or reads it
+// wrong (objects/held_object.h).
+struct CarryConfig {
+  double hold_distance_m = 0.02;  // fingertip to the box's surface (offset taken off): holding
+  double max_deviation_m = 0.1;   // observed this far from the hand and from where it was: misread
+  int max_frames = 30;            // carried at most this long after the grip was last seen; 0: off
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CarryConfig, hold_distance_m, max_deviation_m,
+                                                max_frames)
+
 // The [objects] section.
 struct ObjectsConfig {
   // Where the box keypoints come from (objects/object_detection.h): empty
@@ -51,12 +61,13 @@ struct ObjectsConfig {
   double max_contact_residual_m = 0.02;  // a contact fit whose median is worse falls back to the prior
   int cylinder_segments = 48;
   ObjectFitConfig fit;
+  CarryConfig carry;  // [objects.carry]
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ObjectsConfig, observations_dir, min_score,
                                                 min_track_frames, max_gap_frames, degenerate_ratio,
                                                 min_contact_frames, fingertip_offset_m,
                                                 contact_robust_m, max_contact_residual_m,
-                                                cylinder_segments, fit, models)
+                                                cylinder_segments, fit, models, carry)
 
 // Valid ranges; throws Error("bad_config") naming section.key.
 void CheckConfig(const ObjectsConfig& c, const std::string& section);

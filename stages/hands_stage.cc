@@ -93,7 +93,8 @@ StageResult HandsStage::Run(const ClipContext& context) {
     landmarker_ = std::make_unique<filters::HandLandmarker>(filters::HandLandmarkerOptions{
         .max_hands = config_.max_hands, .max_side = config_.max_side, .clip = clip,
         .backend = config_.backend, .models = config_.models, .palm_every = config_.palm_every,
-        .lost_search = config_.palm_every, .wide_every = config_.wide_search_every});
+        .lost_search = config_.palm_every, .wide_every = config_.wide_search_every,
+        .lost_wide = config_.lost_wide_search});
   }
   DetectedFrames detected;
   try {

@@ -52,6 +52,7 @@ Json Measurements(const ObjectsResult& r, size_t observations) {
   m[kMeasureContactResidual] = t.contact_residual_m;
   m[kMeasureObservedFrames] = t.ObservedFrames();
   m[kMeasureFilledFrames] = Count(t, &ObjectFrame::filled);
+  m[kMeasureCarriedFrames] = Count(t, &ObjectFrame::carried);
   m[kMeasureDegenerateFrames] = Count(t, &ObjectFrame::degenerate);
   return m;
 }

@@ -46,6 +46,8 @@ inline constexpr const char* kMeasureContactResidual = "contact_residual_m";
 inline constexpr const char* kMeasureObservations = "observations";
 inline constexpr const char* kMeasureObservedFrames = "observed_frames";
 inline constexpr const char* kMeasureFilledFrames = "filled_frames";
+// Frames posed by the hand holding the object (objects/held_object.h), among the filled.
+inline constexpr const char* kMeasureCarriedFrames = "carried_frames";
 inline constexpr const char* kMeasureDegenerateFrames = "degenerate_frames";
 inline constexpr const char* kMeasureTracks = "tracks";
 inline constexpr const char* kMeasureUnknownCategories = "unknown_categories";

@@ -421,13 +421,56 @@ TEST(HandsTracker, OverlappingTracksThatVoteAlikeGetDifferentSides) {
     frames[f] = {a.seen[f], second};
   }
   TrackingSummary summary;
-  const auto tracks = BuildTracks(frames, TrackerConfig{}, &summary);
+  TrackerConfig by_vote;
+  by_vote.min_arrangement_lean = 0;  // the hands' place not asked
+  const auto tracks = BuildTracks(frames, by_vote, &summary);
   ASSERT_EQ(tracks.size(), 2u);
   EXPECT_EQ(summary.side_changes, 1);
   // The surer vote (0.9) keeps right; the other becomes left.
   for (const Track& t : tracks) {
     EXPECT_EQ(t.side, t.side_vote > 0.8 ? Side::kRight : Side::kLeft);
   }
+}
+
+// Two hands of one person seen together, both voted `p_right`-alike; the
+// image turned upside down when `fingers_up` (y -> 479 - y), so the
+// fingers point up instead of down. Returns the side of the hand at the
+// image's left.
+Side SideOfImageLeftHand(bool fingers_up, double vote_left, double vote_right) {
+  auto a = MakeSyntheticHand(DexRows(), 30, 0, 1.0, 0.002, vote_right, 8);
+  auto b = MakeSyntheticHand(DexRows(), 30, 100, 1.0, 0.002, vote_left, 9);
+  std::vector<FrameObservations> frames(30);
+  for (int f = 0; f < 30; ++f) {
+    HandObservation right_in_image = a.seen[f], left_in_image = b.seen[f];
+    for (auto& p : left_in_image.uv) p.x() -= 250;
+    for (HandObservation* o : {&right_in_image, &left_in_image}) {
+      for (auto& p : o->uv) {
+        if (fingers_up) p.y() = 479 - p.y();
+      }
+    }
+    frames[f] = {right_in_image, left_in_image};
+  }
+  const auto tracks = BuildTracks(frames, TrackerConfig{});
+  EXPECT_EQ(tracks.size(), 2u);
+  if (tracks.size() != 2) return Side::kRight;
+  EXPECT_NE(tracks[0].side, tracks[1].side);
+  const bool first_is_left = tracks[0].frames[0]->uv[0].x() < tracks[1].frames[0]->uv[0].x();
+  return tracks[first_is_left ? 0 : 1].side;
+}
+
+TEST(HandsTracker, TwoHandsVotingAlikeTakeTheirSidesFromTheirPlace) {
+  // The synthetic hands' fingers point down the image: a person facing the
+  // camera across the hands, whose right hand is at the image's left
+  // (02_cups, 03_blocks' labels), whichever hand's vote is surer.
+  EXPECT_EQ(SideOfImageLeftHand(false, 0.6, 0.9), Side::kRight);
+  EXPECT_EQ(SideOfImageLeftHand(false, 0.9, 0.6), Side::kRight);
+  EXPECT_EQ(SideOfImageLeftHand(false, 0.1, 0.4), Side::kRight);
+  // Fingers up (one's own view): the right hand at the image's right.
+  EXPECT_EQ(SideOfImageLeftHand(true, 0.6, 0.9), Side::kLeft);
+  EXPECT_EQ(SideOfImageLeftHand(true, 0.1, 0.4), Side::kLeft);
+  // Votes that differ are the model's reading and stand, place or not.
+  EXPECT_EQ(SideOfImageLeftHand(false, 0.1, 0.9), Side::kLeft);
+  EXPECT_EQ(SideOfImageLeftHand(true, 0.9, 0.1), Side::kRight);
 }
 
 TEST(HandsTracker, ShortSpuriousTracksAreDropped) {

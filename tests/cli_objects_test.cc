@@ -1,7 +1,8 @@
 // `doasido objects` on files: 02_cups' first frames as a short clip and one
 // of them as an image, the middle cup seeded where the hand-made labels put
 // it: one JSON per input in the documented schema, the cup's centre on the
-// labelled one, an overlay read back by OpenCV; a bad seed refused by name.
+// labelled one, an overlay read back by OpenCV; a bad seed refused by
+// name; and a real photo whose cup the 2D detector finds unaided.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -86,6 +87,39 @@ TEST(CliObjects, WritesTheSeededCupsKeypointsForAClipAndAnImage) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("--seed"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(tmp / "bad/still.json"));
+}
+
+// A real photo the 2D detector finds unaided (no --seed): scikit-image's
+// coffee cup (Debian python3-skimage, CC0; scripts/setup.sh --test installs
+// it), labelled by hand in bench/object_labels/coffee.json. The box's top
+// face (the mean of corners 3, 4, 7, 8) is the rim ellipse, so its centre
+// must sit on the labelled rim centre and the box centre below it.
+TEST(CliObjects, TheDetectorAloneFindsTheCupOfARealPhotoOnItsLabels) {
+  std::string why;
+  if (!objects::ObjectronModelFilesAvailable(&why)) GTEST_SKIP() << why;
+  const Json labels = Json::parse(testing::ReadFile(testing::SourceDir() / "bench/object_labels/coffee.json"));
+  const fs::path photo = labels.at("video").get<std::string>();
+  ASSERT_TRUE(fs::exists(photo)) << photo << ": scripts/setup.sh --test installs python3-skimage";
+  testing::TempDir tmp;
+  const testing::CommandResult r =
+      RunDoasido({"objects", photo.string(), "--out", (tmp / "out").string(), "--categories", "cup"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json j = Json::parse(testing::ReadFile(tmp / "out/coffee.json"));
+  ASSERT_EQ(j.at("frames").size(), 1u);
+  const Json& found = j.at("frames").at(0).at("objects");
+  ASSERT_EQ(found.size(), 1u);
+  const Json& cup = found.at(0);
+  EXPECT_EQ(cup.at("category"), "cup");
+  EXPECT_GE(cup.at("score").get<double>(), 0.99);
+  const Json& k = cup.at("keypoints_2d");
+  ASSERT_EQ(k.size(), 9u);
+  Eigen::Vector2d top(0, 0);
+  for (int i : {3, 4, 7, 8}) top += Eigen::Vector2d(k.at(i).at(0).get<double>(), k.at(i).at(1).get<double>()) / 4;
+  const Json& label = labels.at("frames").at(0).at("cups").at(0);
+  const Eigen::Vector2d upper(label.at("upper").at(0).get<double>(), label.at("upper").at(1).get<double>());
+  const double rim_width = label.at("rim_right").at(0).get<double>() - label.at("rim_left").at(0).get<double>();
+  EXPECT_LT((top - upper).norm(), 0.1 * rim_width) << "top face at " << top.transpose();
+  EXPECT_GT(k.at(0).at(1).get<double>(), top.y()) << "the box centre lies below the rim: the cup stands";
 }
 
 }  // namespace

@@ -15,6 +15,11 @@
 //     the top `top_fraction` returns are z-scored and soft-maxed with
 //     `temperature`; the plan becomes the weighted mean of their knots;
 //     stop early when best return - return of sample 0 < improvement_threshold.
+//   The last weighted mean is rolled out too (under the last iteration's
+//   perturbations; the samples' mean was never simulated) and replaced by
+//   the last iteration's best sample when that scored higher (MuJoCo MPC
+//   keeps its best likewise; issue 51: a mean of samples no better than the
+//   nominal opened the grip before a lift).
 //   The first ctrl_dt of the plan is executed (no perturbation) and the plan
 //   shifted: knots inside the old horizon keep the optimised controls; knots
 //   beyond it take the next chunk of reference with the optimised offset at
@@ -171,7 +176,7 @@ struct WindowTrace {
   PlanOutcome nominal;      // the plan entering the window (sample 0 of iteration 0)
   PlanOutcome reference;    // the reference's feed-forward controls (RefCtrl)
   PlanOutcome best;         // the best sample of the last iteration
-  PlanOutcome executed;     // the plan executed (the weighted mean)
+  PlanOutcome executed;     // the plan executed (the weighted mean or the best sample)
   double best_score = 0;    // the best sample's return as the optimiser scored it
   // The executed state at the window's start: mean |finger joint - reference|
   // (rad), hand-object contacts and their summed normal force (N).

@@ -69,7 +69,8 @@ void Planner::HoldObject(mjData* d, int step) const {
 void Planner::ReferenceKnots(int start, RowMatrix& out) const {
   out.resize(knots_, m_->nu);
   for (int k = 0; k < knots_; ++k) {
-    for (int a = 0; a < m_->nu; ++a) out(k, a) = RefCtrl(start + static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt)), a);
+    const int step = start + static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt));
+    for (int a = 0; a < m_->nu; ++a) out(k, a) = RefCtrl(step, a);
     Clamp(out.row(k).data());
   }
 }
@@ -261,12 +262,7 @@ DynamicResult Planner::Run(const std::function<void(int, int)>& progress, const 
   out.ctrl.resize(steps, nu);
   out.qpos.row(0) = Eigen::Map<const Eigen::RowVectorXd>(d->qpos, m_->nq);
   out.ctrl.row(0) = ref_.ctrl.row(0);
-  for (int k = 0; k < knots_; ++k) {
-    for (int a = 0; a < nu; ++a) {
-      nominal_(k, a) = RefCtrl(static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt)), a);
-    }
-    Clamp(nominal_.row(k).data());
-  }
+  ReferenceKnots(0, nominal_);
   const int ctrl_steps = std::max(1, static_cast<int>(std::lround(c_.ctrl_dt / ref_.dt)));
   for (int start = 0, plan = 0; start < steps - 1; start += ctrl_steps, ++plan) {
     Save(m_, d.get(), state_);

@@ -56,12 +56,14 @@ class Planner {
   double Rollout(const double* knots, int perturbation, int thread, int start, int length,
                  std::uint64_t key, double* object_z = nullptr);
   const double* Sample(int c) const { return buffer_.data() + static_cast<size_t>(c) * knots_ * m_->nu; }
-  // The reference's feed-forward controls as knots of the window at `start`.
+  // The reference's feed-forward controls as knots of the window at
+  // `start` (clamped): the first nominal, and a plan the trace scores.
   void ReferenceKnots(int start, RowMatrix& out) const;
   // For the trace: the state's finger gap and hand-object contacts.
   void DescribeState(const mjData* d, int step, WindowTrace& w) const;
-  int best_ = 0;  // the best sample of the last iteration
+  // After Optimise: the executed plan, the weighted mean or the best sample.
   void KeepTheBetterPlan(int start, int length, std::uint64_t key);
+  // Rolls the window's plans out for `trace` (WindowTrace).
   void Trace(const mjData* d, int start, int plan, int iterations, const RowMatrix& entering,
              const WindowTraceFn& trace);
   int Optimise(int start, int plan);
@@ -75,6 +77,7 @@ class Planner {
   int knots_, horizon_steps_;
   std::vector<uint8_t> gate_;           // (steps) perturbations allowed
   int group_ = 1, samples_ = 2;         // of the current plan
+  int best_ = 0;                        // the best sample of the last iteration
   std::vector<double> buffer_;          // (samples, knots, nu)
   std::vector<double> rollout_return_;  // (samples * group)
   std::vector<double> returns_, weights_;

@@ -25,7 +25,13 @@
 //       [--clip_seconds=10] [--carry_seconds=4] [--threads=2] [--make_only [--from=I] | --plan_only]
 //       [--no_replay] [--compare] [--only=NAME] [--real=DIR] [--follow_rounds=N] [--follow_smoothing=S]
 //       [--preset=fast|medium|seed|ladder] [--no_hot3d] [--default_scene] [--diagnose]
-//       [--sampler=JSON]
+//       [--sampler=JSON] [--trace_windows=FROM,TO]
+// --trace_windows=2.5,5 prints each planning window starting in [2.5, 5] s
+// (retarget::WindowTrace; issue 51): the returns and the object's height at
+// the horizon's end of the plan entering the window, the reference's
+// controls, the best sample and the executed weighted mean, each rolled out
+// from the window's start state, and that state's finger gap and
+// hand-object contacts; with --diagnose, for the open-loop replay too.
 // --sampler='{"horizon":2}' replaces those fields of the --preset's sampler
 // (AnnealedSamplerConfig keys; one rung). --default_scene makes the references with DynamicRetargetConfig{}'s
 // kinematic and scene settings (object density, grasp terms off) instead of
@@ -95,6 +101,9 @@ struct Flags {
   // (density, grasp terms, restarts) instead of the dynamics bench's.
   bool default_scene = false;
   bool diagnose = false;  // --diagnose: the object's error over time (Diagnose)
+  // --trace_windows=A,B: print the planner's windows starting in [A, B] s
+  // (retarget::WindowTrace) while making references, and in --diagnose's replay.
+  double trace_from = 1, trace_to = 0;
   // --sampler='{"horizon": 2}': the --preset's sampler with these fields
   // replaced (a JSON object of AnnealedSamplerConfig keys), run as one rung.
   Json sampler_patch;
@@ -130,6 +139,11 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--preset") f.preset = v;
     else if (k == "--default_scene") f.default_scene = true;
     else if (k == "--diagnose") f.diagnose = true;
+    else if (k == "--trace_windows") {
+      const auto comma = v.find(',');
+      f.trace_from = std::stod(v.substr(0, comma));
+      f.trace_to = comma == std::string::npos ? f.trace_from : std::stod(v.substr(comma + 1));
+    }
     else if (k == "--sampler") f.sampler_patch = Json::parse(v);
     else if (k == "--servo_omega") f.plan.servo_omega = std::stod(v);
     else if (k == "--follow_rounds") f.plan.follow_rounds = std::stoi(v);
@@ -169,8 +183,26 @@ void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
 // once (ClipRetarget), then a rung only when the one before failed. The
 // kept trajectory carries the ladder's measurements; made.json holds each
 // rung's wall and CPU seconds and the preparation's.
-void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarget::DynamicRetargetConfig& config,
-               const fs::path& dir) {
+// --trace_windows: one line per planning window in [trace_from, trace_to]
+// s; returns (and object heights at the horizon's end) of the plan entering
+// the window, the reference's controls, the best sample and the executed
+// weighted mean, each rolled out from the window's start state.
+retarget::WindowTraceFn WindowPrinter(const Flags& f, const std::string& label) {
+  if (f.trace_from > f.trace_to) return {};
+  std::fprintf(stderr, "%s trace: t s | ref z | nominal ret z | ref-ctrl ret z | best ret z (scored) | executed ret z "
+               "| it | finger gap rad, contacts, force N\n", label.c_str());
+  return [f, label](const retarget::WindowTrace& w) {
+    if (w.time < f.trace_from - 1e-9 || w.time > f.trace_to + 1e-9) return;
+    std::fprintf(stderr, "%s trace: %5.2f-%5.2f | %.3f | %8.4f %.3f | %8.4f %.3f | %8.4f %.3f (%8.4f) | %8.4f %.3f | %2d "
+                 "| %.3f, %d, %.2f\n", label.c_str(), w.time, w.end_time, w.ref_object_z, w.nominal.ret,
+                 w.nominal.object_z, w.reference.ret, w.reference.object_z, w.best.ret, w.best.object_z,
+                 w.best_score, w.executed.ret, w.executed.object_z, w.iterations, w.finger_gap,
+                 w.object_contacts, w.object_force);
+  };
+}
+
+void MakeRungs(const Flags& f, const recon::Reconstruction& r, const TriMesh& mesh,
+               const retarget::DynamicRetargetConfig& config, const fs::path& dir) {
   const std::string label = dir.filename().string();
   const double cpu0 = bench::SelfCpu();
   const auto t0 = Clock::now();
@@ -184,7 +216,7 @@ void MakeRungs(const recon::Reconstruction& r, const TriMesh& mesh, const retarg
     }
     const double rung_cpu0 = bench::SelfCpu();
     const auto r0 = Clock::now();
-    retarget::DynamicRetargetRun run = clip->Track(retarget::RungSampler(config, rung));
+    retarget::DynamicRetargetRun run = clip->Track(retarget::RungSampler(config, rung), {}, WindowPrinter(f, label + " " + rung));
     const double seconds = std::chrono::duration<double>(Clock::now() - r0).count();
     const double cpu = bench::SelfCpu() - rung_cpu0;
     made["rungs"].push_back({{"name", rung}, {"seconds", seconds}, {"cpu_seconds", cpu},
@@ -248,7 +280,7 @@ void MakeSingle(const Flags& f, int i) {
     const fs::path dir = f.cache / ("ref" + std::to_string(i) + (n ? "_noisy" : "_clean"));
     if (fs::exists(dir / "trajectory.json") || (!f.only.empty() && dir.filename() != f.only)) continue;
     fs::create_directories(dir);
-    MakeRungs(n ? s.noisy : s.clean, s.mesh, config, dir);
+    MakeRungs(f, n ? s.noisy : s.clean, s.mesh, config, dir);
   }
 }
 
@@ -275,8 +307,10 @@ void Diagnose(const Flags& f, int i) {
     replay.sampler.max_num_iterations = 1;
     replay.sampler.pos_noise_scale = replay.sampler.rot_noise_scale = replay.sampler.joint_noise_scale = 0;
     const double cpu0 = bench::SelfCpu();
-    const retarget::DynamicRetargetRun run = retarget::RetargetReconstruction(
-        r, s.mesh, retarget::FindEmbodiment(replay.hand, replay.robots_dir), replay, dir / "diagnose_scene", "diagnose");
+    const retarget::DynamicRetargetRun run =
+        retarget::ClipRetarget(r, s.mesh, retarget::FindEmbodiment(replay.hand, replay.robots_dir), replay,
+                               dir / "diagnose_scene", "diagnose")
+            .Track(replay.sampler, {}, WindowPrinter(f, dir.filename().string() + " replay"));
     int top = 0;
     for (int k = 0; k < r.frames(); ++k) top = ref[k].t.z() > ref[top].t.z() ? k : top;
     const retarget::ModelPtr m = retarget::CompileMjcfText(run.robot_scene_xml, (dir / "diagnose_scene" / "robot_scene.xml").string());

@@ -174,7 +174,7 @@ TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
   EXPECT_DOUBLE_EQ(reward(0, true, true), reward(0, true, false) - penalty);
 }
 
-TEST(DynamicReference, AnObjectOnTheFloorRestsAndIsInNoHand) {
+TEST(DynamicReference, AnObjectOnTheFloorRestsOnlyWithNoHandNearAndIsInNoHand) {
   const TriMesh cylinder = Cylinder();  // radius 3 cm, height 8 cm, base at z = 0
   const Quat on_side(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
   const std::vector<Pose> object = {{Quat::Identity(), Vec3(0, 0, 0)},
@@ -194,7 +194,12 @@ TEST(DynamicReference, AnObjectOnTheFloorRestsAndIsInNoHand) {
   const HandTrajectory t = kinematic.Solve(r.right_joints, r.right_valid, r.fps);
   const DynamicReference ref = BuildReference(hand.model.get(), t, object, {1, 1, 0, 1},
                                               LabelResting(object, cylinder, 0.01), 0.0);
-  const std::vector<uint8_t> in_hand = {0, 1, 0, 1}, resting = {1, 0, 1, 0};
+  // Frame 0 lies on the floor with a hand near it (a grasp or a release):
+  // no rest (seed stages: floor contact may end any step), nor in hand
+  // (the perturbations' gate). A reference lifting the object through the
+  // rest band otherwise costs a rollout that follows it the transition
+  // penalty (issue 51).
+  const std::vector<uint8_t> in_hand = {0, 1, 0, 1}, resting = {0, 0, 1, 0};
   for (int f = 0; f < 4; ++f) {
     const int s = ref.StepOfFrame(f);
     EXPECT_EQ(ref.in_hand[s], in_hand[f]) << "frame " << f;
@@ -424,9 +429,11 @@ TEST(DynamicRetargetStage, WritesTheTrajectoryMetricsAndVerdict) {
 // The ladder (sampler_ladder.h) on a lifting reference whose kinematic
 // grasp holds the object (pinch, grasp terms pressing 1 cm in, a hollow
 // object's density: the bench's synthetic setting). Rung "replay" executes
-// the reference's own controls (no noise); rung "starved" averages four
-// samples with uniform weights (no optimisation) under a noise that opens
-// the grip.
+// the reference's own controls (no noise); rung "starved" draws four
+// samples under a noise that opens the grip and scores them with a
+// penetration penalty of no tolerance, so that any grip costs more than
+// losing the object (the planner keeps the better of the samples' mean and
+// the best sample, which is the nominal when the reward favours it).
 TriMesh LadderCylinder() { return synth::MakeCylinder(0.03, 0.09, 16); }
 
 recon::Reconstruction Lift(int frames) {
@@ -458,6 +465,8 @@ DynamicRetargetConfig LadderRung(const std::string& rung) {
     s.temperature = 1e6;
     s.pos_noise_scale = 0.05;
     s.joint_noise_scale = 1.0;
+    s.reward.penetration_tolerance = 0;
+    s.reward.penetration_penalty_scale = 1e6;
   }
   return c;
 }
@@ -562,6 +571,49 @@ TEST(SamplerLadder, TheConfigNamesItsRungs) {
   DynamicRetargetConfig a, b;
   b.ladder = {"fast", "seed"};
   EXPECT_NE(ParamHash(stages::DynamicRetargetStage(a).Params()), ParamHash(stages::DynamicRetargetStage(b).Params()));
+}
+
+
+// Issue 51's ground truth: deploy_plans_bench's reference 0 (a 10-s
+// pick-and-place of a cylinder lifting it 16 cm at 4.0-4.6 s), cut after
+// the lift at 5.5 s. The open-loop replay of its kinematic reference lifts
+// the object, so the `fast` preset, whose nominal that replay is, must end
+// lifted too. It did not: the transition reward asked the object to touch
+// the floor while the reference lifted it through the rest band, and the
+// planner executed a never simulated mean of samples that opened the grip.
+TEST(DynamicRetarget, AReferenceWhoseReplayLiftsTheObjectEndsLifted) {
+  const TriMesh cylinder = synth::MakeCylinder(0.03, 0.09, 16);
+  synth::EpisodeSpec spec;
+  spec.verb = synth::Verb::kPickPlace;
+  spec.frames = 300;
+  spec.manipulation_scale = 2.0;
+  spec.approach_elevation = 0.55;
+  spec.grasp = synth::GraspType::kPinch;
+  spec.approach_azimuth = -0.35;
+  recon::Reconstruction r = synth::EpisodeReconstruction(synth::ScriptEpisode(spec, cylinder), 30.0);
+  const int frames = 165;
+  r.right_valid.resize(frames), r.right_joints.resize(frames);
+  r.object_valid.resize(frames), r.object_poses.resize(frames);
+  ASSERT_GT(r.object_poses.back().t.z() - r.object_poses.front().t.z(), 0.12) << "the reference lifts";
+
+  DynamicRetargetConfig c = SmallConfig();
+  c.kinematic.contact_weight = 16;  // deploy_plans_bench's FastConfig
+  c.kinematic.contact_depth = 0.01;
+  c.scene.density = 400;
+  c.sampler = SamplerPreset("fast");
+  c.sampler.threads = 2;
+  TempDir dir;
+  const ClipRetarget clip(r, cylinder, FindEmbodiment(c.hand, c.robots_dir), c, dir / "scene", "lift");
+  AnnealedSamplerConfig replay = c.sampler;  // the nominal alone: no noise, one iteration
+  replay.num_samples = 2;
+  replay.max_num_iterations = 1;
+  replay.pos_noise_scale = replay.rot_noise_scale = replay.joint_noise_scale = 0;
+  const double top = r.object_poses.back().t.z();
+  const DynamicRetargetRun open_loop = clip.Track(replay);
+  ASSERT_NEAR(open_loop.trajectory.object_poses.back().t.z(), top, 0.03) << "the replay lifts the object";
+  const DynamicRetargetRun fast = clip.Track(c.sampler);
+  EXPECT_NEAR(fast.trajectory.object_poses.back().t.z(), top, 0.03) << "E_pos " << fast.metrics.e_pos;
+  EXPECT_TRUE(fast.metrics.success) << "E_pos " << fast.metrics.e_pos;
 }
 
 }  // namespace

@@ -138,10 +138,10 @@ void WeightSamples(const std::vector<double>& returns, double top_fraction, doub
 
 DynamicResult RetargetDynamics(const mjModel* m, const DynamicReference& ref,
                                const AnnealedSamplerConfig& config,
-                               const std::function<void(int, int)>& progress) {
+                               const std::function<void(int, int)>& progress, const WindowTraceFn& trace) {
   if (ref.steps() < 2) throw Error("bad_reference", "reference shorter than two steps");
   Planner planner(m, ref, config);
-  return planner.Run(progress);
+  return planner.Run(progress, trace);
 }
 
 }  // namespace doasido::retarget

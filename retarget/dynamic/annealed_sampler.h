@@ -15,6 +15,11 @@
 //     the top `top_fraction` returns are z-scored and soft-maxed with
 //     `temperature`; the plan becomes the weighted mean of their knots;
 //     stop early when best return - return of sample 0 < improvement_threshold.
+//   The last weighted mean is rolled out too (under the last iteration's
+//   perturbations; the samples' mean was never simulated) and replaced by
+//   the last iteration's best sample when that scored higher (MuJoCo MPC
+//   keeps its best likewise; issue 51: a mean of samples no better than the
+//   nominal opened the grip before a lift).
 //   The first ctrl_dt of the plan is executed (no perturbation) and the plan
 //   shifted: knots inside the old horizon keep the optimised controls; knots
 //   beyond it take the next chunk of reference with the optimised offset at
@@ -154,13 +159,42 @@ struct DynamicResult {
   SamplerStats stats;
 };
 
+// What one planning window did (a diagnosis for benches, issue 51): each
+// plan is rolled out once more from the window's start state, without
+// perturbation, over the window's horizon; per plan its return (the
+// optimiser's score) and the object's height at the horizon's end.
+struct PlanOutcome {
+  double ret = 0;
+  double object_z = 0;
+};
+struct WindowTrace {
+  int plan = 0;
+  double time = 0;          // s from frame 0 at the window's start
+  double end_time = 0;      // s from frame 0 at the horizon's end
+  double ref_object_z = 0;  // the reference object's height there
+  int iterations = 0;
+  PlanOutcome nominal;      // the plan entering the window (sample 0 of iteration 0)
+  PlanOutcome reference;    // the reference's feed-forward controls (RefCtrl)
+  PlanOutcome best;         // the best sample of the last iteration
+  PlanOutcome executed;     // the plan executed (the weighted mean or the best sample)
+  double best_score = 0;    // the best sample's return as the optimiser scored it
+  // The executed state at the window's start: mean |finger joint - reference|
+  // (rad), hand-object contacts and their summed normal force (N).
+  double finger_gap = 0;
+  int object_contacts = 0;
+  double object_force = 0;
+};
+using WindowTraceFn = std::function<void(const WindowTrace&)>;
+
 // Optimises and executes the whole reference in `m` (IndexScene's layout).
 // The initial state: hand joints at reference step 0, object at its
-// reference pose, at rest. `progress`, when set, gets (done, total) steps.
+// reference pose, at rest. `progress`, when set, gets (done, total) steps;
+// `trace`, when set, gets every window (costs four rollouts a window).
 // Throws Error("unstable_simulation") when the executed state turns
 // non-finite (MuJoCo's bad qpos/qvel/qacc warnings).
 DynamicResult RetargetDynamics(const mjModel* m, const DynamicReference& ref,
                                const AnnealedSamplerConfig& config,
-                               const std::function<void(int, int)>& progress = {});
+                               const std::function<void(int, int)>& progress = {},
+                               const WindowTraceFn& trace = {});
 
 }  // namespace doasido::retarget

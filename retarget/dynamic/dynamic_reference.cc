@@ -241,7 +241,9 @@ DynamicReference BuildReference(const mjModel* m,
     ref.object_pos[s] = (1 - a) * object[f0].t + a * object[f1].t;
     ref.object_quat[s] = object[f0].q.normalized().slerp(a, object[f1].q.normalized());
     const int nearest = a < 0.5 ? f0 : f1;
-    ref.resting[s] = resting[nearest];
+    // Seed stages: a hand near the object is no rest, even on the floor
+    // (grasping or letting go: floor contact may end any step).
+    ref.resting[s] = resting[nearest] && !in_hand[nearest];
     ref.in_hand[s] = resting[nearest] ? 0 : in_hand[nearest];
   }
   return ref;

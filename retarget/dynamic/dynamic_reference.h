@@ -8,7 +8,10 @@
 //    reconstructed object lies on the floor, "in hand" (per hand) while a
 //    reconstructed hand is within epsilon of the object surface and the
 //    object is off the floor; a step may be neither (the object in the air
-//    with no hand near it: a reconstruction error the reward asks nothing of).
+//    with no hand near it: a reconstruction error the reward asks nothing
+//    of; or on the floor with a hand near it, a grasp closing or opening,
+//    where floor contact may end any step: the seed's "rest" is a hand away
+//    from the object).
 // Time: `warmup_steps` steps (seed "Warmup Steps") precede frame 0 and
 // repeat it; step s is at time (s - warmup_steps) * dt from frame 0.
 #pragma once
@@ -98,7 +101,7 @@ std::vector<bool> LabelResting(const std::vector<Pose>& object, const TriMesh& m
 // frame: the hands near the object, bit h for SceneIndex hand h; 1 for the
 // one hand of a one-hand scene) and `resting` (LabelResting) at the model's
 // timestep, after `warmup_seconds` of frame 0. A resting frame holds in no
-// hand.
+// hand, and a frame rests only with no hand near.
 // Feed-forward targets: u = q + (d / kp) qdot for every actuated joint
 // (its damping's lag at the reference velocity); the floating base, whose
 // gains are critically damped (kp = I w^2, d = 2 I w: embodiment.h), also

@@ -112,7 +112,8 @@ ClipRetarget::ClipRetarget(const recon::Reconstruction& r, const TriMesh& mesh, 
 }
 
 DynamicRetargetRun ClipRetarget::Track(const AnnealedSamplerConfig& sampler,
-                                       const std::function<void(int, int)>& progress) const {
+                                       const std::function<void(int, int)>& progress,
+                                       const WindowTraceFn& trace) const {
   DynamicRetargetRun run;
   run.robot_scene_xml = model_.xml;
   run.kinematic = kinematic_;
@@ -128,7 +129,7 @@ DynamicRetargetRun ClipRetarget::Track(const AnnealedSamplerConfig& sampler,
     const DynamicReference ref =
         BuildReference(m, run.kinematic, clip_.object, std::vector<uint8_t>(in_hand.begin(), in_hand.end()),
                        resting, WarmupSeconds(sampler));
-    const DynamicResult result = RetargetDynamics(m, ref, sampler, progress);
+    const DynamicResult result = RetargetDynamics(m, ref, sampler, progress, trace);
     run.stats = result.stats;
     run.trajectory = SimulatedTrajectory(m, index, ref, result, run.kinematic);
     run.metrics = ObjectMetrics(clip_, run.trajectory);

@@ -111,7 +111,8 @@ class ClipRetarget {
   // Steps 4-5 with `sampler`; the same result as RetargetReconstruction
   // with a config whose effective sampler is `sampler`.
   DynamicRetargetRun Track(const AnnealedSamplerConfig& sampler,
-                           const std::function<void(int, int)>& progress = {}) const;
+                           const std::function<void(int, int)>& progress = {},
+                           const WindowTraceFn& trace = {}) const;
 
  private:
   ClipObject clip_;

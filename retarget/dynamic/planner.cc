@@ -66,19 +66,48 @@ void Planner::HoldObject(mjData* d, int step) const {
   std::fill(d->qvel + index_.object_dof, d->qvel + index_.object_dof + 6, 0.0);
 }
 
-double Planner::Rollout(int rollout, int thread, int start, int length, std::uint64_t key) {
+void Planner::ReferenceKnots(int start, RowMatrix& out) const {
+  out.resize(knots_, m_->nu);
+  for (int k = 0; k < knots_; ++k) {
+    const int step = start + static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt));
+    for (int a = 0; a < m_->nu; ++a) out(k, a) = RefCtrl(step, a);
+    Clamp(out.row(k).data());
+  }
+}
+
+void Planner::DescribeState(const mjData* d, int step, WindowTrace& w) const {
+  int fingers = 0;
+  for (int a = 0; a < m_->nu; ++a) {
+    if (index_.act_kind[a] != kFinger) continue;
+    w.finger_gap += std::abs(d->qpos[index_.act_qpos[a]] - ref_.ctrl(step, a));
+    ++fingers;
+  }
+  w.finger_gap /= std::max(1, fingers);
+  for (int c = 0; c < d->ncon; ++c) {
+    const mjContact& con = d->contact[c];
+    const int b1 = m_->geom_bodyid[con.geom1], b2 = m_->geom_bodyid[con.geom2];
+    if ((b1 == index_.object_body) == (b2 == index_.object_body)) continue;
+    if (index_.body_hand[b1 == index_.object_body ? b2 : b1] < 0) continue;
+    mjtNum f[6];
+    mj_contactForce(m_, d, c, f);
+    ++w.object_contacts;
+    w.object_force += f[0];
+  }
+}
+
+double Planner::Rollout(const double* knots, int perturbation, int thread, int start, int length,
+                        std::uint64_t key, double* object_z) {
   mjData* d = pool_.data(thread);
   Load(m_, state_, d);
-  const double* knots = buffer_.data() + static_cast<size_t>(rollout / group_) * knots_ * m_->nu;
   // Common random numbers: perturbation k of every control sample draws
   // the same stream.
-  Rng rng{Mix(key, static_cast<std::uint64_t>(rollout % group_), 0x5eed, 1)};
+  Rng rng{Mix(key, static_cast<std::uint64_t>(std::max(0, perturbation)), 0x5eed, 1)};
   double* xfrc = d->xfrc_applied + 6 * index_.object_body;
   bool active = false;
   double total = 0;
   for (int h = 0; h < length; ++h) {
     EvaluateKnots(knots, knots_, m_->nu, c_.knot_dt, h * ref_.dt, d->ctrl);
-    if (group_ > 1) {
+    if (perturbation >= 0) {
       const bool was = active;
       active = gate_[start + h] && rng.Uniform() < (was ? c_.perturb_continue_prob : c_.perturb_prob);
       if (active && !was) {
@@ -95,6 +124,7 @@ double Planner::Rollout(int rollout, int thread, int start, int length, std::uin
     const double r = StepReward(m_, d, index_, ref_, s, c_.reward);
     total += (h == length - 1 ? c_.reward.terminal_rew_scale : 1.0) * r;
   }
+  if (object_z) *object_z = d->qpos[index_.object_qpos + 2];
   return total / (length - 1 + c_.reward.terminal_rew_scale);
 }
 
@@ -114,7 +144,7 @@ int Planner::Optimise(int start, int plan) {
     const std::uint64_t key = Mix(c_.seed, plan, it, 0xf0);
     const auto t0 = Clock::now();
     pool_.Run(samples_ * group_, [&](int n, int thread) {
-      rollout_return_[n] = Rollout(n, thread, start, length, key);
+      rollout_return_[n] = Rollout(Sample(n / group_), group_ > 1 ? n % group_ : -1, thread, start, length, key);
     });
     stats_.rollout_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats_.rollouts += samples_ * group_;
@@ -140,11 +170,31 @@ int Planner::Optimise(int start, int plan) {
                                     buffer_.data() + static_cast<size_t>(c) * knots_ * nu, knots_, nu);
     }
     ++it;
-    const double best = *std::max_element(returns_.begin(), returns_.end());
-    if (best - returns_[0] < c_.improvement_threshold) break;
+    best_ = static_cast<int>(std::max_element(returns_.begin(), returns_.end()) - returns_.begin());
+    if (returns_[best_] - returns_[0] < c_.improvement_threshold) break;
   }
   stats_.iterations += it;
+  KeepTheBetterPlan(start, length, Mix(c_.seed, plan, it - 1, 0xf0));
   return it;
+}
+
+// The weighted mean of the top samples was never simulated: a mean of
+// controls that each hold the object need not hold it (issue 51: the mean
+// of samples no better than the nominal opened the grip). It is rolled out
+// under the last iteration's perturbations and replaced by the best sample
+// when that scored higher (MuJoCo MPC's sampling planner keeps its best).
+void Planner::KeepTheBetterPlan(int start, int length, std::uint64_t key) {
+  pool_.Run(group_, [&](int g, int thread) {
+    rollout_return_[g] = Rollout(nominal_.data(), group_ > 1 ? g : -1, thread, start, length, key);
+  });
+  stats_.rollouts += group_;
+  stats_.sim_steps += static_cast<long long>(group_) * length;
+  double mean = 0;
+  for (int g = 0; g < group_; ++g) {
+    mean += std::isfinite(rollout_return_[g]) ? rollout_return_[g] : -std::numeric_limits<double>::infinity();
+  }
+  mean /= group_;
+  if (returns_[best_] > mean) nominal_ = Eigen::Map<const RowMatrix>(Sample(best_), knots_, m_->nu);
 }
 
 void Planner::Shift(int start, int next_start) {
@@ -169,7 +219,32 @@ void Planner::Shift(int start, int next_start) {
   }
 }
 
-DynamicResult Planner::Run(const std::function<void(int, int)>& progress) {
+void Planner::Trace(const mjData* d, int start, int plan, int iterations, const RowMatrix& entering,
+                    const WindowTraceFn& trace) {
+  const int length = std::min(horizon_steps_, ref_.steps() - 1 - start);
+  WindowTrace w;
+  w.plan = plan;
+  w.time = (start - ref_.warmup_steps) * ref_.dt;
+  w.end_time = (start + length - ref_.warmup_steps) * ref_.dt;
+  w.ref_object_z = ref_.object_pos[start + length].z();
+  w.iterations = iterations;
+  w.best_score = returns_[best_];
+  DescribeState(d, start, w);
+  RowMatrix reference;
+  ReferenceKnots(start, reference);
+  const auto outcome = [&](const double* knots) {
+    PlanOutcome o;
+    o.ret = Rollout(knots, -1, 0, start, length, 0, &o.object_z);
+    return o;
+  };
+  w.nominal = outcome(entering.data());
+  w.reference = outcome(reference.data());
+  w.best = outcome(Sample(best_));
+  w.executed = outcome(nominal_.data());
+  trace(w);
+}
+
+DynamicResult Planner::Run(const std::function<void(int, int)>& progress, const WindowTraceFn& trace) {
   const auto t0 = Clock::now();
   const int steps = ref_.steps(), nu = m_->nu;
   DataPtr d = MakeData(m_);
@@ -187,17 +262,14 @@ DynamicResult Planner::Run(const std::function<void(int, int)>& progress) {
   out.ctrl.resize(steps, nu);
   out.qpos.row(0) = Eigen::Map<const Eigen::RowVectorXd>(d->qpos, m_->nq);
   out.ctrl.row(0) = ref_.ctrl.row(0);
-  for (int k = 0; k < knots_; ++k) {
-    for (int a = 0; a < nu; ++a) {
-      nominal_(k, a) = RefCtrl(static_cast<int>(std::lround(k * c_.knot_dt / ref_.dt)), a);
-    }
-    Clamp(nominal_.row(k).data());
-  }
+  ReferenceKnots(0, nominal_);
   const int ctrl_steps = std::max(1, static_cast<int>(std::lround(c_.ctrl_dt / ref_.dt)));
   for (int start = 0, plan = 0; start < steps - 1; start += ctrl_steps, ++plan) {
     Save(m_, d.get(), state_);
-    Optimise(start, plan);
+    const RowMatrix entering = trace ? nominal_ : RowMatrix();
+    const int iterations = Optimise(start, plan);
     ++stats_.plans;
+    if (trace) Trace(d.get(), start, plan, iterations, entering, trace);
     Load(m_, state_, d.get());
     const int run = std::min(ctrl_steps, steps - 1 - start);
     for (int h = 0; h < run; ++h) {

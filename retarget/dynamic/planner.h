@@ -39,7 +39,7 @@ class Planner {
     sigma_ = NoiseScales(c_, index_.act_kind, knots_);
   }
 
-  DynamicResult Run(const std::function<void(int, int)>& progress);
+  DynamicResult Run(const std::function<void(int, int)>& progress, const WindowTraceFn& trace = {});
 
  private:
   // The nominal control of actuator a at `step` (feed-forward targets).
@@ -50,7 +50,22 @@ class Planner {
     for (int a = 0; a < m_->nu; ++a) u[a] = std::clamp(u[a], index_.ctrl_lo[a], index_.ctrl_hi[a]);
   }
   void HoldObject(mjData* d, int step) const;
-  double Rollout(int rollout, int thread, int start, int length, std::uint64_t key);
+  // Simulates `knots` from state_ over `length` steps from `start`:
+  // the return; perturbation sequence `perturbation` of `key` when
+  // perturbing (< 0: none); the object's final height into *object_z.
+  double Rollout(const double* knots, int perturbation, int thread, int start, int length,
+                 std::uint64_t key, double* object_z = nullptr);
+  const double* Sample(int c) const { return buffer_.data() + static_cast<size_t>(c) * knots_ * m_->nu; }
+  // The reference's feed-forward controls as knots of the window at
+  // `start` (clamped): the first nominal, and a plan the trace scores.
+  void ReferenceKnots(int start, RowMatrix& out) const;
+  // For the trace: the state's finger gap and hand-object contacts.
+  void DescribeState(const mjData* d, int step, WindowTrace& w) const;
+  // After Optimise: the executed plan, the weighted mean or the best sample.
+  void KeepTheBetterPlan(int start, int length, std::uint64_t key);
+  // Rolls the window's plans out for `trace` (WindowTrace).
+  void Trace(const mjData* d, int start, int plan, int iterations, const RowMatrix& entering,
+             const WindowTraceFn& trace);
   int Optimise(int start, int plan);
   void Shift(int start, int next_start);
 
@@ -62,6 +77,7 @@ class Planner {
   int knots_, horizon_steps_;
   std::vector<uint8_t> gate_;           // (steps) perturbations allowed
   int group_ = 1, samples_ = 2;         // of the current plan
+  int best_ = 0;                        // the best sample of the last iteration
   std::vector<double> buffer_;          // (samples, knots, nu)
   std::vector<double> rollout_return_;  // (samples * group)
   std::vector<double> returns_, weights_;

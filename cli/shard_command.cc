@@ -40,7 +40,7 @@ void AddShardOptions(CLI::App& cmd, ShardCliOptions& o) {
 // The parameter hash each pipeline stage runs with under the config.
 Json StageHashes(Database& db, const Json& config) {
   Json hashes = Json::object();
-  for (const auto& stage : db.Pipeline()) hashes[stage] = ParamHash(stages::MakeStage(stage, config)->Params());
+  for (const auto& stage : db.Pipeline()) hashes[stage] = stages::ResultHash(*stages::MakeStage(stage, config));
   return hashes;
 }
 

@@ -137,7 +137,7 @@ RethresholdTally RethresholdStage(Database& db, const std::string& name, const J
                                   bool dry_run) {
   RethresholdTally tally;
   const auto stage = stages::MakeStage(name, config);
-  const std::string hash = ParamHash(stage->Params());
+  const std::string hash = stages::ResultHash(*stage);
   RedecideFinished(db, *stage, hash, dry_run, tally);
   if (dry_run) return tally;
   // Claims like a worker (its lease names this process), so a re-run after

@@ -173,7 +173,7 @@ WorkerStats RunWorkerLoop(const WorkerOptions& options) {
   std::map<std::string, std::string> hashes;
   for (const auto& name : names) {
     stages[name] = stages::MakeStage(name, options.config);
-    hashes[name] = ParamHash(stages[name]->Params());
+    hashes[name] = stages::ResultHash(*stages[name]);
     stages[name]->Prepare();
   }
   RunWatch watch(options.db, worker, options);
@@ -221,7 +221,7 @@ void PrepareQueue(const WorkerOptions& options) {
   for (const auto& name : options.stages.empty() ? pipeline : options.stages) {
     const auto stage = stages::MakeStage(name, options.config);
     std::int64_t downstream = 0;
-    const auto changed = db.InvalidateOtherParams(name, ParamHash(stage->Params()), &downstream);
+    const auto changed = db.InvalidateOtherParams(name, stages::ResultHash(*stage), &downstream);
     if (changed > 0) {
       std::printf("%s: parameters changed, %lld clips queued again, and %lld later runs of "
                   "them\n", name.c_str(), static_cast<long long>(changed),

@@ -63,6 +63,10 @@ class DynamicRetargetStage : public Stage {
   explicit DynamicRetargetStage(retarget::DynamicRetargetConfig config = {});
   std::string Name() const override { return retarget::kRetargetStageName; }
   Json Params() const override { return config_; }
+  // 2: the seed's stages (a hand near the object is no rest) and the plan
+  // executed only once rolled out (issue 51): the same parameters now lift
+  // what revision 1 left on the floor.
+  int Revision() const override { return 2; }
   StageResult Run(const ClipContext& context) override;
   std::optional<StageResult> Redecide(const Json& measurements) const override;
 

@@ -21,8 +21,13 @@ class Stage {
  public:
   virtual ~Stage() = default;
   virtual std::string Name() const = 0;
-  // The effective parameters; their ParamHash identifies a result.
+  // The effective parameters; with Revision, what identifies a result
+  // (ResultHash).
   virtual Json Params() const = 0;
+  // Bumped when a change of code changes what the stage makes from the
+  // same parameters (a bug fixed), so that earlier results are made again
+  // as after a change of parameters. 1: the hash is the parameters' alone.
+  virtual int Revision() const { return 1; }
   // Runs on one clip. Throws doasido::Error for bad input; the worker
   // records the message and retries up to the attempt limit.
   virtual StageResult Run(const ClipContext& context) = 0;
@@ -36,5 +41,14 @@ class Stage {
     return std::nullopt;
   }
 };
+
+// What identifies a stage's result: ParamHash of its parameters, or of
+// {"params": ..., "revision": N} once Revision() > 1 (so revision 1 keeps
+// the hashes recorded before revisions existed).
+inline std::string ResultHash(const Stage& stage) {
+  const int revision = stage.Revision();
+  if (revision <= 1) return ParamHash(stage.Params());
+  return ParamHash(Json{{"params", stage.Params()}, {"revision", revision}});
+}
 
 }  // namespace doasido::stages

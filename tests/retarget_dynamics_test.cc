@@ -571,6 +571,14 @@ TEST(SamplerLadder, TheConfigNamesItsRungs) {
   DynamicRetargetConfig a, b;
   b.ladder = {"fast", "seed"};
   EXPECT_NE(ParamHash(stages::DynamicRetargetStage(a).Params()), ParamHash(stages::DynamicRetargetStage(b).Params()));
+  // Issue 51's fixes are revision 2: a result recorded under the
+  // parameters' hash alone (every run before them) no longer matches, so
+  // `run` makes it again; revision 1 stages keep their old hashes.
+  const stages::DynamicRetargetStage fixed(a);
+  EXPECT_EQ(fixed.Revision(), 2);
+  EXPECT_NE(stages::ResultHash(fixed), ParamHash(fixed.Params()));
+  const stages::KinematicStage kinematic;
+  EXPECT_EQ(stages::ResultHash(kinematic), ParamHash(kinematic.Params()));
 }
 
 

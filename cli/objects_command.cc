@@ -152,6 +152,9 @@ void RunObjects(ObjectsOptions& o) {
     } catch (const Error& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       ++failed;
+    } catch (const std::exception& e) {  // a library's own error: still this input's alone
+      std::fprintf(stderr, "error: %s: %s\n", input.c_str(), e.what());
+      ++failed;
     }
   }
   if (failed > 0) {
@@ -174,7 +177,10 @@ void AddObjectsCommand(CLI::App& app) {
   cmd->add_option("inputs", o->inputs, "Videos (any format ffmpeg reads) or images (PNG, JPEG, ...)")
       ->required();
   cmd->add_option("--out", o->out, "Output folder (created)")->required();
-  cmd->add_option("--categories", o->config.categories, "Box-landmark models to run: cup sneakers chair camera")
+  cmd->add_option("--categories", o->config.categories,
+                  "Box-landmark models to run, comma-separated: cup,sneakers,chair,camera")
+      ->delimiter(',')
+      ->allow_extra_args(false)
       ->capture_default_str();
   cmd->add_option("--detect-every", o->config.detect_every,
                   "While objects are tracked, the detector looks for others every this many frames")
@@ -189,7 +195,8 @@ void AddObjectsCommand(CLI::App& app) {
                   "object the detector may miss, boxed by hand on one frame (pixels of the input); followed\n"
                   "from there in 2D (median flow), the box-landmark model reading its keypoints (a clip\n"
                   "list's object_box column takes the same text); the track ends where the keypoints leave\n"
-                  "the followed box or the follower loses it");
+                  "the followed box or the follower loses it. One value per --seed (repeat it)")
+      ->allow_extra_args(false);
   cmd->add_option("--follow-side", o->config.prompt_follow_side,
                   "A seeded box is followed on a grey frame shrunk so that its long side is this many\n"
                   "pixels ([objects.models] prompt_follow_side)")
@@ -227,8 +234,9 @@ void AddObjectsCommand(CLI::App& app) {
       "in 3D here the size is the category's prior (scale_assumed true; the objects stage sizes\n"
       "it by the touching hand). Frames the fit filled have keypoints_2d null (docs/objects.md).\n"
       "The models are the npm package @mediapipe/objectron (scripts/setup.sh installs it).\n"
-      "The 2D detector does not find every object of its categories (02_cups' red plastic cups:\n"
-      "no cup score above 0.2): --seed starts a track where a person boxed the object;\n"
+      "The 2D detector does not find every object of its categories (it finds scikit-image's\n"
+      "coffee cup photo, not 02_cups' red plastic cups: no cup score above 0.2): --seed starts a\n"
+      "track where a person boxed the object;\n"
       "--near-hands tries boxes beside the fingers (rough boxes, and hands alone can pass).\n\n"
       "Example:\n"
       "  doasido objects clips/cups.mp4 photos/mug.jpg --out work/objects --overlay\n"

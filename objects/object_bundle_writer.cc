@@ -79,14 +79,14 @@ void WriteText(const std::filesystem::path& path, const std::string& text) {
 
 }  // namespace
 
-Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame) {
+Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame, int frame_count) {
   Json tracks = Json::array();
   for (const ObjectTrack& t : result.tracks) tracks.push_back(TrackSummary(t));
-  const int T = result.tracks.empty() ? 0 : static_cast<int>(result.tracks[0].frames.size());
   Json frames = Json::array();
-  for (int k = 0; k < T; ++k) {
+  for (int k = 0; k < frame_count; ++k) {
     Json objects = Json::array();
     for (const ObjectTrack& t : result.tracks) {
+      if (k >= static_cast<int>(t.frames.size())) continue;
       const ObjectFrame& f = t.frames[k];
       if (f.posed || f.observed) objects.push_back(FrameObject(t, f));
     }
@@ -124,10 +124,8 @@ void WriteObjectBundle(const ObjectsResult& result, const recon::ClipBundle& han
                        const std::filesystem::path& dir, int cylinder_segments) {
   std::filesystem::create_directories(dir);
   if (result.chosen >= 0) recon::WriteBundle(ObjectBundle(result, hands, cylinder_segments), dir);
-  WriteText(dir / kObjectsFile, LiftedObjectsJson(result, hands.K.empty() ? Mat3::Identity() : hands.KAt(0),
-                                            first_frame)
-                                    .dump() +
-                                    "\n");
+  const Mat3 K = hands.K.empty() ? Mat3::Identity() : hands.KAt(0);
+  WriteText(dir / kObjectsFile, LiftedObjectsJson(result, K, first_frame, hands.frames).dump() + "\n");
 }
 
 }  // namespace doasido::objects

@@ -34,8 +34,9 @@ namespace doasido::objects {
 //       "keypoints_2d" [[u, v] x 9] (null when not observed),
 //       "center_camera" [x, y, z], "rotation_camera" [[3x3]], "size_m",
 //       "scale_assumed", "observed", "filled", "degenerate"}]}]}
-// A frame lists each track posed or observed on it.
-Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame);
+// Every one of the span's `frame_count` frames has an entry (objects []
+// where nothing was found); a frame lists each track posed or observed on it.
+Json LiftedObjectsJson(const ObjectsResult& result, const Mat3& K, int first_frame, int frame_count);
 
 // The bundle of the chosen track (requires result.chosen >= 0); `hands`
 // gives the size, frame count, fps and K.

@@ -23,7 +23,7 @@ Json ObjectsFileJson(const DetectedObjects& detected, const Mat3& K, const Objec
   ObjectsConfig every_track = config;
   every_track.min_track_frames = 1;
   const ObjectsResult result = ReconstructObjects(observations, camera, every_track);
-  Json out = LiftedObjectsJson(result, K, static_cast<int>(detected.first_frame));
+  Json out = LiftedObjectsJson(result, K, static_cast<int>(detected.first_frame), camera.frames);
   const Json plain = ObjectsJson(detected);
   for (const char* key : {"width", "height", "fps", "models"}) out[key] = plain.at(key);
   return out;

@@ -9,6 +9,8 @@
 #include <opencv2/videoio.hpp>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -120,6 +122,41 @@ TEST(CliObjects, TheDetectorAloneFindsTheCupOfARealPhotoOnItsLabels) {
   const double rim_width = label.at("rim_right").at(0).get<double>() - label.at("rim_left").at(0).get<double>();
   EXPECT_LT((top - upper).norm(), 0.1 * rim_width) << "top face at " << top.transpose();
   EXPECT_GT(k.at(0).at(1).get<double>(), top.y()) << "the box centre lies below the rim: the cup stands";
+}
+
+// Bad input in a batch (ground rule 5): a truncated JPEG (decodes partly,
+// with no cup) and a photo with no cup keep an entry per frame with no
+// objects and an overlay; a file that is not an image fails alone, named;
+// the coffee cup after them is still found. Options before the inputs take
+// one value each (a list is comma-separated), so they leave the inputs be.
+TEST(CliObjects, ABatchGoesOnPastPhotosWithoutACupAndAFileThatIsNotOne) {
+  std::string why;
+  if (!objects::ObjectronModelFilesAvailable(&why)) GTEST_SKIP() << why;
+  const fs::path coffee = "/usr/lib/python3/dist-packages/skimage/data/coffee.png";
+  const fs::path camera = "/usr/lib/python3/dist-packages/skimage/data/camera.png";
+  ASSERT_TRUE(fs::exists(coffee) && fs::exists(camera)) << "scripts/setup.sh --test installs python3-skimage";
+  testing::TempDir tmp;
+  std::vector<uchar> jpeg;
+  cv::imencode(".jpg", cv::imread(coffee.string()), jpeg);
+  jpeg.resize(jpeg.size() / 8);  // the top of the picture: rim only, cut mid-stream
+  testing::WriteFile(tmp / "cut.jpg", std::string(jpeg.begin(), jpeg.end()));
+  testing::WriteFile(tmp / "notes.png", "not a picture\n");
+  const testing::CommandResult r = RunDoasido({"objects", "--categories", "cup,chair", "--overlay", "--out",
+                                               (tmp / "out").string(), (tmp / "cut.jpg").string(),
+                                               camera.string(), (tmp / "notes.png").string(), coffee.string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("notes.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1 of 4 input(s) failed"), std::string::npos) << r.err;
+  for (const char* stem : {"cut", "camera"}) {
+    const Json j = Json::parse(testing::ReadFile(tmp / "out" / (std::string(stem) + ".json")));
+    ASSERT_EQ(j.at("frames").size(), 1u) << stem;
+    EXPECT_EQ(j.at("frames").at(0).at("objects").size(), 0u) << stem;
+    EXPECT_FALSE(cv::imread((tmp / "out" / (std::string(stem) + ".overlay.png")).string()).empty()) << stem;
+  }
+  EXPECT_FALSE(fs::exists(tmp / "out/notes.json"));
+  const Json cup = Json::parse(testing::ReadFile(tmp / "out/coffee.json"));
+  ASSERT_EQ(cup.at("frames").at(0).at("objects").size(), 1u);
+  EXPECT_EQ(cup.at("frames").at(0).at("objects").at(0).at("category"), "cup");
 }
 
 }  // namespace

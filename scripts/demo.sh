@@ -13,9 +13,9 @@
 # object_box, as a person prompts SAM2): the objects stage follows it and
 # lifts it to a metric pose sized by the touching fingertips, and that clip
 # (cups_held, frames 12-40) is a real hand + object episode retargeted with
-# dynamics; so is cups_lifted_left (frames 274-299: the person's left hand
-# lifts a cup and carries it up, retargeted mirrored; about 25 CPU s of
-# retarget at `fast`). The other real clips stay hand-only (real hand motion on the
+# dynamics; so is cups_carried_left (frames 82-97: the person's left hand
+# lifts a cup and carries it behind the middle one, retargeted mirrored;
+# about 20 CPU s of retarget at `fast`). The other real clips stay hand-only (real hand motion on the
 # robot hand). The synthetic clips have exact ground truth: a stand-in for
 # a model command (tools/ground_truth_bundle.sh) hands their bundles,
 # objects included, to the bundle stage.
@@ -43,8 +43,8 @@ command = "sh '$PWD/tools/ground_truth_bundle.sh' {video} {output}"
 [retarget]
 preset = "fast"
 
-# Look wide for a hand lost mid-clip (cups_lifted_left's hand lifting the
-# cup to the frame's top: docs/hands.md).
+# Look wide for a hand lost mid-clip (a hand lifting a cup fast loses its
+# track: docs/hands.md).
 [hands]
 lost_wide_search = 3
 TOML
@@ -59,7 +59,7 @@ if VERSION=$($DOASIDO dataset create --db "$DB" --root "$WORK/datasets" --name d
   $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --out "$WORK/lerobot/$(basename "$VERSION")"
   # The hand-only episodes drop observation.object_pose from the whole
   # export; the hand-object episodes alone (the real cups_held and
-  # cups_lifted_left among them)
+  # cups_carried_left among them)
   # keep it.
   rm -rf "$WORK/lerobot/$(basename "$VERSION")-hand-object"
   $DOASIDO dataset export "$VERSION" --format lerobot --fps 30 --hand-object-only \

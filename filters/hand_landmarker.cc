@@ -16,7 +16,6 @@ constexpr double kMinPalmScore = 0.5, kNmsIou = 0.3, kMinPresence = 0.5;
 constexpr double kPalmCropScale = 2.6, kPalmCropShift = -0.5;    // palm -> hand crop
 constexpr double kTrackCropScale = 2.0, kTrackCropShift = -0.1;  // keypoints -> next crop
 constexpr int kPalmWrist = 0, kPalmMiddleBase = 2;  // palm detector keypoints
-constexpr int kWrist = 0, kMiddleBase = 9;
 // A palm whose hand crop overlaps a tracked hand's crop by more than this
 // (IoU, unrotated) is that hand (MediaPipe's association threshold).
 constexpr double kSameHandIou = 0.5;

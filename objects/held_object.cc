@@ -5,11 +5,12 @@
 #include <limits>
 #include <optional>
 
+#include "filters/hand_landmarker.h"
+
 namespace doasido::objects {
 namespace {
 
-constexpr int kHeldTips[] = {4, 8, 12, 16, 20};
-constexpr int kHeldWrist = 0, kHeldIndexBase = 5, kHeldLittleBase = 17;
+using filters::kFingertips, filters::kIndexBase, filters::kLittleBase, filters::kWrist;
 
 bool FiniteJoints(const recon::Joints21& j) { return j.allFinite(); }
 
@@ -25,9 +26,9 @@ const recon::Joints21* HeldHandAt(const std::optional<recon::HandTrack>& hand, i
 }  // namespace
 
 Pose HandFrame(const recon::Joints21& joints) {
-  const Vec3 wrist = joints.row(kHeldWrist).transpose();
-  const Vec3 x = (Vec3(joints.row(kHeldIndexBase).transpose()) - wrist).normalized();
-  const Vec3 z = x.cross(Vec3(joints.row(kHeldLittleBase).transpose()) - wrist).normalized();
+  const Vec3 wrist = joints.row(kWrist).transpose();
+  const Vec3 x = (Vec3(joints.row(kIndexBase).transpose()) - wrist).normalized();
+  const Vec3 z = x.cross(Vec3(joints.row(kLittleBase).transpose()) - wrist).normalized();
   Mat3 R;
   R.col(0) = x;
   R.col(1) = z.cross(x);
@@ -39,7 +40,7 @@ double FingertipToBox(const recon::Joints21& joints, const Pose& box, const Vec3
   const Pose to_box = box.Inverse();
   const Vec3 half = size / 2;
   double best = std::numeric_limits<double>::infinity();
-  for (int k : kHeldTips) {
+  for (int k : kFingertips) {
     const Vec3 p = to_box * Vec3(joints.row(k).transpose());
     const Vec3 outside = (p.cwiseAbs() - half).cwiseMax(0.0);
     best = std::min(best, outside.norm());

@@ -44,6 +44,8 @@
 //   [--penetration_scale=3000 --terminal_scale=10] (RewardConfig; not where a preset replaces the flags)
 //   [--ladder_clips=2 --ladder_first=0 --ladder_clean --ladder_presets=fast,medium] (section "ladder")
 //   [--ladder_clean_only] (the ladder section on the clean references only)
+//   [--ladder_alone=P,Q] (the presets run alone on every clip; the other rungs
+//     run only where the ladder reaches them; default: every preset)
 //  7. the ladder (--sections=ladder): each preset of --ladder_presets alone
 //     on --ladder_clips clips, wall and CPU seconds and success per clip;
 //     the ladder of those presets in that order is composed from the same
@@ -116,6 +118,7 @@ struct Flags {
   int ladder_clips = 2, ladder_first = 0;
   bool ladder_clean = false, ladder_clean_only = false;
   std::string ladder_presets = "fast,medium";
+  std::string ladder_alone;  // "" = every preset of ladder_presets
   // The default section: >= 0 replaces the default config's
   // kinematic.contact_weight (to compare with the grasp terms off).
   double default_contact_weight = -1;
@@ -158,6 +161,7 @@ Flags Parse(int argc, char** argv) {
     else if (k == "--ladder_clean") f.ladder_clean = v != "0";
     else if (k == "--ladder_clean_only") f.ladder_clean = f.ladder_clean_only = v != "0";
     else if (k == "--ladder_presets") f.ladder_presets = v;
+    else if (k == "--ladder_alone") f.ladder_alone = v;
     else if (k == "--default_contact_weight") f.default_contact_weight = std::stod(v);
     else if (k == "--verbose") f.verbose = v != "0";
     else std::fprintf(stderr, "unknown flag %s\n", a.c_str());
@@ -662,6 +666,10 @@ std::vector<std::string> SplitList(const std::string& text) {
 void Ladder(const Flags& f) {
   const int frames = static_cast<int>(f.clip_seconds * 30);
   const std::vector<std::string> presets = SplitList(f.ladder_presets);
+  const std::vector<std::string> alone_presets = SplitList(f.ladder_alone.empty() ? f.ladder_presets : f.ladder_alone);
+  const auto runs_alone = [&](const std::string& p) {
+    return std::find(alone_presets.begin(), alone_presets.end(), p) != alone_presets.end();
+  };
   std::printf("\n== Ladder %s on %d %.0f-s clips from clip %d (%s), %d threads\n", f.ladder_presets.c_str(),
               f.ladder_clips, f.clip_seconds, f.ladder_first, f.ladder_clean_only ? "clean" : f.ladder_clean ? "noisy and clean" : "noisy",
               f.threads);
@@ -675,6 +683,7 @@ void Ladder(const Flags& f) {
     for (int noisy = f.ladder_clean_only ? 0 : 1; noisy >= (f.ladder_clean ? 0 : 1); --noisy) {
       bool done = false;
       for (const std::string& preset : presets) {
+        if (done && !runs_alone(preset)) continue;
         DynamicRetargetConfig config = BaseConfig(f);
         config.preset = preset;
         const double cpu0 = CpuSeconds();

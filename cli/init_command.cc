@@ -28,7 +28,8 @@ void AddInitCommand(CLI::App& app) {
                   "chain, what init gives without --pipeline), `filters` (the filtering job "
                   "alone, for its report); a preset word in a list stands for its stages, e.g. "
                   "filters,hands,bundle,recon,retarget_kinematic")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);
   std::string presets;
   for (const auto& [name, list] : stages::PipelinePresets()) {
     presets += "\n  " + name + std::string(14 - std::min<size_t>(13, name.size()), ' ');

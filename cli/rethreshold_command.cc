@@ -22,7 +22,8 @@ void AddRethresholdCommand(CLI::App& app) {
   cmd->add_option("--stages", opt->stages,
                   "Only these stages (default: every pipeline stage that decides from stored "
                   "measurements)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);
   cmd->add_flag("--dry-run", opt->dry_run,
                 "Count what would change without writing (first-order: a clip that a change "
                 "upstream would send on is not judged)");

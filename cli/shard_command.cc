@@ -34,7 +34,8 @@ void AddShardOptions(CLI::App& cmd, ShardCliOptions& o) {
   cmd.add_option("--out", o.out, "Folder for the shard folders (default: <db folder>/shards)");
   cmd.add_option("--media-root", o.media_root,
                  "OLD=NEW: video paths under OLD are written as under NEW in the shards (media "
-                 "mounted elsewhere on the nodes); repeatable");
+                 "mounted elsewhere on the nodes); repeatable")
+      ->allow_extra_args(false);
 }
 
 // The parameter hash each pipeline stage runs with under the config.

@@ -12,7 +12,8 @@ void AddWorkerOptions(CLI::App& cmd, WorkerOptions& opt) {
       ->capture_default_str()
       ->check(FiniteRange(1, kMaxJobs));
   cmd.add_option("--stages", opt.stages, "Only these stages (default: the whole pipeline)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);  // the lists after it stay positionals
   cmd.add_option("--lease", opt.lease_s,
                  "Seconds a claim is held without a heartbeat before another worker may take it")
       ->capture_default_str()

@@ -110,6 +110,18 @@ TEST(Commands, ChangedParametersRerunSameParametersDoNot) {
   EXPECT_NE(bad.err.find("noop.work_sm"), std::string::npos) << bad.err;
 }
 
+// A list option takes one value (comma-separated) and leaves the clip list
+// after it a positional: `run --stages noop l.csv` once read l.csv as a stage.
+TEST(Commands, AStageListBeforeTheClipListLeavesTheClipList) {
+  TempDir dir;
+  const std::string db = (dir / "d.db").string();
+  WriteFile(dir / "l.csv", "url,id\nhttps://example.org/a.mp4,a\nhttps://example.org/b.mp4,b\n");
+  ASSERT_EQ(RunDoasido({"init", "--db", db, "--pipeline", "noop"}).exit_code, 0);
+  const auto run = RunDoasido({"run", "--db", db, "--stages", "noop", (dir / "l.csv").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(Database(db).Summary().done, 2);
+}
+
 TEST(Commands, ClearErrorsForBadInvocations) {
   TempDir dir;
   const auto missing = RunDoasido({"ingest", "--db", (dir / "d.db").string(),

@@ -186,7 +186,8 @@ void Save(const retarget::HandTrajectory& t, const fs::path& dir) {
 // --trace_windows: one line per planning window in [trace_from, trace_to]
 // s; returns (and object heights at the horizon's end) of the plan entering
 // the window, the reference's controls, the best sample and the executed
-// weighted mean, each rolled out from the window's start state.
+// weighted mean, each rolled out from the window's start state; below
+// each window, every plan's return parts (PlanOutcome).
 retarget::WindowTraceFn WindowPrinter(const Flags& f, const std::string& label) {
   if (f.trace_from > f.trace_to) return {};
   std::fprintf(stderr, "%s trace: t s | ref z | nominal ret z | ref-ctrl ret z | best ret z (scored) | executed ret z "
@@ -198,6 +199,13 @@ retarget::WindowTraceFn WindowPrinter(const Flags& f, const std::string& label) 
                  w.nominal.object_z, w.reference.ret, w.reference.object_z, w.best.ret, w.best.object_z,
                  w.best_score, w.executed.ret, w.executed.object_z, w.iterations, w.finger_gap,
                  w.object_contacts, w.object_force);
+    const std::pair<const char*, const retarget::PlanOutcome*> plans[] = {
+        {"nominal", &w.nominal}, {"ref-ctrl", &w.reference}, {"best", &w.best}, {"executed", &w.executed}};
+    for (const auto& [name, o] : plans) {
+      std::fprintf(stderr, "%s trace:   %-8s parts: object pos %.4f rot %.4f | wrist pos %.4f rot %.4f | fingers "
+                   "%.4f | penetration %.4f transition %.4f\n", label.c_str(), name, o->object_pos, o->object_rot,
+                   o->wrist_pos, o->wrist_rot, o->fingers, o->penetration, o->transition);
+    }
   };
 }
 

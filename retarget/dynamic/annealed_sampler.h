@@ -162,10 +162,15 @@ struct DynamicResult {
 // What one planning window did (a diagnosis for benches, issue 51): each
 // plan is rolled out once more from the window's start state, without
 // perturbation, over the window's horizon; per plan its return (the
-// optimiser's score) and the object's height at the horizon's end.
+// optimiser's score), the object's height at the horizon's end, and the
+// return's parts: each tracking term's weighted error (the norm's
+// components: object position and rotation, wrist position and rotation,
+// fingers) and the two penalties, averaged with the return's step weights.
 struct PlanOutcome {
   double ret = 0;
   double object_z = 0;
+  double object_pos = 0, object_rot = 0, wrist_pos = 0, wrist_rot = 0, fingers = 0;
+  double penetration = 0, transition = 0;
 };
 struct WindowTrace {
   int plan = 0;

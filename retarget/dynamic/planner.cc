@@ -96,7 +96,7 @@ void Planner::DescribeState(const mjData* d, int step, WindowTrace& w) const {
 }
 
 double Planner::Rollout(const double* knots, int perturbation, int thread, int start, int length,
-                        std::uint64_t key, double* object_z) {
+                        std::uint64_t key, PlanOutcome* outcome) {
   mjData* d = pool_.data(thread);
   Load(m_, state_, d);
   // Common random numbers: perturbation k of every control sample draws
@@ -121,11 +121,31 @@ double Planner::Rollout(const double* knots, int perturbation, int thread, int s
     const int s = start + h + 1;
     HoldObject(d, s);
     if (BadState(d)) return -std::numeric_limits<double>::infinity();
-    const double r = StepReward(m_, d, index_, ref_, s, c_.reward);
-    total += (h == length - 1 ? c_.reward.terminal_rew_scale : 1.0) * r;
+    RewardTerms terms;
+    const double r = StepReward(m_, d, index_, ref_, s, c_.reward, outcome ? &terms : nullptr);
+    const double weight = h == length - 1 ? c_.reward.terminal_rew_scale : 1.0;
+    total += weight * r;
+    if (outcome) AddTerms(terms, weight, *outcome);
   }
-  if (object_z) *object_z = d->qpos[index_.object_qpos + 2];
-  return total / (length - 1 + c_.reward.terminal_rew_scale);
+  const double weights = length - 1 + c_.reward.terminal_rew_scale;
+  if (outcome) {
+    outcome->object_z = d->qpos[index_.object_qpos + 2];
+    for (double* part : {&outcome->object_pos, &outcome->object_rot, &outcome->wrist_pos, &outcome->wrist_rot,
+                         &outcome->fingers, &outcome->penetration, &outcome->transition}) {
+      *part /= weights;
+    }
+  }
+  return total / weights;
+}
+
+void Planner::AddTerms(const RewardTerms& t, double weight, PlanOutcome& o) const {
+  o.object_pos += weight * std::sqrt(t.object_pos_sq);
+  o.object_rot += weight * std::sqrt(t.object_rot_sq);
+  o.wrist_pos += weight * std::sqrt(t.wrist_pos_sq);
+  o.wrist_rot += weight * std::sqrt(t.wrist_rot_sq);
+  o.fingers += weight * std::sqrt(t.fingers_sq);
+  if (c_.reward.penetration) o.penetration += weight * c_.reward.penetration_penalty_scale * t.penetration_depth;
+  if (c_.reward.transition && t.stage_missed) o.transition += weight * c_.reward.transition_penalty_scale;
 }
 
 int Planner::Optimise(int start, int plan) {
@@ -234,7 +254,7 @@ void Planner::Trace(const mjData* d, int start, int plan, int iterations, const 
   ReferenceKnots(start, reference);
   const auto outcome = [&](const double* knots) {
     PlanOutcome o;
-    o.ret = Rollout(knots, -1, 0, start, length, 0, &o.object_z);
+    o.ret = Rollout(knots, -1, 0, start, length, 0, &o);
     return o;
   };
   w.nominal = outcome(entering.data());

@@ -52,9 +52,12 @@ class Planner {
   void HoldObject(mjData* d, int step) const;
   // Simulates `knots` from state_ over `length` steps from `start`:
   // the return; perturbation sequence `perturbation` of `key` when
-  // perturbing (< 0: none); the object's final height into *object_z.
+  // perturbing (< 0: none); `outcome`, when set, gets the object's final
+  // height and the return's parts (PlanOutcome).
   double Rollout(const double* knots, int perturbation, int thread, int start, int length,
-                 std::uint64_t key, double* object_z = nullptr);
+                 std::uint64_t key, PlanOutcome* outcome = nullptr);
+  // Adds one step's reward parts, weighted as the return weighs it.
+  void AddTerms(const RewardTerms& terms, double weight, PlanOutcome& outcome) const;
   const double* Sample(int c) const { return buffer_.data() + static_cast<size_t>(c) * knots_ * m_->nu; }
   // The reference's feed-forward controls as knots of the window at
   // `start` (clamped): the first nominal, and a plan the trace scores.

@@ -29,7 +29,8 @@ Vec3 RotationError(const Quat& a, const Quat& b) {
 }
 
 double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
-                  const DynamicReference& ref, int step, const RewardConfig& config) {
+                  const DynamicReference& ref, int step, const RewardConfig& config,
+                  RewardTerms* terms) {
   const double* q = d->qpos + index.object_qpos;
   const Vec3 pos_err = Vec3(q[0], q[1], q[2]) - ref.object_pos[step];
   const Vec3 rot_err = RotationError(ref.object_quat[step], Quat(q[3], q[4], q[5], q[6]));
@@ -37,12 +38,20 @@ double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
               config.rot_rew_scale * config.rot_rew_scale * rot_err.squaredNorm();
   const double w[3] = {config.base_pos_rew_scale, config.base_rot_rew_scale, config.joint_rew_scale};
   const double* r = ref.ctrl.row(step).data();
+  if (terms) {
+    terms->object_pos_sq = config.pos_rew_scale * config.pos_rew_scale * pos_err.squaredNorm();
+    terms->object_rot_sq = config.rot_rew_scale * config.rot_rew_scale * rot_err.squaredNorm();
+  }
   for (int a = 0; a < m->nu; ++a) {
     const double e = w[index.act_kind[a]] * (d->qpos[index.act_qpos[a]] - r[a]);
     sq += e * e;
+    if (terms) {
+      const int kind = index.act_kind[a];
+      (kind == kBasePos ? terms->wrist_pos_sq : kind == kBaseRot ? terms->wrist_rot_sq : terms->fingers_sq) += e * e;
+    }
   }
   double reward = -std::sqrt(sq);
-  if (!config.penetration && !config.transition) return reward;
+  if (!config.penetration && !config.transition && !terms) return reward;
   double depth = 0;
   bool floor_contact = false;
   unsigned touching = 0;  // bit h: hand h touches the object
@@ -58,10 +67,12 @@ double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
     }
     if (!(o1 && o2)) depth += std::max(0.0, -con.dist - config.penetration_tolerance);
   }
+  if (terms) terms->penetration_depth = depth;
   if (config.penetration) reward -= config.penetration_penalty_scale * depth;
   // Resting stages: the object must touch the floor; in-hand stages: every
   // hand that holds the object in the reference must touch it.
   const bool missed = ref.resting[step] ? !floor_contact : (ref.in_hand[step] & ~touching) != 0;
+  if (terms) terms->stage_missed = missed;
   if (config.transition && missed) {
     reward -= config.transition_penalty_scale;
   }

@@ -44,9 +44,21 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RewardConfig, pos_rew_scale, rot
                                                 transition_epsilon, transition_rest_height)
 void CheckConfig(const RewardConfig& c, const std::string& section);
 
+// The parts of one step's reward, for diagnosis: the squares of the
+// weighted errors under the tracking norm (object position, object
+// rotation, wrist position, wrist rotation, fingers), the penetration
+// depth beyond the tolerance (m) and whether the stage was missed.
+struct RewardTerms {
+  double object_pos_sq = 0, object_rot_sq = 0, wrist_pos_sq = 0, wrist_rot_sq = 0, fingers_sq = 0;
+  double penetration_depth = 0;
+  bool stage_missed = false;
+};
+
 // Reward of the state in `d` against reference step `step`. No allocation.
+// `terms`, when set, gets its parts (the reward is the same either way).
 double StepReward(const mjModel* m, const mjData* d, const SceneIndex& index,
-                  const DynamicReference& ref, int step, const RewardConfig& config);
+                  const DynamicReference& ref, int step, const RewardConfig& config,
+                  RewardTerms* terms = nullptr);
 
 // Rotation vector (axis * angle, angle in [0, pi]) of a^-1 b.
 Vec3 RotationError(const Quat& a, const Quat& b);

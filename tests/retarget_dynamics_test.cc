@@ -132,9 +132,11 @@ TEST(AnnealedSampler, PresetsAndRangeChecks) {
 // hand's; a stage whose holding hands all touch costs nothing, one where a
 // holding hand does not costs transition_penalty_scale; resting, the
 // object's floor contact is what counts; neither, nothing is asked.
-TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
+// A box on the floor between two one-joint "hands": the left one's finger
+// just touches it, the right one stands apart.
+ModelPtr TwoHandsAndABox() {
   const std::string mount = kWristMountBody;
-  const ModelPtr model = CompileMjcfText(R"(<mujoco><worldbody>
+  return CompileMjcfText(R"(<mujoco><worldbody>
     <geom name="floor" type="plane" size="1 1 0.1"/>
     <body name="object" pos="0 0 0.05"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
     <body name="l_)" + mount + R"(" pos="-0.069 0 0.05"><joint name="lx" type="slide" axis="1 0 0"/>
@@ -142,7 +144,12 @@ TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
     <body name="r_)" + mount + R"(" pos="0.17 0 0.05"><joint name="rx" type="slide" axis="1 0 0"/>
       <geom type="box" size="0.02 0.02 0.02"/></body>
   </worldbody><actuator><position joint="lx"/><position joint="rx"/></actuator></mujoco>)",
-                                         "two boxes");
+                         "two boxes");
+}
+
+TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
+  const std::string mount = kWristMountBody;
+  const ModelPtr model = TwoHandsAndABox();
   const mjModel* m = model.get();
   const SceneIndex index = IndexScene(m);
   ASSERT_EQ(index.hands, (std::vector<std::string>{"l_" + mount, "r_" + mount}));
@@ -172,6 +179,36 @@ TEST(RetargetReward, TheTransitionRewardAsksEachHoldingHandForContact) {
   d->qpos[index.object_qpos + 2] += 0.02;
   mj_forward(m, d.get());
   EXPECT_DOUBLE_EQ(reward(0, true, true), reward(0, true, false) - penalty);
+}
+
+// The parts the trace prints (RewardTerms) are the reward taken apart:
+// the tracking norm of their squares, minus both penalties.
+TEST(RetargetReward, ItsPartsMakeTheReward) {
+  const ModelPtr model = TwoHandsAndABox();
+  const mjModel* m = model.get();
+  const SceneIndex index = IndexScene(m);
+  DataPtr d = MakeData(m);
+  d->qpos[index.act_qpos[0]] = 0.012;  // the left finger 11 mm into the box
+  mj_forward(m, d.get());
+  DynamicReference ref;
+  ref.ctrl = RowMatrix::Constant(1, m->nu, 0.004);
+  ref.object_pos = {Vec3(0.03, 0, 0.05)};
+  ref.object_quat = {Quat(Eigen::AngleAxisd(0.2, Vec3::UnitZ()))};
+  ref.in_hand = {0b10};  // the right hand should hold it and stands apart
+  ref.resting = {false};
+  const RewardConfig config;
+  RewardTerms terms;
+  const double reward = StepReward(m, d.get(), index, ref, 0, config, &terms);
+  EXPECT_DOUBLE_EQ(reward, StepReward(m, d.get(), index, ref, 0, config));
+  EXPECT_NEAR(terms.object_pos_sq, 0.03 * 0.03, 1e-9);
+  EXPECT_NEAR(terms.object_rot_sq, std::pow(config.rot_rew_scale * 0.2, 2), 1e-9);
+  EXPECT_GT(terms.penetration_depth, 0.005);
+  EXPECT_TRUE(terms.stage_missed);
+  const double tracking = terms.object_pos_sq + terms.object_rot_sq + terms.wrist_pos_sq + terms.wrist_rot_sq +
+                          terms.fingers_sq;
+  EXPECT_GT(terms.wrist_pos_sq + terms.wrist_rot_sq + terms.fingers_sq, 0);
+  EXPECT_NEAR(reward, -std::sqrt(tracking) - config.penetration_penalty_scale * terms.penetration_depth -
+                          config.transition_penalty_scale, 1e-12);
 }
 
 TEST(DynamicReference, AnObjectOnTheFloorRestsOnlyWithNoHandNearAndIsInNoHand) {

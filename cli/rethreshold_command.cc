@@ -20,8 +20,8 @@ void AddRethresholdCommand(CLI::App& app) {
       "Re-decide the filter verdicts from stored measurements with new thresholds (no decoding)");
   AddDbOptions(*cmd, opt->db);
   cmd->add_option("--stages", opt->stages,
-                  "Only these stages (default: every pipeline stage that decides from stored "
-                  "measurements)")
+                  "Only these stages, comma-separated (default: every pipeline stage that decides "
+                  "from stored measurements)")
       ->delimiter(',')
       ->allow_extra_args(false);
   cmd->add_flag("--dry-run", opt->dry_run,

@@ -11,7 +11,7 @@ void AddWorkerOptions(CLI::App& cmd, WorkerOptions& opt) {
   cmd.add_option("--jobs,-j", opt.jobs, "Worker processes")
       ->capture_default_str()
       ->check(FiniteRange(1, kMaxJobs));
-  cmd.add_option("--stages", opt.stages, "Only these stages (default: the whole pipeline)")
+  cmd.add_option("--stages", opt.stages, "Only these stages, comma-separated, e.g. probe,shot_boundary (default: the whole pipeline)")
       ->delimiter(',')
       ->allow_extra_args(false);  // the lists after it stay positionals
   cmd.add_option("--lease", opt.lease_s,

@@ -70,6 +70,7 @@
 #include <sys/resource.h>
 
 #include "core/error.h"
+#include "core/hand_keypoints.h"
 #include "eval/hot3d_recording.h"
 #include "eval/reconstruction_noise.h"
 #include "eval/reference_hold.h"
@@ -506,7 +507,7 @@ void DescribeGrasp(const mjModel* m, mjData* d, const HandTrajectory& traj,
   };
   const Vec3 palm = (Vec3(r.right_joints[k].row(0).transpose()) + Vec3(r.right_joints[k].row(9).transpose())) * 0.5;
   std::fprintf(stderr, "  human: palm %.0f deg z %.3f;", angle(palm).first, angle(palm).second);
-  for (int tip : {4, 8, 12, 16, 20}) {
+  for (int tip : kFingertips) {
     const Vec3 p = r.right_joints[k].row(tip).transpose();
     const double dist = synth::DistanceToMesh(mesh.Transformed(o), p);
     std::fprintf(stderr, " tip%d %.0f deg z %.3f d %.3f;", tip, angle(p).first, angle(p).second, dist);

@@ -9,6 +9,7 @@
 
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/hand_keypoints.h"
 #include "core/json_input.h"
 #include "recon/recon_metrics.h"
 
@@ -20,7 +21,6 @@ constexpr const char* kHandsJsonl = "umetrack_hand_pose_trajectory.jsonl";
 constexpr const char* kHandProfile = "umetrack_hand_user_profile.json";
 constexpr std::array<const char*, 2> kHandKeys = {"0", "1"};  // HOT3D: 0 left, 1 right
 constexpr std::array<const char*, 2> kHandNames = {"left", "right"};
-constexpr std::array<int, 5> kTips = {4, 8, 12, 16, 20};  // OpenPose-21
 
 std::ifstream Open(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -135,7 +135,7 @@ double MeanFingertipDistance(const std::vector<Joints21>& joints, const std::vec
   for (size_t t = 0; t < joints.size(); ++t) {
     const Pose inv = object[t].Inverse();
     double best = std::numeric_limits<double>::infinity();
-    for (int k : kTips) best = std::min(best, surface.Distance(inv * Vec3(joints[t].row(k).transpose())));
+    for (int k : kFingertips) best = std::min(best, surface.Distance(inv * Vec3(joints[t].row(k).transpose())));
     sum += best;
   }
   return sum / std::max<size_t>(1, joints.size());

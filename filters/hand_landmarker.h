@@ -25,12 +25,9 @@
 #include <string>
 #include <vector>
 
-namespace doasido::filters {
+#include "core/hand_keypoints.h"
 
-inline constexpr int kHandKeypoints = 21;
-inline constexpr int kFingertips[5] = {4, 8, 12, 16, 20};
-// Keypoints the hand's frame and its pointing are read from (MediaPipe order).
-inline constexpr int kWrist = 0, kIndexBase = 5, kMiddleBase = 9, kLittleBase = 17;
+namespace doasido::filters {
 
 struct LandmarkedHand {
   double score = 0;  // hand presence, 0..1

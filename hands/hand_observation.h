@@ -12,7 +12,7 @@
 
 namespace doasido::hands {
 
-inline constexpr int kJoints = filters::kHandKeypoints;  // MediaPipe = OpenPose-21 order
+inline constexpr int kJoints = kHandKeypoints;
 // The parent of each joint in the hand's tree (wrist = -1): the 20 bones.
 inline constexpr int kParent[kJoints] = {-1, 0, 1, 2, 3, 0, 5, 6, 7, 0, 9,
                                          10, 11, 0, 13, 14, 15, 0, 17, 18, 19};

@@ -5,7 +5,7 @@
 #include <limits>
 #include <optional>
 
-#include "filters/hand_landmarker.h"
+#include "core/hand_keypoints.h"
 
 namespace doasido::hands {
 namespace {
@@ -172,7 +172,7 @@ std::optional<Side> ArrangedSide(const Track& t, const Track& k, double min_lean
     const auto& b = k.frames[static_cast<size_t>(f - k.first_frame)];
     if (!a || !b) continue;
     for (const HandObservation* o : {&*a, &*b}) {
-      lean += (o->uv[filters::kMiddleBase].y() - o->uv[filters::kWrist].y()) / Size(*o) / 2;
+      lean += (o->uv[kMiddleBase].y() - o->uv[kWrist].y()) / Size(*o) / 2;
     }
     left_of += Centre(*a).x() < Centre(*b).x() ? 1 : -1;
     ++shared;

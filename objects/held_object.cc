@@ -5,12 +5,10 @@
 #include <limits>
 #include <optional>
 
-#include "filters/hand_landmarker.h"
+#include "core/hand_keypoints.h"
 
 namespace doasido::objects {
 namespace {
-
-using filters::kFingertips, filters::kIndexBase, filters::kLittleBase, filters::kWrist;
 
 bool FiniteJoints(const recon::Joints21& j) { return j.allFinite(); }
 

@@ -5,7 +5,7 @@
 #include <map>
 
 #include "core/error.h"
-#include "filters/hand_landmarker.h"
+#include "core/hand_keypoints.h"
 #include "objects/held_object.h"
 #include "objects/object_categories.h"
 #include "objects/object_scale.h"
@@ -14,7 +14,6 @@
 namespace doasido::objects {
 namespace {
 
-using filters::kFingertips;  // OpenPose-21 and MediaPipe share the order
 
 double Cross(const Vec2& o, const Vec2& a, const Vec2& b) {
   return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();

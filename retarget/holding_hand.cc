@@ -4,10 +4,10 @@
 #include <limits>
 #include <vector>
 
+#include "core/hand_keypoints.h"
+
 namespace doasido::retarget {
 namespace {
-
-constexpr int kFingertips[] = {4, 8, 12, 16, 20};
 
 // The median over frames of the nearest fingertip-to-vertex distance; +inf
 // without a frame where hand and object are both valid.
